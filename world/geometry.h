@@ -1,0 +1,47 @@
+// Plain 2D geometry in the map frame: x right (east), y up (north), yaw counter-clockwise from +x,
+// metres and radians (REP-103 in the plane).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <vector>
+
+namespace autonomsim::world {
+
+using Vec2 = Eigen::Vector2d;
+
+// Pose of a body in the map frame (X_map_body in Drake's notation).
+struct Pose2 {
+  double x_m{0.0};
+  double y_m{0.0};
+  double yaw_rad{0.0};
+
+  Vec2 position() const { return {x_m, y_m}; }
+  Vec2 heading() const { return {std::cos(yaw_rad), std::sin(yaw_rad)}; }
+};
+
+// Axis-aligned box in the map frame; used for the intersection areas and stop zones, which the
+// real cars test with strict inequalities (reference §1).
+struct Box {
+  double x_min_m{0.0};
+  double x_max_m{0.0};
+  double y_min_m{0.0};
+  double y_max_m{0.0};
+
+  bool Contains(const Vec2& p) const {
+    return p.x() > x_min_m && p.x() < x_max_m && p.y() > y_min_m && p.y() < y_max_m;
+  }
+  template <class V>
+  void Describe(V& v) {
+    v("x_min_m", x_min_m);
+    v("x_max_m", x_max_m);
+    v("y_min_m", y_min_m);
+    v("y_max_m", y_max_m);
+  }
+  void Validate() const;
+};
+
+// Wraps an angle to (-pi, pi].
+double WrapAngle(double a_rad);
+
+}  // namespace autonomsim::world

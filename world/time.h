@@ -1,0 +1,31 @@
+// Simulated time. Every module counts time as int64 nanoseconds (ARCHITECTURE: "Time is
+// std::chrono::nanoseconds everywhere"); doubles in seconds appear only at the edges (config
+// files, outputs) and are converted here, once.
+#pragma once
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace autonomsim {
+
+using Duration = std::chrono::nanoseconds;
+using Time = std::chrono::nanoseconds;  // time since the start of a run
+
+inline constexpr Duration kZeroTime{0};
+
+// Seconds (finite, within ±292 years) to nanoseconds, rounded to the nearest nanosecond.
+inline Duration FromSeconds(double s) {
+  if (!std::isfinite(s) || std::abs(s) > 9.2e9) {
+    throw std::invalid_argument("time value out of range: " + std::to_string(s) + " s");
+  }
+  return Duration{static_cast<std::int64_t>(std::llround(s * 1e9))};
+}
+
+inline constexpr double ToSeconds(Duration d) { return static_cast<double>(d.count()) * 1e-9; }
+
+inline constexpr Duration Milliseconds(std::int64_t ms) { return std::chrono::milliseconds{ms}; }
+
+}  // namespace autonomsim
