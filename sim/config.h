@@ -1,0 +1,220 @@
+// The one reader (YAML) and the one writer (JSON) of every config struct. A struct opts in by
+// listing its keys once in `template <class V> void Describe(V& v)` (CONTRIBUTING.md); reading is
+// strict: an unknown key, a wrong type or a value its Validate() rejects is a ConfigError whose
+// message names the file, line, column and key path, e.g.
+//   scenarios/x.yaml:12:7: cars[0].oracle.speed_mps: expected a number, got 'fast'
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// Unusable user input (scenario, track, command line): the CLI maps it to exit code 2.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Where values come from, for error messages: the file, and the key paths that --set replaced.
+struct ConfigSource {
+  std::string file;
+  std::set<std::string> overridden_paths;
+};
+
+// Parses a YAML file; a syntax error is a ConfigError naming the file and line.
+YAML::Node LoadYamlFile(const std::filesystem::path& file);
+
+// Applies `--set path=value`: the path is dot-separated keys with [i] or .i for list elements
+// (e.g. cars[0].oracle.speed_mps, or cars.0.oracle.speed_mps); the value is parsed as YAML (so
+// 0.3, true, [1, 2] and {a: 1} all work). Missing map keys are created (the strict reader then
+// rejects those the schema does not know); list indices must exist. Records the path in source.
+void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source);
+
+namespace detail {
+
+template <class T>
+struct IsVector : std::false_type {};
+template <class T, class A>
+struct IsVector<std::vector<T, A>> : std::true_type {};
+template <class T>
+struct IsArray : std::false_type {};
+template <class T, std::size_t N>
+struct IsArray<std::array<T, N>> : std::true_type {};
+template <class T>
+struct IsMap : std::false_type {};
+template <class T, class C, class A>
+struct IsMap<std::map<std::string, T, C, A>> : std::true_type {};
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+
+std::string JoinPath(const std::string& parent, const std::string& key);
+std::string JoinIndex(const std::string& parent, std::size_t index);
+// "file:line:col: path: " or "--set path: " when the value came from the command line.
+std::string Where(const YAML::Node& node, const std::string& path, const ConfigSource& source);
+[[noreturn]] void Fail(const YAML::Node& node, const std::string& path, const ConfigSource& source,
+                       const std::string& message);
+std::string Describe(const YAML::Node& node);  // a short rendering of a bad value for messages
+// Throws for keys of `node` not in `known`, suggesting the closest known key.
+void CheckKeys(const YAML::Node& node, const std::vector<std::string>& known,
+               const std::string& path, const ConfigSource& source);
+
+void ReadScalar(const YAML::Node& node, bool& out, const std::string& path,
+                const ConfigSource& source);
+void ReadScalar(const YAML::Node& node, int& out, const std::string& path,
+                const ConfigSource& source);
+void ReadScalar(const YAML::Node& node, std::uint64_t& out, const std::string& path,
+                const ConfigSource& source);
+void ReadScalar(const YAML::Node& node, double& out, const std::string& path,
+                const ConfigSource& source);
+void ReadScalar(const YAML::Node& node, std::string& out, const std::string& path,
+                const ConfigSource& source);
+void ReadScalar(const YAML::Node& node, Duration& out, const std::string& path,
+                const ConfigSource& source);
+
+template <class T>
+void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigSource& source);
+
+class YamlFieldReader {
+ public:
+  YamlFieldReader(const YAML::Node& node, const std::string& path, const ConfigSource& source)
+      : node_(node), path_(path), source_(source) {}
+
+  template <class T>
+  void operator()(const char* key, T& value) {
+    known_.emplace_back(key);
+    const YAML::Node child = node_[key];
+    if (child) Read(child, value, JoinPath(path_, key), source_);
+  }
+  const std::vector<std::string>& known() const { return known_; }
+
+ private:
+  const YAML::Node& node_;
+  const std::string& path_;
+  const ConfigSource& source_;
+  std::vector<std::string> known_;
+};
+
+template <class T>
+void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigSource& source) {
+  if constexpr (IsOptional<T>::value) {
+    typename T::value_type value{};
+    Read(node, value, path, source);
+    out = std::move(value);
+  } else if constexpr (IsVector<T>::value) {
+    if (!node.IsSequence()) Fail(node, path, source, "expected a list, got " + Describe(node));
+    out.clear();
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      typename T::value_type value{};
+      Read(node[i], value, JoinIndex(path, i), source);
+      out.push_back(std::move(value));
+    }
+  } else if constexpr (IsArray<T>::value) {
+    if (!node.IsSequence() || node.size() != out.size()) {
+      Fail(node, path, source,
+           "expected a list of " + std::to_string(out.size()) + " values, got " + Describe(node));
+    }
+    for (std::size_t i = 0; i < out.size(); ++i) Read(node[i], out[i], JoinIndex(path, i), source);
+  } else if constexpr (IsMap<T>::value) {
+    if (!node.IsMap()) Fail(node, path, source, "expected a mapping, got " + Describe(node));
+    out.clear();
+    for (const auto& item : node) {
+      const std::string key = item.first.as<std::string>();
+      typename T::mapped_type value{};
+      Read(item.second, value, JoinPath(path, key), source);
+      out.emplace(key, std::move(value));
+    }
+  } else if constexpr (requires(T& t, YamlFieldReader& r) { t.Describe(r); }) {
+    if (node.IsNull()) {
+      // `key:` or `key: ~` keeps every default, like `key: {}`.
+    } else if (!node.IsMap()) {
+      Fail(node, path, source, "expected a mapping, got " + Describe(node));
+    } else {
+      YamlFieldReader reader(node, path, source);
+      out.Describe(reader);
+      CheckKeys(node, reader.known(), path, source);
+    }
+    try {
+      out.Validate();
+    } catch (const std::invalid_argument& e) {
+      Fail(node, path, source, e.what());
+    }
+  } else {
+    ReadScalar(node, out, path, source);
+  }
+}
+
+template <class T>
+nlohmann::json ToJsonValue(const T& value);
+
+class JsonFieldWriter {
+ public:
+  template <class T>
+  void operator()(const char* key, const T& value) {
+    if constexpr (IsOptional<T>::value) {
+      if (!value) return;
+    }
+    json_[key] = ToJsonValue(value);
+  }
+  nlohmann::json take() { return std::move(json_); }
+
+ private:
+  nlohmann::json json_ = nlohmann::json::object();
+};
+
+template <class T>
+nlohmann::json ToJsonValue(const T& value) {
+  if constexpr (IsOptional<T>::value) {
+    return value ? ToJsonValue(*value) : nlohmann::json();
+  } else if constexpr (IsVector<T>::value || IsArray<T>::value) {
+    nlohmann::json array = nlohmann::json::array();
+    for (const auto& item : value) array.push_back(ToJsonValue(item));
+    return array;
+  } else if constexpr (IsMap<T>::value) {
+    nlohmann::json object = nlohmann::json::object();
+    for (const auto& [key, item] : value) object[key] = ToJsonValue(item);
+    return object;
+  } else if constexpr (requires(T& t, JsonFieldWriter& w) { t.Describe(w); }) {
+    JsonFieldWriter writer;
+    const_cast<T&>(value).Describe(writer);  // Describe only reads through a writer
+    return writer.take();
+  } else if constexpr (std::is_same_v<T, Duration>) {
+    return ToSeconds(value);
+  } else {
+    return value;
+  }
+}
+
+}  // namespace detail
+
+// Reads a whole config struct from a YAML node (strict; see the top of this file).
+template <class T>
+T ReadConfig(const YAML::Node& node, const ConfigSource& source, const std::string& path = "") {
+  T value{};
+  detail::Read(node, value, path, source);
+  return value;
+}
+
+// The same struct as JSON, every key present (defaults included): the canonical, resolved form.
+template <class T>
+nlohmann::json ToJson(const T& value) {
+  return detail::ToJsonValue(value);
+}
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,76 @@
+// What a run leaves behind, in memory: the events, the trajectory samples and the per-car
+// metrics. Outputs (sim/outputs.h) and expectations (sim/expectations.h) read only this.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// One line of events.jsonl. Types: request, free (a car sent them), grant, denied (a car received
+// the server's answer), enter, exit (ground truth: the car's chassis centre entered or left an
+// intersection area; `granted` says whether the server held the intersection for it then),
+// collision, lap, parked, obstacle_appear, obstacle_disappear, v2i_lost, v2i_malformed.
+struct Event {
+  Time t{0};
+  std::string type;
+  int car{-1};
+  int intersection{-1};
+  int other_car{-1};
+  std::string obstacle;
+  std::optional<bool> granted;
+  int lap{0};
+  std::string detail;
+};
+
+struct TrajectorySample {
+  Time t{0};
+  int car{0};
+  double x_m{0.0};
+  double y_m{0.0};
+  double yaw_rad{0.0};
+  double speed_mps{0.0};
+  double steering_rad{0.0};
+  double throttle{0.0};
+  double curvature_cmd_per_m{0.0};
+  double lateral_error_m{0.0};
+  double route_progress_m{0.0};
+};
+
+struct CarMetrics {
+  int id{0};
+  std::string route;
+  double route_length_m{0.0};
+  int laps{0};
+  std::vector<double> lap_times_s;  // sim time at which each lap completed
+  int collisions{0};
+  double max_lateral_error_m{0.0};
+  double rms_lateral_error_m{0.0};
+  double distance_m{0.0};
+  double mean_speed_mps{0.0};
+  int intersection_entries{0};  // times the chassis centre entered an intersection area
+  int waits{0};                 // times the car stopped in a stop zone until granted
+  double total_wait_s{0.0};
+  double max_wait_s{0.0};
+};
+
+struct RunRecord {
+  Duration sim_duration{0};
+  std::uint64_t kernel_events{0};
+  std::vector<Event> events;
+  std::vector<TrajectorySample> trajectory;
+  std::vector<CarMetrics> cars;
+  struct ServerCounters {
+    std::uint64_t requests{0}, grants{0}, denials{0}, frees{0}, lease_expiries{0},
+        malformed{0};
+  } server;
+  struct LinkCounters {
+    std::uint64_t sent{0}, delivered{0}, lost{0};
+  } v2i;
+};
+
+}  // namespace autonomsim::sim

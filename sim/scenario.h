@@ -1,0 +1,194 @@
+// A scenario file, field for field (scenarios/*.yaml). Keys map 1:1 to these structs; the strict
+// reader in sim/config.h turns every mistake into an error naming file, line and key.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/config.h"
+#include "sim/oracle_driver.h"
+#include "stack/intersection_client.h"
+#include "vehicle/car.h"
+#include "vehicle/physics_world.h"
+#include "world/time.h"
+#include "world/track.h"
+#include "world/traffic_light_server.h"
+
+namespace autonomsim::sim {
+
+struct CarConfig {
+  int id{0};  // 0..9: the /vtl/ protocol carries the car id as one digit (reference §7)
+  std::optional<std::string> route;               // a route of the track, by name, or
+  std::optional<std::vector<std::string>> lanes;  // the lane segments to drive, in order
+  std::optional<std::string> start;   // a named start pose of the track (must lie on the route)
+  std::optional<double> start_s_m;    // or the distance along the route to start at (default 0)
+  std::optional<int> laps;            // on a loop: park after this many laps (default: drive on)
+  std::string driver{"oracle"};       // "oracle": ground-truth lane following (sim/oracle_driver.h)
+  OracleDriverParams oracle;
+  stack::IntersectionClientParams intersection_client;
+  vehicle::CarParams vehicle;
+
+  template <class V>
+  void Describe(V& v) {
+    v("id", id);
+    v("route", route);
+    v("lanes", lanes);
+    v("start", start);
+    v("start_s_m", start_s_m);
+    v("laps", laps);
+    v("driver", driver);
+    v("oracle", oracle);
+    v("intersection_client", intersection_client);
+    v("vehicle", vehicle);
+  }
+  void Validate() const;
+};
+
+// A box on the floor that cars can hit (and, later, see). It is present from appear_s until
+// disappear_s (if given).
+struct ObstacleConfig {
+  std::string name;
+  double x_m{0.0};
+  double y_m{0.0};
+  double yaw_deg{0.0};
+  double length_m{0.2};
+  double width_m{0.2};
+  double height_m{0.2};
+  double appear_s{0.0};
+  std::optional<double> disappear_s;
+
+  template <class V>
+  void Describe(V& v) {
+    v("name", name);
+    v("x_m", x_m);
+    v("y_m", y_m);
+    v("yaw_deg", yaw_deg);
+    v("length_m", length_m);
+    v("width_m", width_m);
+    v("height_m", height_m);
+    v("appear_s", appear_s);
+    v("disappear_s", disappear_s);
+  }
+  void Validate() const;
+};
+
+// The car ↔ traffic-light-server link. "embedded": in-process, with a modeled WLAN delay and loss
+// per message and direction.
+struct V2IConfig {
+  std::string link{"embedded"};
+  Duration latency{std::chrono::milliseconds(20)};  // assumed: one-way WLAN + broker delay
+  Duration jitter{std::chrono::milliseconds(5)};    // assumed: uniform extra delay in [0, jitter]
+  double loss{0.0};                                 // probability that one message is lost
+
+  template <class V>
+  void Describe(V& v) {
+    v("link", link);
+    v("latency_s", latency);
+    v("jitter_s", jitter);
+    v("loss", loss);
+  }
+  void Validate() const;
+};
+
+struct OutputConfig {
+  Duration trajectory_period{std::chrono::milliseconds(50)};  // one trajectory.csv row per car
+
+  template <class V>
+  void Describe(V& v) {
+    v("trajectory_period_s", trajectory_period);
+  }
+  void Validate() const;
+};
+
+// Arguments an expectation may take; which ones each kind accepts is checked in ExpectClause.
+struct ExpectArgs {
+  std::optional<int> car;         // the car it is about (default: every car)
+  std::optional<int> laps;        // completes: laps to finish
+  std::optional<double> within_s; // completes: by this time (default: the scenario's duration)
+  std::optional<double> max_m;    // max_lateral_error: the bound
+
+  template <class V>
+  void Describe(V& v) {
+    v("car", car);
+    v("laps", laps);
+    v("within_s", within_s);
+    v("max_m", max_m);
+  }
+  void Validate() const {}
+};
+
+// One `expect:` entry: exactly one of these keys, e.g. `- completes: {car: 0, laps: 3}`.
+struct ExpectClause {
+  std::optional<ExpectArgs> no_collision;
+  std::optional<ExpectArgs> intersection_mutex;
+  std::optional<ExpectArgs> no_entry_without_grant;
+  std::optional<ExpectArgs> completes;
+  std::optional<ExpectArgs> max_lateral_error;
+
+  template <class V>
+  void Describe(V& v) {
+    v("no_collision", no_collision);
+    v("intersection_mutex", intersection_mutex);
+    v("no_entry_without_grant", no_entry_without_grant);
+    v("completes", completes);
+    v("max_lateral_error", max_lateral_error);
+  }
+  void Validate() const;
+  std::string kind() const;
+  const ExpectArgs& args() const;
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::uint64_t seed{1};
+  Duration duration{std::chrono::seconds(120)};
+  std::string track{"tracks/lab.yaml"};  // relative to the scenario file's folder
+  vehicle::PhysicsParams physics;
+  world::TrafficLightServerParams traffic_lights;
+  V2IConfig v2i;
+  std::vector<CarConfig> cars;
+  std::vector<ObstacleConfig> obstacles;
+  std::vector<ExpectClause> expect;
+  OutputConfig output;
+
+  template <class V>
+  void Describe(V& v) {
+    v("name", name);
+    v("description", description);
+    v("seed", seed);
+    v("duration_s", duration);
+    v("track", track);
+    v("physics", physics);
+    v("traffic_lights", traffic_lights);
+    v("v2i", v2i);
+    v("cars", cars);
+    v("obstacles", obstacles);
+    v("expect", expect);
+    v("output", output);
+  }
+  void Validate() const;
+};
+
+// A scenario read, overridden, checked against its track, and ready to run.
+struct LoadedScenario {
+  std::filesystem::path file;
+  Scenario scenario;
+  world::Track track;
+  std::vector<world::Route> routes;     // one per car, in scenario order
+  std::vector<double> start_s_m;        // per car: where on its route it starts
+  std::vector<world::Pose2> start_poses;  // per car: its initial chassis pose
+  std::string sha256;                   // of the resolved scenario and track (canonical JSON)
+  nlohmann::json resolved;              // {"scenario": ..., "track": ...} with every default
+};
+
+// Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,
+// loads the track, resolves each car's route and start. Throws ConfigError on unusable input.
+LoadedScenario LoadScenario(const std::filesystem::path& file,
+                            const std::vector<std::string>& overrides = {},
+                            std::optional<std::uint64_t> seed = std::nullopt);
+
+}  // namespace autonomsim::sim

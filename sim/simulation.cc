@@ -1,0 +1,346 @@
+#include "sim/simulation.h"
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <stdexcept>
+
+#include "sim/kernel.h"
+#include "sim/oracle_driver.h"
+#include "sim/priorities.h"
+#include "sim/random.h"
+#include "sim/traffic_light_node.h"
+#include "sim/v2i_link.h"
+#include "stack/intersection_client.h"
+#include "vehicle/physics_world.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// An open route ends this far before its last point: the car parks there (its motor brakes it
+// within ≈ v·τ ≈ 0.15 m).
+constexpr double kArrivalMargin_m = 0.2;
+// How far a car may move along its route between two physics steps, for the local projection.
+constexpr double kTrackingWindow_m = 0.5;
+
+// One car and everything that drives and watches it.
+struct CarAgent {
+  const CarConfig* config{nullptr};
+  const world::Route* route{nullptr};
+  vehicle::Car* car{nullptr};
+  OracleDriverState driver;
+  stack::IntersectionClientState client;
+  std::vector<world::Response> inbox;  // responses addressed to this car since the client's last step
+  vehicle::ActuatorCommand command;
+  bool waiting{false};  // the intersection client says: stop here until granted
+  bool parked{false};   // done: laps driven or route ended
+  std::optional<Time> wait_started;
+  // ground-truth tracking of the chassis centre along the route
+  double route_s_m{0.0};
+  double progress_m{0.0};
+  double lateral_error_m{0.0};
+  double lateral_sq_sum{0.0};
+  std::uint64_t lateral_samples{0};
+  int area{-1};  // the intersection whose area holds the chassis centre, or -1
+  CarMetrics metrics;
+};
+
+Duration Phase(const RngStreams& streams, const std::string& name, Duration period) {
+  // whole milliseconds, so that phases read well in traces
+  Rng rng = streams.Stream(name);
+  const auto period_ms = std::chrono::duration_cast<std::chrono::milliseconds>(period).count();
+  if (period_ms <= 0) return kZeroTime;
+  return std::chrono::milliseconds(static_cast<std::int64_t>(rng.Uniform01() *
+                                                              static_cast<double>(period_ms)));
+}
+
+}  // namespace
+
+struct Simulation::Impl {
+  explicit Impl(const LoadedScenario& loaded);
+
+  void Emit(Event event) { record.events.push_back(std::move(event)); }
+  void StepPhysics();
+  void Track(CarAgent* agent, Time t);
+  void StepDriver(CarAgent* agent);
+  void StepClient(CarAgent* agent);
+  void Sample();
+  void ReceiveAtCar(int car_id, const world::V2IMessage& message);
+  void Finish();
+
+  const LoadedScenario& loaded;
+  const Scenario& scenario;
+  const Time end;
+  Kernel kernel;
+  RngStreams streams;
+  vehicle::PhysicsWorld physics;
+  std::vector<CarAgent> agents;
+  std::map<int, std::size_t> agent_index;  // car id -> agents index
+  TrafficLightNode server;
+  std::unique_ptr<EmbeddedV2ILink> link;
+  RunRecord record;
+};
+
+Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
+    : loaded(loaded_scenario),
+      scenario(loaded_scenario.scenario),
+      end(loaded_scenario.scenario.duration),
+      streams(loaded_scenario.scenario.seed),
+      physics(loaded_scenario.scenario.physics),
+      server(
+          &kernel, scenario.traffic_lights,
+          [&] {
+            std::vector<int> ids;
+            for (const world::IntersectionSpec& i : loaded_scenario.track.spec().intersections) {
+              ids.push_back(i.id);
+            }
+            return ids;
+          }(),
+          [this](Event event) { Emit(std::move(event)); }) {
+  // cars, each on its route
+  std::vector<int> car_ids;
+  agents.reserve(scenario.cars.size());
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const CarConfig& config = scenario.cars[i];
+    CarAgent agent;
+    agent.config = &config;
+    agent.route = &loaded.routes[i];
+    agent.car = &physics.AddCar(config.id, config.vehicle, loaded.start_poses[i]);
+    agent.route_s_m = loaded.start_s_m[i];
+    const world::Vec2 heading = loaded.start_poses[i].heading();
+    agent.driver.rear_axle_s_m =
+        agent.route->path
+            .Project(loaded.start_poses[i].position() - 0.5 * config.vehicle.wheelbase_m * heading)
+            .s_m;
+    agent.metrics.id = config.id;
+    agent.metrics.route = agent.route->name;
+    agent.metrics.route_length_m = agent.route->path.length_m();
+    agent_index[config.id] = agents.size();
+    agents.push_back(std::move(agent));
+    car_ids.push_back(config.id);
+  }
+
+  // the V2I link between the cars and the server
+  link = std::make_unique<EmbeddedV2ILink>(
+      &kernel, scenario.v2i, streams, car_ids,
+      [this](int car_id, const world::V2IMessage& m) { server.OnMessage(car_id, m); },
+      [this](int car_id, const world::V2IMessage& m) { ReceiveAtCar(car_id, m); },
+      [this](int car_id, const world::V2IMessage& m) {
+        Emit(Event{.t = kernel.Now(), .type = "v2i_lost", .car = car_id,
+                   .detail = m.topic + " '" + m.payload + "'"});
+      });
+  server.set_link(link.get());
+
+  // obstacles, appearing and disappearing on schedule
+  for (const ObstacleConfig& o : scenario.obstacles) {
+    const vehicle::ObstacleBox box{o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0},
+                                   o.length_m, o.width_m, o.height_m};
+    const std::size_t index = physics.AddObstacle(box, false);
+    auto set = [this, index, name = o.name](bool enabled) {
+      physics.SetObstacleEnabled(index, enabled);
+      Emit(Event{.t = kernel.Now(),
+                 .type = enabled ? "obstacle_appear" : "obstacle_disappear",
+                 .obstacle = name});
+    };
+    kernel.ScheduleAt(FromSeconds(o.appear_s), [set] { set(true); }, kPriorityWorldChange);
+    if (o.disappear_s) {
+      kernel.ScheduleAt(FromSeconds(*o.disappear_s), [set] { set(false); },
+                        kPriorityWorldChange);
+    }
+  }
+
+  // the periodic work: clients, drivers, recording, physics
+  for (CarAgent& agent : agents) {
+    const std::string car = "car" + std::to_string(agent.config->id);
+    const Duration client_period = agent.config->intersection_client.tick_period;
+    const Duration driver_period = agent.config->oracle.period;
+    kernel.SchedulePeriodic(Phase(streams, car + "/client_phase", client_period), client_period,
+                            [this, a = &agent] { StepClient(a); }, kPriorityClient);
+    kernel.SchedulePeriodic(Phase(streams, car + "/driver_phase", driver_period), driver_period,
+                            [this, a = &agent] { StepDriver(a); }, kPriorityDriver);
+  }
+  kernel.SchedulePeriodic(kZeroTime, scenario.output.trajectory_period, [this] { Sample(); },
+                          kPriorityRecord);
+  kernel.SchedulePeriodic(kZeroTime, physics.step(), [this] { StepPhysics(); }, kPriorityPhysics);
+}
+
+void Simulation::Impl::StepClient(CarAgent* agent) {
+  const int id = agent->config->id;
+  stack::IntersectionClientInput input;
+  input.now = kernel.Now();
+  input.p_map = agent->car->pose().position();
+  input.responses = std::move(agent->inbox);
+  agent->inbox.clear();
+  const stack::IntersectionClientOutput out =
+      stack::StepIntersectionClient(agent->config->intersection_client, id,
+                                    loaded.track.spec().intersections, input, &agent->client);
+  for (const world::Request& request : out.requests) {
+    Emit(Event{.t = kernel.Now(), .type = "request", .car = id,
+               .intersection = request.intersection});
+    link->SendToServer(id, world::ToMessage(request));
+  }
+  for (const world::Free& free : out.frees) {
+    Emit(Event{.t = kernel.Now(), .type = "free", .car = id});
+    link->SendToServer(id, world::ToMessage(free));
+  }
+  const bool was_waiting = agent->waiting;
+  agent->waiting = !out.may_proceed;
+  if (!was_waiting && agent->waiting) agent->wait_started = kernel.Now();
+  if (was_waiting && !agent->waiting && agent->wait_started) {
+    const double wait_s = ToSeconds(kernel.Now() - *agent->wait_started);
+    agent->metrics.total_wait_s += wait_s;
+    agent->metrics.max_wait_s = std::max(agent->metrics.max_wait_s, wait_s);
+    ++agent->metrics.waits;
+    agent->wait_started.reset();
+  }
+}
+
+void Simulation::Impl::ReceiveAtCar(int car_id, const world::V2IMessage& message) {
+  const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
+  if (!decoded || !std::holds_alternative<world::Response>(decoded.value())) return;
+  const world::Response response = std::get<world::Response>(decoded.value());
+  if (response.car != car_id) return;  // a broadcast for another car
+  CarAgent& agent = agents[agent_index.at(car_id)];
+  Emit(Event{.t = kernel.Now(), .type = response.granted ? "grant" : "denied", .car = car_id});
+  agent.inbox.push_back(response);
+}
+
+void Simulation::Impl::StepDriver(CarAgent* agent) {
+  OracleDriverInput input;
+  input.X_map_car = agent->car->pose();
+  input.speed_mps = agent->car->forward_speed_mps();
+  input.hold = agent->waiting || agent->parked;
+  agent->command = StepOracleDriver(agent->config->oracle, agent->config->vehicle, *agent->route,
+                                    input, &agent->driver);
+  agent->car->SetCommand(agent->command);
+}
+
+void Simulation::Impl::StepPhysics() {
+  if (kernel.Now() >= end) return;  // the world is complete at `end`
+  physics.Step();
+  const Time t = kernel.Now() + physics.step();
+  for (const vehicle::ContactEvent& contact : physics.TakeContacts()) {
+    Event event{.t = t, .type = "collision", .car = contact.car_id};
+    ++agents[agent_index.at(contact.car_id)].metrics.collisions;
+    if (contact.with_car) {
+      event.other_car = contact.other_car_id;
+      ++agents[agent_index.at(contact.other_car_id)].metrics.collisions;
+    } else {
+      event.obstacle = contact.obstacle_name;
+    }
+    Emit(std::move(event));
+  }
+  for (CarAgent& agent : agents) Track(&agent, t);
+}
+
+void Simulation::Impl::Track(CarAgent* agent, Time t) {
+  const int id = agent->config->id;
+  const world::Pose2 pose = agent->car->pose();
+  const world::Polyline& path = agent->route->path;
+  const double length = path.length_m();
+
+  // progress and lateral error along the route
+  const world::Polyline::Projection on =
+      path.ProjectNear(pose.position(), agent->route_s_m, kTrackingWindow_m);
+  double ds = on.s_m - agent->route_s_m;
+  if (path.cyclic()) ds = std::remainder(ds, length);
+  agent->route_s_m = on.s_m;
+  agent->progress_m += ds;
+  agent->lateral_error_m = on.lateral_m;
+  agent->metrics.max_lateral_error_m =
+      std::max(agent->metrics.max_lateral_error_m, std::abs(on.lateral_m));
+  agent->lateral_sq_sum += on.lateral_m * on.lateral_m;
+  ++agent->lateral_samples;
+  agent->metrics.distance_m += std::abs(agent->car->forward_speed_mps()) * ToSeconds(physics.step());
+
+  // laps, and the end of the drive
+  if (path.cyclic()) {
+    while (agent->progress_m >= (agent->metrics.laps + 1) * length) {
+      ++agent->metrics.laps;
+      agent->metrics.lap_times_s.push_back(ToSeconds(t));
+      Emit(Event{.t = t, .type = "lap", .car = id, .lap = agent->metrics.laps});
+      if (!agent->parked && agent->config->laps && agent->metrics.laps >= *agent->config->laps) {
+        agent->parked = true;
+        Emit(Event{.t = t, .type = "parked", .car = id, .detail = "laps done"});
+      }
+    }
+  } else if (!agent->parked && agent->route_s_m >= length - kArrivalMargin_m) {
+    agent->parked = true;
+    Emit(Event{.t = t, .type = "parked", .car = id, .detail = "route end"});
+  }
+
+  // ground truth: entering and leaving intersection areas
+  const world::IntersectionSpec* inside = loaded.track.IntersectionAt(pose.position());
+  const int area = inside ? inside->id : -1;
+  if (area != agent->area) {
+    if (agent->area >= 0) {
+      Emit(Event{.t = t, .type = "exit", .car = id, .intersection = agent->area});
+    }
+    if (area >= 0) {
+      const std::optional<int> holder = server.server().Holder(area);
+      Emit(Event{.t = t, .type = "enter", .car = id, .intersection = area,
+                 .granted = holder.has_value() && *holder == id});
+      ++agent->metrics.intersection_entries;
+    }
+    agent->area = area;
+  }
+}
+
+void Simulation::Impl::Sample() {
+  for (const CarAgent& agent : agents) {
+    const world::Pose2 pose = agent.car->pose();
+    record.trajectory.push_back(TrajectorySample{
+        .t = kernel.Now(),
+        .car = agent.config->id,
+        .x_m = pose.x_m,
+        .y_m = pose.y_m,
+        .yaw_rad = pose.yaw_rad,
+        .speed_mps = agent.car->forward_speed_mps(),
+        .steering_rad = agent.car->steering_angle_rad(),
+        .throttle = agent.command.throttle,
+        .curvature_cmd_per_m = agent.command.curvature_per_m,
+        .lateral_error_m = agent.lateral_error_m,
+        .route_progress_m = agent.progress_m,
+    });
+  }
+}
+
+void Simulation::Impl::Finish() {
+  record.sim_duration = end;
+  record.kernel_events = kernel.executed();
+  for (CarAgent& agent : agents) {
+    if (agent.lateral_samples > 0) {
+      agent.metrics.rms_lateral_error_m =
+          std::sqrt(agent.lateral_sq_sum / static_cast<double>(agent.lateral_samples));
+    }
+    agent.metrics.mean_speed_mps = agent.metrics.distance_m / ToSeconds(end);
+    record.cars.push_back(agent.metrics);
+  }
+  const world::TrafficLightServer::Counters c = server.server().counters();
+  record.server = {c.requests, c.grants, c.denials, c.frees, c.lease_expiries, server.malformed()};
+  record.v2i = {link->sent(), link->delivered(), link->lost()};
+}
+
+Simulation::Simulation(const LoadedScenario& scenario) : impl_(std::make_unique<Impl>(scenario)) {}
+
+Simulation::~Simulation() = default;
+
+void Simulation::Run(const std::function<void(Time)>& progress, Duration progress_period) {
+  if (progress) {
+    impl_->kernel.SchedulePeriodic(
+        progress_period, progress_period, [this, &progress] { progress(impl_->kernel.Now()); },
+        kPriorityRecord);
+  }
+  impl_->kernel.RunUntil(impl_->end);
+  impl_->Finish();
+}
+
+const RunRecord& Simulation::record() const { return impl_->record; }
+
+RunRecord RunScenario(const LoadedScenario& scenario) {
+  Simulation simulation(scenario);
+  simulation.Run();
+  return simulation.record();
+}
+
+}  // namespace autonomsim::sim
