@@ -1,0 +1,167 @@
+#include "world/traffic_light_server.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace autonomsim::world {
+namespace {
+
+void CheckId(int id, const char* what) {
+  if (id < 0 || id > kMaxV2IId) {
+    throw std::invalid_argument(std::string(what) + " id must be a single digit 0..9, got " +
+                                std::to_string(id));
+  }
+}
+
+}  // namespace
+
+void TrafficLightServerParams::Validate() const {
+  if (policy != "fifo" && policy != "original") {
+    throw std::invalid_argument("policy must be 'fifo' or 'original', got '" + policy + "'");
+  }
+  if (lease <= Duration::zero()) {
+    throw std::invalid_argument("lease_s must be > 0 s, got " + std::to_string(ToSeconds(lease)) +
+                                " s");
+  }
+}
+
+TrafficLightServer::TrafficLightServer(TrafficLightServerParams params,
+                                       std::vector<int> intersection_ids)
+    : params_(std::move(params)) {
+  params_.Validate();
+  fifo_ = params_.policy == "fifo";
+  if (intersection_ids.empty()) {
+    throw std::invalid_argument("intersection_ids must not be empty");
+  }
+  for (int id : intersection_ids) {
+    CheckId(id, "intersection");
+    if (!slots_.emplace(id, Slot{}).second) {
+      throw std::invalid_argument("intersection id " + std::to_string(id) + " is repeated");
+    }
+  }
+}
+
+void TrafficLightServer::AdvanceTo(Time now) {
+  if (last_now_ && now < *last_now_) {
+    throw std::invalid_argument("time went backwards: " + std::to_string(ToSeconds(now)) +
+                                " s after " + std::to_string(ToSeconds(*last_now_)) + " s");
+  }
+  last_now_ = now;
+}
+
+bool TrafficLightServer::IsDead(int car, Time now) const {
+  const auto& heard = last_heard_[static_cast<std::size_t>(car)];
+  return !heard || now >= *heard + params_.lease;
+}
+
+void TrafficLightServer::GrantHeadIfFree(Slot* slot, std::vector<Response>* out) {
+  if (slot->holder || slot->queue.empty()) return;
+  slot->holder = slot->queue.front();
+  slot->queue.pop_front();
+  ++counters_.grants;
+  out->push_back(Response{*slot->holder, true});
+}
+
+void TrafficLightServer::Expire(Time now, std::vector<Response>* out) {
+  if (!fifo_) return;
+  // Drop every dead queued car first, so that an expiry never grants a car that is itself dead.
+  for (auto& [id, slot] : slots_) {
+    const auto before = slot.queue.size();
+    std::erase_if(slot.queue, [&](int car) { return IsDead(car, now); });
+    counters_.queue_drops += before - slot.queue.size();
+  }
+  for (auto& [id, slot] : slots_) {
+    if (slot.holder && IsDead(*slot.holder, now)) {
+      slot.holder.reset();
+      ++counters_.lease_expiries;
+    }
+    GrantHeadIfFree(&slot, out);
+  }
+}
+
+std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& request) {
+  CheckId(request.car, "car");
+  CheckId(request.intersection, "intersection");
+  AdvanceTo(now);
+  std::vector<Response> out;
+  Expire(now, &out);
+  ++counters_.requests;
+  last_heard_[static_cast<std::size_t>(request.car)] = now;
+
+  auto it = slots_.find(request.intersection);
+  if (it == slots_.end()) {
+    ++counters_.unknown_intersection;
+    ++counters_.denials;
+    out.push_back(Response{request.car, false});
+    return out;
+  }
+  Slot& slot = it->second;
+  if (!slot.holder) {
+    // Invariant: a free slot has an empty queue (every release grants the head at once).
+    slot.holder = request.car;
+    ++counters_.grants;
+    out.push_back(Response{request.car, true});
+  } else if (*slot.holder == request.car) {
+    out.push_back(Response{request.car, true});  // renewal
+  } else {
+    if (fifo_ && std::find(slot.queue.begin(), slot.queue.end(), request.car) == slot.queue.end()) {
+      slot.queue.push_back(request.car);
+    }
+    ++counters_.denials;
+    out.push_back(Response{request.car, false});
+  }
+  return out;
+}
+
+std::vector<Response> TrafficLightServer::OnFree(Time now, const Free& free) {
+  CheckId(free.car, "car");
+  AdvanceTo(now);
+  std::vector<Response> out;
+  Expire(now, &out);
+  ++counters_.frees;
+  last_heard_[static_cast<std::size_t>(free.car)] = now;
+  for (auto& [id, slot] : slots_) {
+    std::erase(slot.queue, free.car);
+    if (slot.holder == free.car) {
+      slot.holder.reset();
+      GrantHeadIfFree(&slot, &out);
+    }
+  }
+  return out;
+}
+
+std::vector<Response> TrafficLightServer::OnTick(Time now) {
+  AdvanceTo(now);
+  std::vector<Response> out;
+  Expire(now, &out);
+  return out;
+}
+
+std::optional<Time> TrafficLightServer::NextDeadline() const {
+  if (!fifo_) return std::nullopt;
+  std::optional<Time> earliest;
+  auto consider = [&](int car) {
+    const auto& heard = last_heard_[static_cast<std::size_t>(car)];
+    const Time deadline = heard ? *heard + params_.lease : kZeroTime;
+    if (!earliest || deadline < *earliest) earliest = deadline;
+  };
+  for (const auto& [id, slot] : slots_) {
+    if (slot.holder) consider(*slot.holder);
+    for (int car : slot.queue) consider(car);
+  }
+  return earliest;
+}
+
+std::optional<int> TrafficLightServer::Holder(int intersection) const {
+  auto it = slots_.find(intersection);
+  if (it == slots_.end()) return std::nullopt;
+  return it->second.holder;
+}
+
+std::vector<int> TrafficLightServer::Queue(int intersection) const {
+  auto it = slots_.find(intersection);
+  if (it == slots_.end()) return {};
+  return {it->second.queue.begin(), it->second.queue.end()};
+}
+
+}  // namespace autonomsim::world

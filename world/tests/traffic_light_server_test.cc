@@ -1,0 +1,298 @@
+#include "world/traffic_light_server.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace autonomsim::world {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+using Responses = std::vector<Response>;
+
+constexpr int kI0 = 0;
+constexpr int kI1 = 1;
+
+Time At(double s) { return FromSeconds(s); }
+
+TrafficLightServer MakeServer(std::string policy = "fifo", double lease_s = 5.0) {
+  TrafficLightServerParams params;
+  params.policy = std::move(policy);
+  params.lease = FromSeconds(lease_s);
+  return TrafficLightServer(params, {kI0, kI1});
+}
+
+Response Granted(int car) { return Response{car, true}; }
+Response Denied(int car) { return Response{car, false}; }
+
+TEST(TrafficLightServerParamsTest, DefaultsAndKeys) {
+  TrafficLightServerParams params;
+  EXPECT_EQ(params.policy, "fifo");
+  EXPECT_EQ(params.lease, std::chrono::seconds(5));
+  EXPECT_NO_THROW(params.Validate());
+  std::vector<std::string> keys;
+  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  params.Describe(visit);
+  EXPECT_THAT(keys, ElementsAre("policy", "lease_s"));
+}
+
+TEST(TrafficLightServerParamsTest, ValidateNamesTheKeyAndTheValue) {
+  TrafficLightServerParams params;
+  params.policy = "lifo";
+  try {
+    params.Validate();
+    FAIL() << "accepted policy lifo";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("policy"));
+    EXPECT_THAT(e.what(), HasSubstr("lifo"));
+  }
+  params = {};
+  params.lease = Duration::zero();
+  try {
+    params.Validate();
+    FAIL() << "accepted a zero lease";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("lease_s"));
+    EXPECT_THAT(e.what(), HasSubstr("0.000000"));
+  }
+}
+
+TEST(TrafficLightServerTest, ConstructorRejectsBadIntersectionIds) {
+  EXPECT_THROW(TrafficLightServer({}, {}), std::invalid_argument);
+  EXPECT_THROW(TrafficLightServer({}, {0, 10}), std::invalid_argument);
+  EXPECT_THROW(TrafficLightServer({}, {-1}), std::invalid_argument);
+  EXPECT_THROW(TrafficLightServer({}, {1, 1}), std::invalid_argument);
+  TrafficLightServerParams bad;
+  bad.policy = "";
+  EXPECT_THROW(TrafficLightServer(bad, {0}), std::invalid_argument);
+}
+
+TEST(TrafficLightServerTest, GrantsAFreeIntersection) {
+  auto server = MakeServer();
+  EXPECT_THAT(server.OnRequest(At(0.0), {0, kI0}), ElementsAre(Granted(0)));
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_EQ(server.Holder(kI1), std::nullopt);
+  EXPECT_EQ(server.counters().requests, 1u);
+  EXPECT_EQ(server.counters().grants, 1u);
+  EXPECT_EQ(server.counters().denials, 0u);
+}
+
+TEST(TrafficLightServerTest, HolderRequestRenewsAndIsGrantedAgain) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {0, kI0});
+  EXPECT_THAT(server.OnRequest(At(1.0), {0, kI0}), ElementsAre(Granted(0)));
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_THAT(server.Queue(kI0), IsEmpty());
+  EXPECT_EQ(server.counters().requests, 2u);
+  EXPECT_EQ(server.counters().grants, 1u);  // a renewal is not a new grant
+  EXPECT_EQ(server.NextDeadline(), At(6.0));
+}
+
+TEST(TrafficLightServerTest, SecondCarIsDeniedThenGrantedWhenTheHolderFrees) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {0, kI0});
+  EXPECT_THAT(server.OnRequest(At(0.5), {1, kI0}), ElementsAre(Denied(1)));
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(1));
+  EXPECT_THAT(server.OnFree(At(2.0), {0}), ElementsAre(Granted(1)));
+  EXPECT_EQ(server.Holder(kI0), 1);
+  EXPECT_THAT(server.Queue(kI0), IsEmpty());
+  EXPECT_EQ(server.counters().grants, 2u);
+  EXPECT_EQ(server.counters().denials, 1u);
+  EXPECT_EQ(server.counters().frees, 1u);
+}
+
+TEST(TrafficLightServerTest, WaitingCarsAreGrantedInFifoOrder) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {0, kI0});
+  EXPECT_THAT(server.OnRequest(At(0.1), {3, kI0}), ElementsAre(Denied(3)));
+  EXPECT_THAT(server.OnRequest(At(0.2), {1, kI0}), ElementsAre(Denied(1)));
+  EXPECT_THAT(server.OnRequest(At(0.3), {2, kI0}), ElementsAre(Denied(2)));
+  // Retries keep their place; they do not move to the back.
+  EXPECT_THAT(server.OnRequest(At(1.1), {3, kI0}), ElementsAre(Denied(3)));
+  EXPECT_THAT(server.OnRequest(At(1.2), {1, kI0}), ElementsAre(Denied(1)));
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(3, 1, 2));
+
+  EXPECT_THAT(server.OnFree(At(2.0), {0}), ElementsAre(Granted(3)));
+  EXPECT_THAT(server.OnFree(At(2.5), {3}), ElementsAre(Granted(1)));
+  EXPECT_THAT(server.OnFree(At(3.0), {1}), ElementsAre(Granted(2)));
+  EXPECT_THAT(server.OnFree(At(3.5), {2}), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), std::nullopt);
+  EXPECT_EQ(server.counters().grants, 4u);
+  EXPECT_EQ(server.counters().denials, 5u);
+}
+
+TEST(TrafficLightServerTest, FreeFromANonHolderChangesNothing) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.1), {1, kI0});
+  EXPECT_THAT(server.OnFree(At(0.2), {2}), IsEmpty());  // car 2 holds nothing, waits for nothing
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(1));
+  EXPECT_EQ(server.counters().frees, 1u);
+}
+
+TEST(TrafficLightServerTest, FreeFromAQueuedCarWithdrawsItButKeepsTheHolder) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.1), {1, kI0});
+  server.OnRequest(At(0.2), {2, kI0});
+  EXPECT_THAT(server.OnFree(At(0.3), {1}), IsEmpty());  // car 1 gave up waiting
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(2));
+  EXPECT_THAT(server.OnFree(At(0.4), {0}), ElementsAre(Granted(2)));
+}
+
+TEST(TrafficLightServerTest, LeaseExpiryFreesASilentHolderAndGrantsTheNextExactlyOnTime) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(1.0), {0, kI0});
+  server.OnRequest(At(2.0), {1, kI0});
+  // Car 0 falls silent; car 1 keeps retrying, so it stays alive.
+  server.OnRequest(At(3.0), {1, kI0});
+  server.OnRequest(At(5.5), {1, kI0});
+  ASSERT_EQ(server.NextDeadline(), At(6.0));  // 5 s after car 0 was last heard
+
+  EXPECT_THAT(server.OnTick(At(6.0) - Duration{1}), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_THAT(server.OnTick(At(6.0)), ElementsAre(Granted(1)));
+  EXPECT_EQ(server.Holder(kI0), 1);
+  EXPECT_EQ(server.counters().lease_expiries, 1u);
+  EXPECT_EQ(server.NextDeadline(), At(10.5));  // now car 1's lease
+}
+
+TEST(TrafficLightServerTest, ExpiryIsAppliedByAnyCallEvenWithoutATick) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.0), {1, kI0});
+  server.OnRequest(At(4.0), {1, kI0});
+  // Car 2's request at 7 s first sees car 0 expire (5 s) and car 1 take over, then queues.
+  EXPECT_THAT(server.OnRequest(At(7.0), {2, kI0}), ElementsAre(Granted(1), Denied(2)));
+  EXPECT_EQ(server.Holder(kI0), 1);
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(2));
+}
+
+TEST(TrafficLightServerTest, SilentQueuedCarIsDroppedAndNeverGranted) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.5), {1, kI0});  // then silent
+  server.OnRequest(At(0.7), {2, kI0});
+  for (double t = 1.0; t <= 5.0; t += 1.0) {  // keepalives from the holder, retries from car 2
+    server.OnRequest(At(t), {0, kI0});
+    server.OnRequest(At(t + 0.2), {2, kI0});
+  }
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(1, 2));
+  EXPECT_EQ(server.NextDeadline(), At(5.5));  // car 1's silence
+  EXPECT_THAT(server.OnTick(At(5.5)), IsEmpty());
+  EXPECT_THAT(server.Queue(kI0), ElementsAre(2));
+  EXPECT_EQ(server.counters().queue_drops, 1u);
+  EXPECT_THAT(server.OnFree(At(6.0), {0}), ElementsAre(Granted(2)));
+}
+
+TEST(TrafficLightServerTest, ALateTickNeverGrantsACarThatIsItselfDead) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.5), {1, kI0});
+  server.OnRequest(At(1.0), {2, kI0});
+  // Nobody calls until 5.9 s: car 0 (dead at 5 s) and car 1 (5.5 s) are gone, car 2 is next.
+  EXPECT_THAT(server.OnTick(At(5.9)), ElementsAre(Granted(2)));
+  EXPECT_EQ(server.counters().lease_expiries, 1u);
+  EXPECT_EQ(server.counters().queue_drops, 1u);
+}
+
+TEST(TrafficLightServerTest, RenewalsPostponeExpiry) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.1), {1, kI0});
+  for (double t = 1.0; t < 20.0; t += 1.0) {
+    server.OnRequest(At(t), {0, kI0});
+    server.OnRequest(At(t + 0.1), {1, kI0});
+    EXPECT_THAT(server.OnTick(At(t + 0.5)), IsEmpty());
+    EXPECT_EQ(server.Holder(kI0), 0);
+    EXPECT_EQ(server.NextDeadline(), At(t + 5.0));
+  }
+  EXPECT_EQ(server.counters().lease_expiries, 0u);
+  // A free from the holder counts as hearing from it too, and releases at once.
+  EXPECT_THAT(server.OnFree(At(20.0), {0}), ElementsAre(Granted(1)));
+}
+
+TEST(TrafficLightServerTest, AnyMessageFromACarRenewsItsLiveness) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(4.0), {0, kI1});  // about the other intersection
+  EXPECT_EQ(server.NextDeadline(), At(9.0));
+  EXPECT_THAT(server.OnTick(At(8.0)), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), 0);
+}
+
+TEST(TrafficLightServerTest, UnknownIntersectionIsCountedAndDenied) {
+  auto server = MakeServer();
+  EXPECT_THAT(server.OnRequest(At(0.0), {4, 7}), ElementsAre(Denied(4)));
+  EXPECT_EQ(server.counters().unknown_intersection, 1u);
+  EXPECT_EQ(server.counters().denials, 1u);
+  EXPECT_EQ(server.Holder(7), std::nullopt);
+  EXPECT_THAT(server.Queue(7), IsEmpty());
+  EXPECT_EQ(server.NextDeadline(), std::nullopt);
+}
+
+TEST(TrafficLightServerTest, IntersectionsAreIndependent) {
+  auto server = MakeServer();
+  EXPECT_THAT(server.OnRequest(At(0.0), {0, kI0}), ElementsAre(Granted(0)));
+  EXPECT_THAT(server.OnRequest(At(0.1), {1, kI1}), ElementsAre(Granted(1)));
+  EXPECT_THAT(server.OnRequest(At(0.2), {2, kI1}), ElementsAre(Denied(2)));
+  EXPECT_THAT(server.OnFree(At(0.3), {0}), IsEmpty());  // car 0 releases 0 only
+  EXPECT_EQ(server.Holder(kI0), std::nullopt);
+  EXPECT_EQ(server.Holder(kI1), 1);
+  EXPECT_THAT(server.Queue(kI1), ElementsAre(2));
+}
+
+TEST(TrafficLightServerTest, ACarMayHoldSeveralAndFreeReleasesThemAllInIdOrder) {
+  auto server = MakeServer();
+  server.OnRequest(At(0.0), {5, kI1});
+  server.OnRequest(At(0.1), {5, kI0});
+  server.OnRequest(At(0.2), {6, kI1});
+  server.OnRequest(At(0.3), {7, kI0});
+  EXPECT_THAT(server.OnFree(At(1.0), {5}), ElementsAre(Granted(7), Granted(6)));
+  EXPECT_EQ(server.Holder(kI0), 7);
+  EXPECT_EQ(server.Holder(kI1), 6);
+}
+
+TEST(TrafficLightServerTest, TimeMustNotGoBackwards) {
+  auto server = MakeServer();
+  server.OnRequest(At(2.0), {0, kI0});
+  EXPECT_NO_THROW(server.OnTick(At(2.0)));
+  EXPECT_THROW(server.OnTick(At(1.0)), std::invalid_argument);
+  EXPECT_THROW(server.OnRequest(At(2.0), {10, kI0}), std::invalid_argument);
+}
+
+TEST(TrafficLightServerOriginalTest, DeniedCarIsNeverGrantedLaterAndNothingExpires) {
+  auto server = MakeServer("original", 5.0);
+  EXPECT_THAT(server.OnRequest(At(0.0), {0, kI0}), ElementsAre(Granted(0)));
+  EXPECT_THAT(server.OnRequest(At(0.1), {0, kI0}), ElementsAre(Granted(0)));  // same car
+  EXPECT_THAT(server.OnRequest(At(0.2), {1, kI0}), ElementsAre(Denied(1)));
+  EXPECT_THAT(server.Queue(kI0), IsEmpty());
+  EXPECT_EQ(server.NextDeadline(), std::nullopt);
+  // Car 0 dies silently: it keeps the slot for ever.
+  EXPECT_THAT(server.OnTick(At(1000.0)), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_EQ(server.counters().lease_expiries, 0u);
+  // Once it frees, nobody is told: car 1 only gets the slot by asking again.
+  EXPECT_THAT(server.OnFree(At(1001.0), {0}), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), std::nullopt);
+  EXPECT_THAT(server.OnRequest(At(1002.0), {1, kI0}), ElementsAre(Granted(1)));
+}
+
+TEST(TrafficLightServerOriginalTest, FreeReleasesOnlyTheCarsSlots) {
+  auto server = MakeServer("original");
+  server.OnRequest(At(0.0), {0, kI0});
+  server.OnRequest(At(0.0), {1, kI1});
+  EXPECT_THAT(server.OnFree(At(1.0), {1}), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_EQ(server.Holder(kI1), std::nullopt);
+}
+
+}  // namespace
+}  // namespace autonomsim::world

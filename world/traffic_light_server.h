@@ -1,0 +1,111 @@
+// The traffic-light server's logic (reference §7: vtl.py), as a pure object: messages and the
+// current time go in, the /vtl/response broadcasts to send come out, in order. No clock, no I/O;
+// the `tlserver` process and the simulator's embedded V2I link both drive this one class.
+//
+// Policy "fifo" (ours), per intersection:
+//   - mutual exclusion: at most one holder;
+//   - a request from the holder renews it and is answered "<car>1" again;
+//   - a request when the intersection is free (hence nobody queued) is granted;
+//   - otherwise the car joins the queue once (a repeated request keeps its place) and is answered
+//     "<car>0"; when the holder frees or its lease expires, the queue head is granted by a later
+//     broadcast "<car>1";
+//   - liveness is per car: any message from a car (request or free, for any intersection) renews
+//     it. A car is dead from last_heard + lease on (inclusive): it loses what it holds
+//     (lease_expiries) and leaves every queue; the next live car in the queue is granted;
+//   - Free("<car>") releases every intersection that car holds and withdraws it from every queue
+//     (the protocol's free names no intersection; it never touches another car's grant);
+//   - a request for an unknown intersection is counted and answered "<car>0".
+// Policy "original" (the lab's vtl.py): grant if the slot is empty or held by the same car, deny
+// otherwise; no queue, no lease; Free releases the car's slots. A denied car is never granted
+// unless it asks again.
+//
+// Expiries are applied lazily too: every On*(now) first applies what expired at `now`, so the
+// outcome depends only on the timestamps of the calls, not on whether OnTick ran in between.
+// `now` must not decrease from one call to the next (std::invalid_argument otherwise).
+// Output order is deterministic: responses to expiries and frees come in ascending intersection
+// id, then the answer to the request itself.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "world/time.h"
+#include "world/v2i_protocol.h"
+
+namespace autonomsim::world {
+
+struct TrafficLightServerParams {
+  // "fifo": ours (above); "original": the lab's vtl.py behaviour (reference §7).
+  std::string policy{"fifo"};
+  // Assumed: the reference has no timeout at all (§7). A holder silent this long loses its grant;
+  // it must exceed the cars' keepalive and retry periods (stack/intersection_client.h, 1 s) with
+  // room for a few lost messages.
+  Duration lease{std::chrono::seconds(5)};
+
+  template <class V>
+  void Describe(V& v) {
+    v("policy", policy);
+    v("lease_s", lease);
+  }
+  void Validate() const;
+};
+
+class TrafficLightServer {
+ public:
+  struct Counters {
+    std::uint64_t requests{0};        // request messages received (known and unknown intersections)
+    std::uint64_t grants{0};          // a car became holder (renewal answers are not counted)
+    std::uint64_t denials{0};         // "<car>0" responses sent
+    std::uint64_t frees{0};           // free messages received (whether or not they released any)
+    std::uint64_t lease_expiries{0};  // holders that lost an intersection by lease expiry
+    std::uint64_t unknown_intersection{0};  // requests naming an intersection we do not serve
+    std::uint64_t queue_drops{0};           // queued cars dropped for silence
+  };
+
+  // Throws std::invalid_argument for invalid params, an empty id list, an id outside 0..9 or a
+  // repeated id.
+  TrafficLightServer(TrafficLightServerParams params, std::vector<int> intersection_ids);
+
+  // Car and intersection ids outside 0..9 throw std::invalid_argument (decoded messages cannot
+  // carry them).
+  std::vector<Response> OnRequest(Time now, const Request& request);
+  std::vector<Response> OnFree(Time now, const Free& free);
+  // Lease expiries due at `now`, and the grants that follow them.
+  std::vector<Response> OnTick(Time now);
+
+  // The earliest time at which the state changes by itself (a holder's lease expires or a queued
+  // car is dropped), so a simulator can schedule OnTick exactly; nullopt when nothing is pending
+  // (always for "original").
+  std::optional<Time> NextDeadline() const;
+
+  // Unknown intersections: nullopt / empty.
+  std::optional<int> Holder(int intersection) const;
+  std::vector<int> Queue(int intersection) const;
+  Counters counters() const { return counters_; }
+  const TrafficLightServerParams& params() const { return params_; }
+
+ private:
+  struct Slot {
+    std::optional<int> holder;
+    std::deque<int> queue;  // waiting cars, head first; never holds the holder or a duplicate
+  };
+
+  void AdvanceTo(Time now);
+  bool IsDead(int car, Time now) const;
+  void Expire(Time now, std::vector<Response>* out);
+  void GrantHeadIfFree(Slot* slot, std::vector<Response>* out);
+
+  TrafficLightServerParams params_;
+  bool fifo_{true};
+  std::map<int, Slot> slots_;  // ordered by id: iteration order is output order
+  std::array<std::optional<Time>, kMaxV2IId + 1> last_heard_{};  // per car id
+  std::optional<Time> last_now_;
+  Counters counters_;
+};
+
+}  // namespace autonomsim::world
