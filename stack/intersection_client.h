@@ -1,0 +1,98 @@
+// The car's side of the /vtl/ protocol (reference §7: vehicle communication + intersection_checker)
+// as a pure step, run every tick_period on the car's estimated position. One improvement over the
+// original client, which requested once and then waited forever: it asks again after a denial or a
+// lost message, and keeps a held intersection alive against the server's lease.
+//
+// State machine (one intersection at a time: a response names no intersection, so it answers the
+// one pending request; a free names none either, so it releases everything the car holds):
+//   kIdle        --p in a stop zone of i-------------------------> kWaiting(i)  send Request{i}
+//   kWaiting(i)  --"<car>1"------------------------------------> kHolding(i)
+//   kWaiting(i)  --"<car>0"------------------------------------> kWaiting(i)  (FIFO grants later)
+//   kWaiting(i)  --retry_period since the last Request----------> kWaiting(i)  send Request{i}
+//   kWaiting(i)  --p outside i's stop zones and area (gave up)----> kIdle       send Free
+//   kHolding(i)  --keepalive_period since last Request-----------> kHolding(i)  send Request{i}
+//   kHolding(i)  --p outside i's stop zones and area--------------> kIdle       send Free
+//                  (before the car has been in the area: outside them by release_margin_m)
+//   kHolding(i)  --"<car>0" (grant lost: lease expired)----------> kWaiting(i)
+//   kIdle        --"<car>1" (late or stale grant)-----------------> kIdle       send Free
+// Responses are applied first, in arrival order, then the position. Entering a stop zone uses the
+// real cars' strict Box::Contains; being still in i (stop zone or area) uses the closed boxes, so
+// a car sampled exactly on the edge a stop zone shares with its area (lab: y = -0.6) neither frees
+// mid-crossing nor rolls on while waiting. Leaving i straight into a stop zone of another
+// intersection j frees i and requests j in the same step. may_proceed is false only while in a
+// stop zone of i in kWaiting(i); a car that overshot into the area keeps going (stopping inside
+// the intersection helps nobody) and keeps asking until it leaves.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "world/geometry.h"
+#include "world/time.h"
+#include "world/track_spec.h"
+#include "world/v2i_protocol.h"
+
+namespace autonomsim::stack {
+
+struct IntersectionClientParams {
+  // Reference §7: the car client checks its zone every 100 ms (used by the node that runs it).
+  Duration tick_period{Milliseconds(100)};
+  // Assumed: re-request when no grant arrived within this (the original never re-asks, §7).
+  // Must be < the server's lease, or a waiting car is dropped from the queue between retries.
+  Duration retry_period{std::chrono::seconds(1)};
+  // Assumed: a holder re-requests this often to renew the server's lease (5 s); 1 s leaves room
+  // for four lost keepalives. Must be < the server's lease.
+  Duration keepalive_period{std::chrono::seconds(1)};
+  // Assumed: the lab's left intersection leaves 0.1 m between two of its stop zones and its area
+  // (reference §1), so a car that leaves a stop zone has not necessarily left the intersection.
+  // Until the car has been inside the area, it keeps its claim while within this distance of the
+  // intersection's boxes. The original client frees in that gap and then enters unclaimed.
+  double release_margin_m{0.3};
+
+  template <class V>
+  void Describe(V& v) {
+    v("tick_period_s", tick_period);
+    v("retry_period_s", retry_period);
+    v("keepalive_period_s", keepalive_period);
+    v("release_margin_m", release_margin_m);
+  }
+  void Validate() const;
+};
+
+// Cross-struct check for whoever assembles cars and server: retry_period_s and keepalive_period_s
+// must be shorter than the server's lease_s. Throws std::invalid_argument naming the key.
+void ValidateAgainstLease(const IntersectionClientParams& params, Duration server_lease);
+
+struct IntersectionClientInput {
+  Time now{kZeroTime};
+  world::Vec2 p_map{world::Vec2::Zero()};  // the car's estimated position, map frame
+  // Every /vtl/response broadcast received since the last step, in arrival order; other cars'
+  // responses are ignored.
+  std::vector<world::Response> responses;
+};
+
+struct IntersectionClientOutput {
+  // Send frees before requests: whenever a step emits both, the free releases the intersection
+  // being left and the request asks for the next one.
+  std::vector<world::Request> requests;
+  std::vector<world::Free> frees;
+  bool may_proceed{true};
+  std::optional<int> waiting_for;  // the intersection id while kWaiting
+};
+
+struct IntersectionClientState {
+  enum class Phase { kIdle, kWaiting, kHolding };
+  Phase phase{Phase::kIdle};
+  int intersection{-1};               // the one waited for or held; -1 in kIdle
+  Time last_request_sent{kZeroTime};  // when the last Request for `intersection` went out
+  bool crossed{false};                // has been inside `intersection`'s area
+};
+
+// car_id must be 0..9 (std::invalid_argument otherwise). `intersections` are the track's, in
+// track order; where stop zones of two intersections overlap, the first listed wins.
+IntersectionClientOutput StepIntersectionClient(
+    const IntersectionClientParams& params, int car_id,
+    const std::vector<world::IntersectionSpec>& intersections, const IntersectionClientInput& input,
+    IntersectionClientState* state);
+
+}  // namespace autonomsim::stack
