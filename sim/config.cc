@@ -143,7 +143,8 @@ void ReadScalar(const YAML::Node& node, double& out, const std::string& path,
   } catch (const YAML::Exception&) {
     Fail(node, path, source, "expected a number, got " + Describe(node));
   }
-  if (!std::isfinite(out)) Fail(node, path, source, "expected a finite number, got " + Describe(node));
+  if (!std::isfinite(out))
+    Fail(node, path, source, "expected a finite number, got " + Describe(node));
 }
 
 void ReadScalar(const YAML::Node& node, std::string& out, const std::string& path,

@@ -140,7 +140,7 @@ void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigS
       Read(item.second, value, JoinPath(path, key), source);
       out.emplace(key, std::move(value));
     }
-  } else if constexpr (requires(T& t, YamlFieldReader& r) { t.Describe(r); }) {
+  } else if constexpr (requires(T & t, YamlFieldReader & r) { t.Describe(r); }) {
     if (node.IsNull()) {
       // `key:` or `key: ~` keeps every default, like `key: {}`.
     } else if (!node.IsMap()) {
@@ -190,7 +190,7 @@ nlohmann::json ToJsonValue(const T& value) {
     nlohmann::json object = nlohmann::json::object();
     for (const auto& [key, item] : value) object[key] = ToJsonValue(item);
     return object;
-  } else if constexpr (requires(T& t, JsonFieldWriter& w) { t.Describe(w); }) {
+  } else if constexpr (requires(T & t, JsonFieldWriter & w) { t.Describe(w); }) {
     JsonFieldWriter writer;
     const_cast<T&>(value).Describe(writer);  // Describe only reads through a writer
     return writer.take();

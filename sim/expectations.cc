@@ -15,7 +15,8 @@ std::string Name(const ExpectClause& clause) {
   if (a.laps) parts.push_back(fmt::format("laps={}", *a.laps));
   if (a.within_s) parts.push_back(fmt::format("within_s={}", *a.within_s));
   if (a.max_m) parts.push_back(fmt::format("max_m={}", *a.max_m));
-  return parts.empty() ? clause.kind() : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
+  return parts.empty() ? clause.kind()
+                       : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
 }
 
 bool Concerns(const ExpectArgs& args, int car) { return !args.car || *args.car == car; }
@@ -50,8 +51,8 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
     for (const auto& [other, in] : inside[e.intersection]) {
       if (in && other != e.car) {
         if (violations++ == 0) {
-          first = fmt::format("car {} entered intersection {} at {} while car {} was inside",
-                              e.car, e.intersection, At(e), other);
+          first = fmt::format("car {} entered intersection {} at {} while car {} was inside", e.car,
+                              e.intersection, At(e), other);
         }
       }
     }

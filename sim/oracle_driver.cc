@@ -9,11 +9,16 @@ namespace autonomsim::sim {
 void OracleDriverParams::Validate() const {
   if (period <= kZeroTime) throw std::invalid_argument("period_s must be > 0");
   if (!(speed_mps > 0.0 && speed_mps <= 5.0)) {
-    throw std::invalid_argument("speed_mps must be in (0, 5] m/s, got " + std::to_string(speed_mps));
+    throw std::invalid_argument("speed_mps must be in (0, 5] m/s, got " +
+                                std::to_string(speed_mps));
   }
   if (!(lookahead_m >= 0.05 && lookahead_m <= 5.0)) {
     throw std::invalid_argument("lookahead_m must be in [0.05, 5] m, got " +
                                 std::to_string(lookahead_m));
+  }
+  if (!(obstacle_stop_gap_m >= 0.0)) {
+    throw std::invalid_argument("obstacle_stop_gap_m must be >= 0, got " +
+                                std::to_string(obstacle_stop_gap_m));
   }
   if (!(speed_gain_per_mps >= 0.0)) {
     throw std::invalid_argument("speed_gain_per_mps must be >= 0, got " +
@@ -23,7 +28,8 @@ void OracleDriverParams::Validate() const {
 
 vehicle::ActuatorCommand StepOracleDriver(const OracleDriverParams& params,
                                           const vehicle::CarParams& car, const world::Route& route,
-                                          const OracleDriverInput& input, OracleDriverState* state) {
+                                          const OracleDriverInput& input,
+                                          OracleDriverState* state) {
   // steer: pure pursuit from the rear axle to the point lookahead_m further along the route
   const world::Vec2 heading = input.X_map_car.heading();
   const world::Vec2 p_rear = input.X_map_car.position() - 0.5 * car.wheelbase_m * heading;
@@ -41,7 +47,8 @@ vehicle::ActuatorCommand StepOracleDriver(const OracleDriverParams& params,
 
   // speed: feed-forward through the motor's top speed plus proportional feedback; holding means
   // no drive at all, so the motor brakes the car to a stop
-  if (input.hold) {
+  const bool blocked = input.obstacle_gap_m && *input.obstacle_gap_m <= params.obstacle_stop_gap_m;
+  if (input.hold || blocked) {
     command.throttle = 0.0;
   } else {
     const double u = params.speed_mps / car.top_speed_mps +

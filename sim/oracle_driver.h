@@ -3,6 +3,8 @@
 // true pose, never a sensor.
 #pragma once
 
+#include <optional>
+
 #include "vehicle/car.h"
 #include "world/geometry.h"
 #include "world/road_graph.h"
@@ -19,6 +21,9 @@ struct OracleDriverParams {
   double lookahead_m{0.4};
   // Assumed: throttle per m/s of speed error on top of the feed-forward u = v / top_speed.
   double speed_gain_per_mps{1.0};
+  // Assumed: with ideal perception the oracle stops for an obstacle on its lane when the gap from
+  // its front to the obstacle closes to this (the motor then brakes it within ≈ v·τ ≈ 0.15 m).
+  double obstacle_stop_gap_m{0.35};
   // Assumed: the oracle stands for ideal driving, so it steers at 50 Hz (the real controller
   // server runs at 20 Hz, reference §6).
   Duration period{std::chrono::milliseconds(20)};
@@ -29,6 +34,7 @@ struct OracleDriverParams {
     v("speed_mps", speed_mps);
     v("lookahead_m", lookahead_m);
     v("speed_gain_per_mps", speed_gain_per_mps);
+    v("obstacle_stop_gap_m", obstacle_stop_gap_m);
   }
   void Validate() const;
 };
@@ -37,6 +43,8 @@ struct OracleDriverInput {
   world::Pose2 X_map_car;  // true chassis pose
   double speed_mps{0.0};   // true forward speed
   bool hold{false};        // stop and stay (waiting for a grant, or parked)
+  // Ground truth: free distance from the car's front to the nearest obstacle on its lane ahead.
+  std::optional<double> obstacle_gap_m;
 };
 
 struct OracleDriverState {

@@ -30,8 +30,8 @@ void WriteFile(const std::filesystem::path& file, const std::string& content) {
 }
 
 // Car colours in track.png (BGR), chosen to stand out on black, white and yellow.
-constexpr std::array<std::array<int, 3>, 6> kCarColours{{
-    {255, 160, 0}, {60, 60, 255}, {80, 220, 80}, {255, 0, 255}, {0, 165, 255}, {255, 255, 0}}};
+constexpr std::array<std::array<int, 3>, 6> kCarColours{
+    {{255, 160, 0}, {60, 60, 255}, {80, 220, 80}, {255, 0, 255}, {0, 165, 255}, {255, 255, 0}}};
 
 cv::Point ToPixel(const world::FloorRaster& raster, double x_m, double y_m) {
   return {static_cast<int>(std::lround((x_m - raster.origin_m.x()) / raster.m_per_px - 0.5)),
@@ -161,9 +161,8 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
                        {"frees", record.server.frees},
                        {"lease_expiries", record.server.lease_expiries},
                        {"malformed", record.server.malformed}};
-  summary["v2i"] = {{"sent", record.v2i.sent},
-                    {"delivered", record.v2i.delivered},
-                    {"lost", record.v2i.lost}};
+  summary["v2i"] = {
+      {"sent", record.v2i.sent}, {"delivered", record.v2i.delivered}, {"lost", record.v2i.lost}};
   summary["versions"] = {
       {"autonomsim", AUTONOMSIM_VERSION},
       {"box2d", fmt::format("{}.{}.{}", b2_version.major, b2_version.minor, b2_version.revision)},

@@ -65,8 +65,7 @@ struct RunRecord {
   std::vector<TrajectorySample> trajectory;
   std::vector<CarMetrics> cars;
   struct ServerCounters {
-    std::uint64_t requests{0}, grants{0}, denials{0}, frees{0}, lease_expiries{0},
-        malformed{0};
+    std::uint64_t requests{0}, grants{0}, denials{0}, frees{0}, lease_expiries{0}, malformed{0};
   } server;
   struct LinkCounters {
     std::uint64_t sent{0}, delivered{0}, lost{0};

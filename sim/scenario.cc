@@ -33,7 +33,8 @@ std::string Num(double value) {
     YAML::Node child;
     if (std::holds_alternative<std::string>(key)) {
       path = detail::JoinPath(path, std::get<std::string>(key));
-      if (node.IsMap() && node[std::get<std::string>(key)]) child = node[std::get<std::string>(key)];
+      if (node.IsMap() && node[std::get<std::string>(key)])
+        child = node[std::get<std::string>(key)];
     } else {
       path = detail::JoinIndex(path, std::get<std::size_t>(key));
       if (node.IsSequence() && std::get<std::size_t>(key) < node.size()) {
@@ -55,23 +56,23 @@ void CarConfig::Validate() const {
   Require(route.has_value() != lanes.has_value(), "give exactly one of route or lanes");
   Require(!(start.has_value() && start_s_m.has_value()), "give at most one of start or start_s_m");
   Require(!laps || *laps >= 1, "laps must be >= 1, got " + std::to_string(laps.value_or(0)));
-  Require(driver == "oracle", "driver must be 'oracle' (the driving stack comes later), got '" +
-                                  driver + "'");
+  Require(driver == "oracle",
+          "driver must be 'oracle' (the driving stack comes later), got '" + driver + "'");
 }
 
 void ObstacleConfig::Validate() const {
   Require(!name.empty(), "obstacle needs a name");
   Require(length_m > 0 && width_m > 0 && height_m > 0,
-          "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " +
-              Num(width_m) + ", " + Num(height_m));
+          "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " + Num(width_m) +
+              ", " + Num(height_m));
   Require(appear_s >= 0.0, "appear_s must be >= 0, got " + Num(appear_s));
   Require(!disappear_s || *disappear_s > appear_s,
           "disappear_s must be after appear_s, got " + Num(disappear_s.value_or(0.0)));
 }
 
 void V2IConfig::Validate() const {
-  Require(link == "embedded", "link must be 'embedded' (the mqtt link comes later), got '" + link +
-                                  "'");
+  Require(link == "embedded",
+          "link must be 'embedded' (the mqtt link comes later), got '" + link + "'");
   Require(latency >= kZeroTime, "latency_s must be >= 0");
   Require(jitter >= kZeroTime, "jitter_s must be >= 0");
   Require(loss >= 0.0 && loss < 1.0, "loss must be in [0, 1), got " + Num(loss));
@@ -101,8 +102,10 @@ void ExpectClause::Validate() const {
   const int count = no_collision.has_value() + intersection_mutex.has_value() +
                     no_entry_without_grant.has_value() + completes.has_value() +
                     max_lateral_error.has_value();
-  Require(count == 1, "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
-                      "got " + std::to_string(count));
+  Require(count == 1,
+          "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
+          "got " +
+              std::to_string(count));
   const std::string k = kind();
   const ExpectArgs& a = args();
   auto forbid = [&](bool present, const char* key) {
@@ -169,7 +172,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     world::Pose2 pose;
     if (car.start) {
       const std::optional<world::Pose2> named = track.StartPose(*car.start);
-      if (!named) FailAt(root, source, {"cars", i, "start"}, "unknown start pose '" + *car.start + "'");
+      if (!named)
+        FailAt(root, source, {"cars", i, "start"}, "unknown start pose '" + *car.start + "'");
       const world::Polyline::Projection on = path.Project(named->position());
       const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
       if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
@@ -184,8 +188,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
       s = car.start_s_m.value_or(0.0);
       if (s < 0.0 || s >= path.length_m()) {
         FailAt(root, source, {"cars", i, "start_s_m"},
-               "start_s_m must be in [0, " + Num(path.length_m()) + ") m (the route's length), got " +
-                   Num(s));
+               "start_s_m must be in [0, " + Num(path.length_m()) +
+                   ") m (the route's length), got " + Num(s));
       }
       const world::Vec2 p = path.PointAt(s);
       pose = world::Pose2{p.x(), p.y(), path.HeadingAt(s)};
@@ -211,8 +215,14 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
 
   nlohmann::json resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(track.spec())}};
   const std::string sha = Sha256Hex(resolved.dump());
-  return LoadedScenario{file,         std::move(scenario), std::move(track), std::move(routes),
-                        std::move(start_s), std::move(start_poses), sha, std::move(resolved)};
+  return LoadedScenario{file,
+                        std::move(scenario),
+                        std::move(track),
+                        std::move(routes),
+                        std::move(start_s),
+                        std::move(start_poses),
+                        sha,
+                        std::move(resolved)};
 }
 
 }  // namespace autonomsim::sim

@@ -23,10 +23,10 @@ struct CarConfig {
   int id{0};  // 0..9: the /vtl/ protocol carries the car id as one digit (reference §7)
   std::optional<std::string> route;               // a route of the track, by name, or
   std::optional<std::vector<std::string>> lanes;  // the lane segments to drive, in order
-  std::optional<std::string> start;   // a named start pose of the track (must lie on the route)
-  std::optional<double> start_s_m;    // or the distance along the route to start at (default 0)
-  std::optional<int> laps;            // on a loop: park after this many laps (default: drive on)
-  std::string driver{"oracle"};       // "oracle": ground-truth lane following (sim/oracle_driver.h)
+  std::optional<std::string> start;  // a named start pose of the track (must lie on the route)
+  std::optional<double> start_s_m;   // or the distance along the route to start at (default 0)
+  std::optional<int> laps;           // on a loop: park after this many laps (default: drive on)
+  std::string driver{"oracle"};      // "oracle": ground-truth lane following (sim/oracle_driver.h)
   OracleDriverParams oracle;
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
@@ -105,10 +105,10 @@ struct OutputConfig {
 
 // Arguments an expectation may take; which ones each kind accepts is checked in ExpectClause.
 struct ExpectArgs {
-  std::optional<int> car;         // the car it is about (default: every car)
-  std::optional<int> laps;        // completes: laps to finish
-  std::optional<double> within_s; // completes: by this time (default: the scenario's duration)
-  std::optional<double> max_m;    // max_lateral_error: the bound
+  std::optional<int> car;          // the car it is about (default: every car)
+  std::optional<int> laps;         // completes: laps to finish
+  std::optional<double> within_s;  // completes: by this time (default: the scenario's duration)
+  std::optional<double> max_m;     // max_lateral_error: the bound
 
   template <class V>
   void Describe(V& v) {
@@ -178,11 +178,11 @@ struct LoadedScenario {
   std::filesystem::path file;
   Scenario scenario;
   world::Track track;
-  std::vector<world::Route> routes;     // one per car, in scenario order
-  std::vector<double> start_s_m;        // per car: where on its route it starts
+  std::vector<world::Route> routes;       // one per car, in scenario order
+  std::vector<double> start_s_m;          // per car: where on its route it starts
   std::vector<world::Pose2> start_poses;  // per car: its initial chassis pose
-  std::string sha256;                   // of the resolved scenario and track (canonical JSON)
-  nlohmann::json resolved;              // {"scenario": ..., "track": ...} with every default
+  std::string sha256;                     // of the resolved scenario and track (canonical JSON)
+  nlohmann::json resolved;                // {"scenario": ..., "track": ...} with every default
 };
 
 // Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,

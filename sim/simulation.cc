@@ -22,6 +22,15 @@ namespace {
 constexpr double kArrivalMargin_m = 0.2;
 // How far a car may move along its route between two physics steps, for the local projection.
 constexpr double kTrackingWindow_m = 0.5;
+// The oracle looks this far ahead along its route for obstacles.
+constexpr double kObstacleHorizon_m = 2.0;
+
+// A static obstacle as seen along one car's route (ground truth, for the oracle).
+struct ObstacleOnRoute {
+  std::size_t index{0};       // in the physics world
+  double s_m{0.0};            // where its centre projects on the route
+  double half_extent_m{0.0};  // half its diagonal: a conservative reach in every direction
+};
 
 // One car and everything that drives and watches it.
 struct CarAgent {
@@ -30,10 +39,11 @@ struct CarAgent {
   vehicle::Car* car{nullptr};
   OracleDriverState driver;
   stack::IntersectionClientState client;
-  std::vector<world::Response> inbox;  // responses addressed to this car since the client's last step
+  std::vector<world::Response> inbox;  // responses for this car since the client's last step
   vehicle::ActuatorCommand command;
   bool waiting{false};  // the intersection client says: stop here until granted
   bool parked{false};   // done: laps driven or route ended
+  std::vector<ObstacleOnRoute> obstacles_on_lane;
   std::optional<Time> wait_started;
   // ground-truth tracking of the chassis centre along the route
   double route_s_m{0.0};
@@ -50,8 +60,8 @@ Duration Phase(const RngStreams& streams, const std::string& name, Duration peri
   Rng rng = streams.Stream(name);
   const auto period_ms = std::chrono::duration_cast<std::chrono::milliseconds>(period).count();
   if (period_ms <= 0) return kZeroTime;
-  return std::chrono::milliseconds(static_cast<std::int64_t>(rng.Uniform01() *
-                                                              static_cast<double>(period_ms)));
+  return std::chrono::milliseconds(
+      static_cast<std::int64_t>(rng.Uniform01() * static_cast<double>(period_ms)));
 }
 
 }  // namespace
@@ -63,6 +73,7 @@ struct Simulation::Impl {
   void StepPhysics();
   void Track(CarAgent* agent, Time t);
   void StepDriver(CarAgent* agent);
+  std::optional<double> ObstacleGap(const CarAgent& agent) const;
   void StepClient(CarAgent* agent);
   void Sample();
   void ReceiveAtCar(int car_id, const world::V2IMessage& message);
@@ -126,14 +137,17 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
       [this](int car_id, const world::V2IMessage& m) { server.OnMessage(car_id, m); },
       [this](int car_id, const world::V2IMessage& m) { ReceiveAtCar(car_id, m); },
       [this](int car_id, const world::V2IMessage& m) {
-        Emit(Event{.t = kernel.Now(), .type = "v2i_lost", .car = car_id,
+        Emit(Event{.t = kernel.Now(),
+                   .type = "v2i_lost",
+                   .car = car_id,
                    .detail = m.topic + " '" + m.payload + "'"});
       });
   server.set_link(link.get());
 
   // obstacles, appearing and disappearing on schedule
   for (const ObstacleConfig& o : scenario.obstacles) {
-    const vehicle::ObstacleBox box{o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0},
+    const vehicle::ObstacleBox box{o.name,
+                                   world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0},
                                    o.length_m, o.width_m, o.height_m};
     const std::size_t index = physics.AddObstacle(box, false);
     auto set = [this, index, name = o.name](bool enabled) {
@@ -142,10 +156,23 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
                  .type = enabled ? "obstacle_appear" : "obstacle_disappear",
                  .obstacle = name});
     };
-    kernel.ScheduleAt(FromSeconds(o.appear_s), [set] { set(true); }, kPriorityWorldChange);
+    kernel.ScheduleAt(
+        FromSeconds(o.appear_s), [set] { set(true); }, kPriorityWorldChange);
     if (o.disappear_s) {
-      kernel.ScheduleAt(FromSeconds(*o.disappear_s), [set] { set(false); },
-                        kPriorityWorldChange);
+      kernel.ScheduleAt(
+          FromSeconds(*o.disappear_s), [set] { set(false); }, kPriorityWorldChange);
+    }
+  }
+
+  // which obstacles stand on which car's lane
+  for (CarAgent& agent : agents) {
+    for (std::size_t o = 0; o < physics.obstacle_count(); ++o) {
+      const vehicle::ObstacleBox& box = physics.obstacle(o);
+      const double half_extent = 0.5 * std::hypot(box.length_m, box.width_m);
+      const world::Polyline::Projection on = agent.route->path.Project(box.pose.position());
+      if (std::abs(on.lateral_m) < half_extent + 0.5 * agent.config->vehicle.width_m) {
+        agent.obstacles_on_lane.push_back(ObstacleOnRoute{o, on.s_m, half_extent});
+      }
     }
   }
 
@@ -154,14 +181,17 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
     const std::string car = "car" + std::to_string(agent.config->id);
     const Duration client_period = agent.config->intersection_client.tick_period;
     const Duration driver_period = agent.config->oracle.period;
-    kernel.SchedulePeriodic(Phase(streams, car + "/client_phase", client_period), client_period,
-                            [this, a = &agent] { StepClient(a); }, kPriorityClient);
-    kernel.SchedulePeriodic(Phase(streams, car + "/driver_phase", driver_period), driver_period,
-                            [this, a = &agent] { StepDriver(a); }, kPriorityDriver);
+    kernel.SchedulePeriodic(
+        Phase(streams, car + "/client_phase", client_period), client_period,
+        [this, a = &agent] { StepClient(a); }, kPriorityClient);
+    kernel.SchedulePeriodic(
+        Phase(streams, car + "/driver_phase", driver_period), driver_period,
+        [this, a = &agent] { StepDriver(a); }, kPriorityDriver);
   }
-  kernel.SchedulePeriodic(kZeroTime, scenario.output.trajectory_period, [this] { Sample(); },
-                          kPriorityRecord);
-  kernel.SchedulePeriodic(kZeroTime, physics.step(), [this] { StepPhysics(); }, kPriorityPhysics);
+  kernel.SchedulePeriodic(
+      kZeroTime, scenario.output.trajectory_period, [this] { Sample(); }, kPriorityRecord);
+  kernel.SchedulePeriodic(
+      kZeroTime, physics.step(), [this] { StepPhysics(); }, kPriorityPhysics);
 }
 
 void Simulation::Impl::StepClient(CarAgent* agent) {
@@ -175,8 +205,8 @@ void Simulation::Impl::StepClient(CarAgent* agent) {
       stack::StepIntersectionClient(agent->config->intersection_client, id,
                                     loaded.track.spec().intersections, input, &agent->client);
   for (const world::Request& request : out.requests) {
-    Emit(Event{.t = kernel.Now(), .type = "request", .car = id,
-               .intersection = request.intersection});
+    Emit(Event{
+        .t = kernel.Now(), .type = "request", .car = id, .intersection = request.intersection});
     link->SendToServer(id, world::ToMessage(request));
   }
   for (const world::Free& free : out.frees) {
@@ -210,9 +240,25 @@ void Simulation::Impl::StepDriver(CarAgent* agent) {
   input.X_map_car = agent->car->pose();
   input.speed_mps = agent->car->forward_speed_mps();
   input.hold = agent->waiting || agent->parked;
+  input.obstacle_gap_m = ObstacleGap(*agent);
   agent->command = StepOracleDriver(agent->config->oracle, agent->config->vehicle, *agent->route,
                                     input, &agent->driver);
   agent->car->SetCommand(agent->command);
+}
+
+std::optional<double> Simulation::Impl::ObstacleGap(const CarAgent& agent) const {
+  const world::Polyline& path = agent.route->path;
+  const double front_s = agent.route_s_m + 0.5 * agent.config->vehicle.length_m;
+  std::optional<double> nearest;
+  for (const ObstacleOnRoute& o : agent.obstacles_on_lane) {
+    if (!physics.obstacle_enabled(o.index)) continue;
+    double ahead = o.s_m - front_s;
+    if (path.cyclic()) ahead = std::remainder(ahead, path.length_m());
+    const double gap = ahead - o.half_extent_m;
+    if (ahead < -o.half_extent_m || gap > kObstacleHorizon_m) continue;
+    if (!nearest || gap < *nearest) nearest = gap;
+  }
+  return nearest;
 }
 
 void Simulation::Impl::StepPhysics() {
@@ -251,7 +297,8 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
       std::max(agent->metrics.max_lateral_error_m, std::abs(on.lateral_m));
   agent->lateral_sq_sum += on.lateral_m * on.lateral_m;
   ++agent->lateral_samples;
-  agent->metrics.distance_m += std::abs(agent->car->forward_speed_mps()) * ToSeconds(physics.step());
+  agent->metrics.distance_m +=
+      std::abs(agent->car->forward_speed_mps()) * ToSeconds(physics.step());
 
   // laps, and the end of the drive
   if (path.cyclic()) {
@@ -278,7 +325,10 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
     }
     if (area >= 0) {
       const std::optional<int> holder = server.server().Holder(area);
-      Emit(Event{.t = t, .type = "enter", .car = id, .intersection = area,
+      Emit(Event{.t = t,
+                 .type = "enter",
+                 .car = id,
+                 .intersection = area,
                  .granted = holder.has_value() && *holder == id});
       ++agent->metrics.intersection_entries;
     }

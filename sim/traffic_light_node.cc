@@ -15,7 +15,9 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
   const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
   if (!decoded) {
     ++malformed_;
-    sink_(Event{.t = kernel_->Now(), .type = "v2i_malformed", .car = from_car,
+    sink_(Event{.t = kernel_->Now(),
+                .type = "v2i_malformed",
+                .car = from_car,
                 .detail = message.topic + " '" + message.payload + "': " + decoded.error()});
     return;
   }
@@ -31,7 +33,9 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
         } else {
           // A response sent to the server is not for it: count it as malformed traffic.
           ++malformed_;
-          sink_(Event{.t = now, .type = "v2i_malformed", .car = from_car,
+          sink_(Event{.t = now,
+                      .type = "v2i_malformed",
+                      .car = from_car,
                       .detail = "a response was sent to the server"});
         }
       },

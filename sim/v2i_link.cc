@@ -7,9 +7,9 @@
 
 namespace autonomsim::sim {
 
-EmbeddedV2ILink::EmbeddedV2ILink(Kernel* kernel, const V2IConfig& config,
-                                 const RngStreams& streams, std::vector<int> car_ids,
-                                 ServerReceive to_server, CarReceive to_car, Lost lost)
+EmbeddedV2ILink::EmbeddedV2ILink(Kernel* kernel, const V2IConfig& config, const RngStreams& streams,
+                                 std::vector<int> car_ids, ServerReceive to_server,
+                                 CarReceive to_car, Lost lost)
     : kernel_(kernel),
       config_(config),
       car_ids_(std::move(car_ids)),
@@ -46,8 +46,8 @@ void EmbeddedV2ILink::Deliver(Path* path, int car_id, const world::V2IMessage& m
     if (on_lost_) on_lost_(car_id, message);
     return;
   }
-  const Duration jitter{static_cast<std::int64_t>(
-      jitter_fraction * static_cast<double>(config_.jitter.count()))};
+  const Duration jitter{
+      static_cast<std::int64_t>(jitter_fraction * static_cast<double>(config_.jitter.count()))};
   const Time at = std::max(kernel_->Now() + config_.latency + jitter, path->last_delivery);
   path->last_delivery = at;
   kernel_->ScheduleAt(

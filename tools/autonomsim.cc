@@ -127,12 +127,23 @@ std::string XmlEscape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -172,9 +183,10 @@ void WriteJunit(const fs::path& file, const std::vector<Outcome>& outcomes) {
   out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << fmt::format("<testsuites tests=\"{}\" failures=\"{}\" errors=\"{}\">\n", tests, failures,
                      errors)
-      << fmt::format("  <testsuite name=\"autonomsim check\" tests=\"{}\" failures=\"{}\" "
-                     "errors=\"{}\">\n",
-                     tests, failures, errors)
+      << fmt::format(
+             "  <testsuite name=\"autonomsim check\" tests=\"{}\" failures=\"{}\" "
+             "errors=\"{}\">\n",
+             tests, failures, errors)
       << cases << "  </testsuite>\n</testsuites>\n";
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
@@ -303,16 +315,19 @@ int main(int argc, char** argv) {
   };
 
   CLI::App* run = app.add_subcommand(
-      "run", "Run one scenario and write its result folder (summary.json, trajectory.csv, "
-             "events.jsonl, track.png, scenario.resolved.json)");
+      "run",
+      "Run one scenario and write its result folder (summary.json, trajectory.csv, "
+      "events.jsonl, track.png, scenario.resolved.json)");
   std::string run_scenario;
   std::optional<std::string> run_out;
   std::optional<std::uint64_t> run_seed;
   bool quiet = false;
-  run->add_option("SCENARIO", run_scenario, "Scenario file (YAML), e.g. scenarios/lab_two_cars.yaml")
+  run->add_option("SCENARIO", run_scenario,
+                  "Scenario file (YAML), e.g. scenarios/lab_two_cars.yaml")
       ->required();
-  run->add_option("--out", run_out, "Result folder (default: runs/<scenario name>); replaced "
-                                    "when the run completes")
+  run->add_option("--out", run_out,
+                  "Result folder (default: runs/<scenario name>); replaced "
+                  "when the run completes")
       ->type_name("DIR");
   run->add_option("--seed", run_seed, "Override the scenario's seed")->type_name("N");
   add_set(run);
@@ -324,8 +339,9 @@ int main(int argc, char** argv) {
   std::optional<std::string> junit;
   std::optional<std::string> check_out;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  check->add_option("SCENARIO_OR_DIR", check_args,
-                    "Scenario files, or folders whose *.yaml files are scenarios")
+  check
+      ->add_option("SCENARIO_OR_DIR", check_args,
+                   "Scenario files, or folders whose *.yaml files are scenarios")
       ->required();
   check->add_option("--junit", junit, "Also write the verdicts as JUnit XML")->type_name("FILE");
   check->add_option("--out", check_out, "Keep each run's result folder under DIR/<scenario>")

@@ -12,8 +12,8 @@ void Require(bool ok, const std::string& message) {
 }
 
 void ValidatePoints(const PointList& points, const std::string& key) {
-  Require(points.size() >= 2, key + " needs at least 2 points, got " +
-                                  std::to_string(points.size()));
+  Require(points.size() >= 2,
+          key + " needs at least 2 points, got " + std::to_string(points.size()));
 }
 
 }  // namespace
@@ -38,16 +38,16 @@ void LaneSegmentSpec::Validate() const {
 }
 
 void IntersectionSpec::Validate() const {
-  Require(id >= 0 && id <= 9, "id must be a single digit 0..9 (the /vtl/ protocol sends one "
-                              "character), got " + std::to_string(id));
+  Require(id >= 0 && id <= 9,
+          "id must be a single digit 0..9 (the /vtl/ protocol sends one "
+          "character), got " +
+              std::to_string(id));
   area.Validate();
   Require(!stop_zones.empty(), "stop_zones must not be empty");
   for (const Box& zone : stop_zones) zone.Validate();
 }
 
-Pose2 StartPoseSpec::ToPose() const {
-  return Pose2{x_m, y_m, yaw_deg * std::numbers::pi / 180.0};
-}
+Pose2 StartPoseSpec::ToPose() const { return Pose2{x_m, y_m, yaw_deg * std::numbers::pi / 180.0}; }
 
 void TrackSpec::Validate() const {
   Require(size_m > 0.0, "size_m must be > 0, got " + std::to_string(size_m));

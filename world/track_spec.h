@@ -95,8 +95,8 @@ struct StartPoseSpec {
 
 struct TrackSpec {
   std::string name;
-  std::string source;   // provenance of the geometry
-  double size_m{5.0};   // the floor is a square of this side, centred on the origin
+  std::string source;  // provenance of the geometry
+  double size_m{5.0};  // the floor is a square of this side, centred on the origin
   Rgb floor_rgb{0, 0, 0};
   std::map<std::string, Rgb> colors_rgb;
   std::vector<TrackLineSpec> lines;
