@@ -46,8 +46,15 @@ std::string JoinIndex(const std::string& parent, std::size_t index) {
 }
 
 std::string Where(const YAML::Node& node, const std::string& path, const ConfigSource& source) {
-  const std::string key = path.empty() ? "(top level)" : path;
+  std::string key = path.empty() ? "(top level)" : path;
   if (IsOverridden(path, source)) return "--set " + key + ": ";
+  // a value below this one came from the command line: say so, the file alone would mislead
+  for (const std::string& overridden : source.overridden_paths) {
+    if (!path.empty() && IsOverridden(overridden, ConfigSource{"", {path}})) {
+      key += " (with --set " + overridden + ")";
+      break;
+    }
+  }
   const YAML::Mark mark = node.Mark();
   std::string where = source.file;
   if (!mark.is_null()) {
@@ -233,7 +240,7 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
         node.reset(child);
       }
     } else {
-      if (!node.IsMap() && !node.IsNull()) {
+      if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
         throw ConfigError("--set " + key + ": '" + canonical + "' is not a mapping");
       }
       canonical = detail::JoinPath(canonical, t);

@@ -15,6 +15,7 @@ std::string Name(const ExpectClause& clause) {
   if (a.laps) parts.push_back(fmt::format("laps={}", *a.laps));
   if (a.within_s) parts.push_back(fmt::format("within_s={}", *a.within_s));
   if (a.max_m) parts.push_back(fmt::format("max_m={}", *a.max_m));
+  if (a.min_m) parts.push_back(fmt::format("min_m={}", *a.min_m));
   return parts.empty() ? clause.kind()
                        : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
 }
@@ -110,6 +111,22 @@ ExpectationResult MaxLateralError(const ExpectArgs& args, const RunRecord& recor
   return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.max_m)};
 }
 
+ExpectationResult MinObstacleGap(const ExpectArgs& args, const RunRecord& record) {
+  bool passed = true;
+  std::vector<std::string> parts;
+  for (const CarMetrics& car : record.cars) {
+    if (!Concerns(args, car.id)) continue;
+    if (!car.min_obstacle_gap_m) {
+      parts.push_back(fmt::format("car {}: no obstacle within {} m", car.id,
+                                  kObstacleGapHorizon_m));
+      continue;
+    }
+    passed = passed && *car.min_obstacle_gap_m >= *args.min_m;
+    parts.push_back(fmt::format("car {}: least gap {:.3f} m", car.id, *car.min_obstacle_gap_m));
+  }
+  return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.min_m)};
+}
+
 }  // namespace
 
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
@@ -124,6 +141,7 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
     if (kind == "no_entry_without_grant") result = NoEntryWithoutGrant(args, record);
     if (kind == "completes") result = Completes(args, record);
     if (kind == "max_lateral_error") result = MaxLateralError(args, record);
+    if (kind == "min_obstacle_gap") result = MinObstacleGap(args, record);
     result.name = Name(clause);
     results.push_back(std::move(result));
   }

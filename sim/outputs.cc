@@ -152,7 +152,9 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
                     {"intersection_entries", c.intersection_entries},
                     {"waits", c.waits},
                     {"total_wait_s", c.total_wait_s},
-                    {"max_wait_s", c.max_wait_s}});
+                    {"max_wait_s", c.max_wait_s},
+                    {"min_obstacle_gap_m", c.min_obstacle_gap_m ? nlohmann::json(*c.min_obstacle_gap_m)
+                                                                : nlohmann::json()}});
   }
   summary["cars"] = cars;
   summary["server"] = {{"requests", record.server.requests},

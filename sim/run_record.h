@@ -56,7 +56,12 @@ struct CarMetrics {
   int waits{0};                 // times the car stopped in a stop zone until granted
   double total_wait_s{0.0};
   double max_wait_s{0.0};
+  // Ground truth: the least free distance between the car's footprint and a present obstacle,
+  // over the run (only obstacles within kObstacleGapHorizon_m count; nullopt if none came near).
+  std::optional<double> min_obstacle_gap_m;
 };
+
+inline constexpr double kObstacleGapHorizon_m = 2.0;
 
 struct RunRecord {
   Duration sim_duration{0};

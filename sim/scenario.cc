@@ -87,12 +87,13 @@ std::string ExpectClause::kind() const {
   if (intersection_mutex) return "intersection_mutex";
   if (no_entry_without_grant) return "no_entry_without_grant";
   if (completes) return "completes";
-  return "max_lateral_error";
+  if (max_lateral_error) return "max_lateral_error";
+  return "min_obstacle_gap";
 }
 
 const ExpectArgs& ExpectClause::args() const {
   for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
-                           &max_lateral_error}) {
+                           &max_lateral_error, &min_obstacle_gap}) {
     if (args->has_value()) return **args;
   }
   throw std::logic_error("ExpectClause::args on an empty clause");
@@ -101,7 +102,7 @@ const ExpectArgs& ExpectClause::args() const {
 void ExpectClause::Validate() const {
   const int count = no_collision.has_value() + intersection_mutex.has_value() +
                     no_entry_without_grant.has_value() + completes.has_value() +
-                    max_lateral_error.has_value();
+                    max_lateral_error.has_value() + min_obstacle_gap.has_value();
   Require(count == 1,
           "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
           "got " +
@@ -115,12 +116,16 @@ void ExpectClause::Validate() const {
   forbid(k != "completes" && a.laps.has_value(), "laps");
   forbid(k != "completes" && a.within_s.has_value(), "within_s");
   forbid(k != "max_lateral_error" && a.max_m.has_value(), "max_m");
+  forbid(k != "min_obstacle_gap" && a.min_m.has_value(), "min_m");
   if (k == "completes") {
     Require(a.laps.has_value() && *a.laps >= 1, "completes needs laps >= 1");
     Require(!a.within_s || *a.within_s > 0.0, "within_s must be > 0");
   }
   if (k == "max_lateral_error") {
     Require(a.max_m.has_value() && *a.max_m > 0.0, "max_lateral_error needs max_m > 0");
+  }
+  if (k == "min_obstacle_gap") {
+    Require(a.min_m.has_value() && *a.min_m >= 0.0, "min_obstacle_gap needs min_m >= 0");
   }
 }
 

@@ -109,6 +109,7 @@ struct ExpectArgs {
   std::optional<int> laps;         // completes: laps to finish
   std::optional<double> within_s;  // completes: by this time (default: the scenario's duration)
   std::optional<double> max_m;     // max_lateral_error: the bound
+  std::optional<double> min_m;     // min_obstacle_gap: the least free distance allowed
 
   template <class V>
   void Describe(V& v) {
@@ -116,6 +117,7 @@ struct ExpectArgs {
     v("laps", laps);
     v("within_s", within_s);
     v("max_m", max_m);
+    v("min_m", min_m);
   }
   void Validate() const {}
 };
@@ -127,6 +129,7 @@ struct ExpectClause {
   std::optional<ExpectArgs> no_entry_without_grant;
   std::optional<ExpectArgs> completes;
   std::optional<ExpectArgs> max_lateral_error;
+  std::optional<ExpectArgs> min_obstacle_gap;
 
   template <class V>
   void Describe(V& v) {
@@ -135,6 +138,7 @@ struct ExpectClause {
     v("no_entry_without_grant", no_entry_without_grant);
     v("completes", completes);
     v("max_lateral_error", max_lateral_error);
+    v("min_obstacle_gap", min_obstacle_gap);
   }
   void Validate() const;
   std::string kind() const;

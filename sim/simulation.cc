@@ -72,6 +72,7 @@ struct Simulation::Impl {
   void Emit(Event event) { record.events.push_back(std::move(event)); }
   void StepPhysics();
   void Track(CarAgent* agent, Time t);
+  void MeasureObstacleGaps();
   void StepDriver(CarAgent* agent);
   std::optional<double> ObstacleGap(const CarAgent& agent) const;
   void StepClient(CarAgent* agent);
@@ -277,6 +278,29 @@ void Simulation::Impl::StepPhysics() {
     Emit(std::move(event));
   }
   for (CarAgent& agent : agents) Track(&agent, t);
+  MeasureObstacleGaps();
+}
+
+void Simulation::Impl::MeasureObstacleGaps() {
+  for (CarAgent& agent : agents) {
+    const vehicle::CarParams& car = agent.config->vehicle;
+    const world::OrientedBox footprint{agent.car->pose(), car.length_m, car.width_m};
+    for (std::size_t o = 0; o < physics.obstacle_count(); ++o) {
+      if (!physics.obstacle_enabled(o)) continue;
+      const vehicle::ObstacleBox& box = physics.obstacle(o);
+      const double reach = 0.5 * (std::hypot(car.length_m, car.width_m) +
+                                  std::hypot(box.length_m, box.width_m));
+      if ((footprint.pose.position() - box.pose.position()).norm() - reach >
+          kObstacleGapHorizon_m) {
+        continue;  // too far for the exact distance to matter
+      }
+      const double gap =
+          world::Distance(footprint, world::OrientedBox{box.pose, box.length_m, box.width_m});
+      if (gap > kObstacleGapHorizon_m) continue;
+      std::optional<double>& least = agent.metrics.min_obstacle_gap_m;
+      if (!least || gap < *least) least = gap;
+    }
+  }
 }
 
 void Simulation::Impl::Track(CarAgent* agent, Time t) {

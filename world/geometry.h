@@ -44,4 +44,16 @@ struct Box {
 // Wraps an angle to (-pi, pi].
 double WrapAngle(double a_rad);
 
+// A rectangle centred on a pose: the footprint of a car or an obstacle.
+struct OrientedBox {
+  Pose2 pose;
+  double length_m{0.0};  // along the pose's x axis
+  double width_m{0.0};
+
+  std::vector<Vec2> Corners() const;  // counter-clockwise
+};
+
+// The free distance between two rectangles: 0 when they touch or overlap.
+double Distance(const OrientedBox& a, const OrientedBox& b);
+
 }  // namespace autonomsim::world

@@ -24,7 +24,9 @@ inline Duration FromSeconds(double s) {
   return Duration{static_cast<std::int64_t>(std::llround(s * 1e9))};
 }
 
-inline constexpr double ToSeconds(Duration d) { return static_cast<double>(d.count()) * 1e-9; }
+// Division (not multiplication by 1e-9) is correctly rounded, so whole and decimal instants come
+// out as the closest double (2.775 s, not 2.7750000000000004 s) and print as written.
+inline constexpr double ToSeconds(Duration d) { return static_cast<double>(d.count()) / 1e9; }
 
 inline constexpr Duration Milliseconds(std::int64_t ms) { return std::chrono::milliseconds{ms}; }
 

@@ -1,0 +1,115 @@
+// Expectation verdicts on hand-made run records: no simulation involved.
+#include "sim/expectations.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+namespace autonomsim::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+Event At(double t_s, std::string type, int car, int intersection = -1) {
+  Event e;
+  e.t = FromSeconds(t_s);
+  e.type = std::move(type);
+  e.car = car;
+  e.intersection = intersection;
+  return e;
+}
+
+Event Enter(double t_s, int car, int intersection, bool granted) {
+  Event e = At(t_s, "enter", car, intersection);
+  e.granted = granted;
+  return e;
+}
+
+ExpectClause Clause(const std::string& kind, ExpectArgs args = {}) {
+  ExpectClause c;
+  if (kind == "no_collision") c.no_collision = args;
+  if (kind == "intersection_mutex") c.intersection_mutex = args;
+  if (kind == "no_entry_without_grant") c.no_entry_without_grant = args;
+  if (kind == "completes") c.completes = args;
+  if (kind == "max_lateral_error") c.max_lateral_error = args;
+  if (kind == "min_obstacle_gap") c.min_obstacle_gap = args;
+  c.Validate();
+  return c;
+}
+
+ExpectationResult Judge(const ExpectClause& clause, const RunRecord& record) {
+  Scenario scenario;
+  scenario.expect = {clause};
+  return EvaluateExpectations(scenario, record).at(0);
+}
+
+RunRecord TwoCars() {
+  RunRecord r;
+  r.sim_duration = std::chrono::seconds(100);
+  r.cars.resize(2);
+  r.cars[0].id = 0;
+  r.cars[1].id = 1;
+  return r;
+}
+
+TEST(ExpectationsTest, IntersectionMutexReplaysEntriesAndExits) {
+  RunRecord r = TwoCars();
+  r.events = {Enter(1, 0, 0, true), At(2, "exit", 0, 0), Enter(2.5, 1, 0, true),
+              At(3, "exit", 1, 0), Enter(3.5, 0, 1, true), Enter(3.6, 1, 0, true)};
+  EXPECT_TRUE(Judge(Clause("intersection_mutex"), r).passed);
+
+  r.events.push_back(Enter(3.7, 0, 0, true));  // car 1 is still in intersection 0
+  const ExpectationResult verdict = Judge(Clause("intersection_mutex"), r);
+  EXPECT_FALSE(verdict.passed);
+  EXPECT_THAT(verdict.detail, HasSubstr("car 0 entered intersection 0 at t=3.700 s while car 1"));
+  EXPECT_EQ(verdict.name, "intersection_mutex");
+}
+
+TEST(ExpectationsTest, NoEntryWithoutGrantLooksAtEveryEntryOfTheCarsConcerned) {
+  RunRecord r = TwoCars();
+  r.events = {Enter(1, 0, 0, true), Enter(2, 1, 1, false)};
+  EXPECT_FALSE(Judge(Clause("no_entry_without_grant"), r).passed);
+  EXPECT_TRUE(Judge(Clause("no_entry_without_grant", {.car = 0}), r).passed);
+  EXPECT_THAT(Judge(Clause("no_entry_without_grant", {.car = 1}), r).detail,
+              HasSubstr("1 of 1 entries without grant"));
+}
+
+TEST(ExpectationsTest, NoCollisionCountsBothCarsOfACarCarContact) {
+  RunRecord r = TwoCars();
+  Event hit = At(4, "collision", 0);
+  hit.other_car = 1;
+  r.events = {hit};
+  EXPECT_FALSE(Judge(Clause("no_collision", {.car = 1}), r).passed);
+  EXPECT_THAT(Judge(Clause("no_collision"), r).detail, HasSubstr("car 0 hit car 1 at t=4.000 s"));
+  r.events.clear();
+  EXPECT_TRUE(Judge(Clause("no_collision"), r).passed);
+}
+
+TEST(ExpectationsTest, CompletesNeedsTheLapsByTheDeadline) {
+  RunRecord r = TwoCars();
+  r.cars[0].laps = 3;
+  r.cars[0].lap_times_s = {30, 60, 90};
+  r.cars[1].laps = 2;
+  r.cars[1].lap_times_s = {40, 80};
+  EXPECT_TRUE(Judge(Clause("completes", {.car = 0, .laps = 3}), r).passed);
+  EXPECT_FALSE(Judge(Clause("completes", {.car = 0, .laps = 3, .within_s = 89}), r).passed);
+  const ExpectationResult both = Judge(Clause("completes", {.laps = 3}), r);
+  EXPECT_FALSE(both.passed);
+  EXPECT_THAT(both.detail, HasSubstr("car 1: 2 lap(s) by 100.0 s"));
+  EXPECT_EQ(both.name, "completes(laps=3)");
+}
+
+TEST(ExpectationsTest, MaxLateralErrorAndMinObstacleGapCompareWithTheirBounds) {
+  RunRecord r = TwoCars();
+  r.cars[0].max_lateral_error_m = 0.04;
+  r.cars[1].max_lateral_error_m = 0.12;
+  EXPECT_FALSE(Judge(Clause("max_lateral_error", {.max_m = 0.1}), r).passed);
+  EXPECT_TRUE(Judge(Clause("max_lateral_error", {.car = 0, .max_m = 0.1}), r).passed);
+
+  EXPECT_TRUE(Judge(Clause("min_obstacle_gap", {.min_m = 0.1}), r).passed);  // none came near
+  r.cars[1].min_obstacle_gap_m = 0.05;
+  EXPECT_FALSE(Judge(Clause("min_obstacle_gap", {.min_m = 0.1}), r).passed);
+  EXPECT_TRUE(Judge(Clause("min_obstacle_gap", {.min_m = 0.05}), r).passed);
+}
+
+}  // namespace
+}  // namespace autonomsim::sim

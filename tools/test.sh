@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Fresh machine to a verdict: installs what is missing (Debian 12), builds, and runs every test
+# with ctest. With AUTONOMSIM_SANITIZE=1 (set by CI) it then builds again with AddressSanitizer
+# and UndefinedBehaviorSanitizer and runs the suite a second time under them.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs="$(nproc)"
+tools/install_deps.sh
+
+cmake --preset release >/dev/null
+cmake --build --preset release -j "$jobs"
+ctest --preset release -j "$jobs"
+
+if [ "${AUTONOMSIM_SANITIZE:-0}" = "1" ]; then
+  cmake --preset asan >/dev/null
+  cmake --build --preset asan -j "$jobs"
+  ctest --preset asan -j "$jobs"
+fi
