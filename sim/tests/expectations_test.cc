@@ -53,8 +53,8 @@ RunRecord TwoCars() {
 
 TEST(ExpectationsTest, IntersectionMutexReplaysEntriesAndExits) {
   RunRecord r = TwoCars();
-  r.events = {Enter(1, 0, 0, true), At(2, "exit", 0, 0), Enter(2.5, 1, 0, true),
-              At(3, "exit", 1, 0), Enter(3.5, 0, 1, true), Enter(3.6, 1, 0, true)};
+  r.events = {Enter(1, 0, 0, true), At(2, "exit", 0, 0),    Enter(2.5, 1, 0, true),
+              At(3, "exit", 1, 0),  Enter(3.5, 0, 1, true), Enter(3.6, 1, 0, true)};
   EXPECT_TRUE(Judge(Clause("intersection_mutex"), r).passed);
 
   r.events.push_back(Enter(3.7, 0, 0, true));  // car 1 is still in intersection 0

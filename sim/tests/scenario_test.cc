@@ -80,9 +80,9 @@ TEST(ScenarioTest, TheHashFollowsTheResolvedScenarioNotTheText) {
 
 TEST(ScenarioTest, OverridesReachAnyField) {
   ScenarioFile file("overrides", kValid);
-  const LoadedScenario loaded =
-      LoadScenario(file.path(), {"cars[1].oracle.speed_mps=0.3", "cars.0.laps=2", "v2i.loss=0.1",
-                                 "duration_s=20"});
+  const LoadedScenario loaded = LoadScenario(
+      file.path(),
+      {"cars[1].oracle.speed_mps=0.3", "cars.0.laps=2", "v2i.loss=0.1", "duration_s=20"});
   EXPECT_DOUBLE_EQ(loaded.scenario.cars[1].oracle.speed_mps, 0.3);
   EXPECT_EQ(loaded.scenario.cars[0].laps, 2);
   EXPECT_DOUBLE_EQ(loaded.scenario.v2i.loss, 0.1);
@@ -133,15 +133,11 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "id: 1", "id: 12"),
                    {},
                    {F("car_id") + ":9:5: cars[1]: id must be a single digit"}},
-        BrokenCase{"duplicate_car",
-                   Replace(kValid, "id: 1", "id: 0"),
-                   {},
-                   {"duplicate car id 0"}},
+        BrokenCase{"duplicate_car", Replace(kValid, "id: 1", "id: 0"), {}, {"duplicate car id 0"}},
         BrokenCase{"unknown_route",
                    Replace(kValid, "route: inner_loop", "route: figure_nine"),
                    {},
-                   {F("unknown_route") + ":10:12: cars[1].route:", "figure_nine",
-                    "south_loop"}},
+                   {F("unknown_route") + ":10:12: cars[1].route:", "figure_nine", "south_loop"}},
         BrokenCase{"lanes_disconnected",
                    Replace(kValid, "route: inner_loop", "lanes: [outer_south, middle_west]"),
                    {},
@@ -192,13 +188,19 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "tracks/lab.yaml", "tracks/nope.yaml"),
                    {},
                    {"scenarios/tracks/nope.yaml: cannot open file"}},
-        BrokenCase{"set_unknown_key",
+        BrokenCase{
+            "set_unknown_key",
+            kValid,
+            {"cars[0].oracle.sped_mps=1"},
+            {"--set cars[0].oracle.sped_mps: unknown key 'sped_mps'", "did you mean 'speed_mps'?"}},
+        BrokenCase{"set_bad_value",
                    kValid,
-                   {"cars[0].oracle.sped_mps=1"},
-                   {"--set cars[0].oracle.sped_mps: unknown key 'sped_mps'",
-                    "did you mean 'speed_mps'?"}},
-        BrokenCase{"set_bad_value", kValid, {"cars[0].laps=many"}, {"--set cars[0].laps: expected an integer"}},
-        BrokenCase{"set_index", kValid, {"cars[7].laps=1"}, {"--set cars[7].laps: index 7 is out of range"}},
+                   {"cars[0].laps=many"},
+                   {"--set cars[0].laps: expected an integer"}},
+        BrokenCase{"set_index",
+                   kValid,
+                   {"cars[7].laps=1"},
+                   {"--set cars[7].laps: index 7 is out of range"}},
         BrokenCase{"set_syntax", kValid, {"cars[0].laps"}, {"expected key=value"}}),
     [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
 

@@ -67,9 +67,8 @@ TEST(SimulationTest, TheDefaultScenarioDrivesBothCarsThroughBothIntersections) {
 
 TEST(SimulationTest, ACarParksAfterItsLaps) {
   const RunRecord record = RunScenario(LoadScenario(kDefault, {"cars[1].laps=1"}));
-  const auto parked = std::find_if(record.events.begin(), record.events.end(), [](const Event& e) {
-    return e.type == "parked" && e.car == 1;
-  });
+  const auto parked = std::find_if(record.events.begin(), record.events.end(),
+                                   [](const Event& e) { return e.type == "parked" && e.car == 1; });
   ASSERT_NE(parked, record.events.end());
   EXPECT_EQ(record.cars[1].laps, 1);
   const TrajectorySample& last = record.trajectory.back();

@@ -1,0 +1,162 @@
+// The `autonomsim` command line as a user and a CI job see it: exit codes, the result folder,
+// JUnit XML, and the same result from separate processes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "sim/outputs.h"
+#include "sim/simulation.h"
+
+namespace autonomsim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct Result {
+  int exit_code{-1};
+  std::string output;  // stdout and stderr together
+};
+
+Result Cli(const std::string& args) {
+  const char* bin_dir = std::getenv("AUTONOMSIM_BIN_DIR");
+  const std::string bin = std::string(bin_dir ? bin_dir : "build/bin") + "/autonomsim";
+  Result result;
+  FILE* pipe = ::popen((bin + " " + args + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string Read(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A fresh folder per test (ctest runs tests in parallel).
+fs::path Scratch() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(::testing::TempDir()) / "autonomsim_cli" / info->name();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(CliTest, HelpAnswers) {
+  const Result top = Cli("--help");
+  EXPECT_EQ(top.exit_code, 0);
+  EXPECT_THAT(top.output, HasSubstr("run"));
+  EXPECT_THAT(top.output, HasSubstr("check"));
+  EXPECT_THAT(top.output, HasSubstr("Exit codes"));
+  const Result run = Cli("run --help");
+  EXPECT_EQ(run.exit_code, 0);
+  for (const char* flag : {"--out", "--seed", "--set", "SCENARIO"}) {
+    EXPECT_THAT(run.output, HasSubstr(flag));
+  }
+  const Result check = Cli("check --help");
+  EXPECT_THAT(check.output, HasSubstr("--junit"));
+}
+
+TEST(CliTest, RunWritesACompleteResultFolder) {
+  const fs::path out = Scratch() / "run";
+  const Result r = Cli("run scenarios/lab_two_cars.yaml -q --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("results: " + out.string()));
+  for (const char* file :
+       {"summary.json", "trajectory.csv", "events.jsonl", "track.png", "scenario.resolved.json"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
+  const nlohmann::json summary = nlohmann::json::parse(Read(out / "summary.json"));
+  for (const char* key : {"scenario", "seed", "scenario_sha256", "sim_seconds", "wall_seconds",
+                          "real_time_factor", "expectations", "cars"}) {
+    EXPECT_TRUE(summary.contains(key)) << key;
+  }
+  EXPECT_EQ(summary["scenario"], "lab_two_cars");
+  EXPECT_EQ(summary["sim_seconds"], 120.0);
+  for (const nlohmann::json& car : summary["cars"]) {
+    for (const char* key : {"laps", "collisions", "max_lateral_error_m"}) {
+      EXPECT_TRUE(car.contains(key)) << key;
+    }
+  }
+  for (const nlohmann::json& e : summary["expectations"]) {
+    EXPECT_TRUE(e.contains("name") && e.contains("passed") && e.contains("detail"));
+  }
+  // nothing half-written next to it
+  for (const auto& entry : fs::directory_iterator(out.parent_path())) {
+    EXPECT_EQ(entry.path().filename(), "run");
+  }
+  // a second run replaces the first, again leaving only the complete folder
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --seed 5 --out " + out.string()).exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(Read(out / "summary.json"))["seed"], 5);
+  EXPECT_EQ(std::distance(fs::directory_iterator(out.parent_path()), fs::directory_iterator()), 1);
+}
+
+// The golden determinism test: separate processes and this process agree bit for bit.
+TEST(CliTest, SeparateProcessesGiveTheSameResultAsThisOne) {
+  const fs::path dir = Scratch();
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --out " + (dir / "a").string()).exit_code, 0);
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --out " + (dir / "b").string()).exit_code, 0);
+  const std::string a = Read(dir / "a" / "trajectory.csv") + Read(dir / "a" / "events.jsonl");
+  const std::string b = Read(dir / "b" / "trajectory.csv") + Read(dir / "b" / "events.jsonl");
+  EXPECT_EQ(a, b);
+  const auto hash = [&](const char* run) {
+    return nlohmann::json::parse(Read(dir / run / "summary.json"))["result_sha256"]
+        .get<std::string>();
+  };
+  const sim::RunRecord here = sim::RunScenario(sim::LoadScenario("scenarios/lab_two_cars.yaml"));
+  EXPECT_EQ(hash("a"), sim::ResultSha256(here));
+  EXPECT_EQ(hash("b"), hash("a"));
+}
+
+TEST(CliTest, CheckPassesTheShippedScenariosAndWritesJunit) {
+  const fs::path junit = Scratch() / "check.xml";
+  const Result r = Cli("check scenarios/ --jobs 2 --junit " + junit.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("PASS  scenarios/lab_two_cars.yaml"));
+  const std::string xml = Read(junit);
+  EXPECT_THAT(xml, HasSubstr("<testsuites"));
+  EXPECT_THAT(xml, HasSubstr("failures=\"0\""));
+  EXPECT_THAT(xml, HasSubstr("classname=\"lab_two_cars\" name=\"intersection_mutex\""));
+  EXPECT_THAT(xml, ::testing::Not(HasSubstr("<failure")));
+}
+
+TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
+  const fs::path dir = Scratch();
+  const fs::path junit = dir / "check.xml";
+  const Result r =
+      Cli("check scenarios/intersection_conflict.yaml --set expect[3].completes.laps=9 "
+          "--junit " +
+          junit.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("FAIL completes(laps=9"));
+  EXPECT_THAT(Read(junit), HasSubstr("<failure message="));
+}
+
+TEST(CliTest, UnusableInputExitsTwo) {
+  const fs::path broken = Scratch() / "broken.yaml";
+  std::ofstream(broken) << "name: broken\ncars: []\n";
+  Result r = Cli("run " + broken.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("cars must not be empty"));
+  EXPECT_EQ(Cli("check " + broken.string()).exit_code, 2);
+  EXPECT_EQ(Cli("run scenarios/nope.yaml").exit_code, 2);
+  EXPECT_EQ(Cli("run scenarios/lab_two_cars.yaml --bogus").exit_code, 2);
+  EXPECT_EQ(Cli("run scenarios/lab_two_cars.yaml --set cars[0].speed=1").exit_code, 2);
+  EXPECT_EQ(Cli("frobnicate").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace autonomsim
