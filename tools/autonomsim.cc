@@ -191,7 +191,8 @@ void WriteJunit(const fs::path& file, const std::vector<Outcome>& outcomes) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
-// SCENARIO|DIR... -> scenario files; a folder contributes the *.yaml files directly inside it.
+// SCENARIO|DIR... -> scenario files; a folder contributes the *.yaml files directly inside it,
+// except hidden ones (editor and tool droppings).
 std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
   std::vector<fs::path> files;
   for (const std::string& arg : args) {
@@ -199,7 +200,8 @@ std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
     if (fs::is_directory(path)) {
       std::vector<fs::path> found;
       for (const auto& entry : fs::directory_iterator(path)) {
-        if (entry.is_regular_file() && entry.path().extension() == ".yaml") {
+        const std::string name = entry.path().filename().string();
+        if (entry.is_regular_file() && entry.path().extension() == ".yaml" && name[0] != '.') {
           found.push_back(entry.path());
         }
       }
