@@ -1,0 +1,98 @@
+#include "tools/cli_common.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "sim/outputs.h"
+#include "sim/simulation.h"
+
+namespace autonomsim::cli {
+
+namespace fs = std::filesystem;
+
+void AddSetOption(CLI::App* command, std::vector<std::string>* overrides) {
+  command
+      ->add_option("--set", *overrides,
+                   "Override a scenario field, e.g. --set cars[0].oracle.speed_mps=0.3 or "
+                   "--set v2i.loss=0.1 (repeatable)")
+      ->type_name("KEY=VALUE");
+}
+
+double WallSecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Progress::Progress(double total_s, bool quiet)
+    : total_s_(total_s), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1) {}
+
+void Progress::Update(double sim_s) {
+  if (quiet_) return;
+  const int percent = static_cast<int>(100.0 * sim_s / total_s_);
+  const double wall_s = WallSecondsSince(start_);
+  const double rtf = wall_s > 0 ? sim_s / wall_s : 0.0;
+  if (tty_) {
+    fmt::print(stderr, "\r  {:6.1f} / {:.1f} s simulated ({:3d}%), {:.1f}x real time", sim_s,
+               total_s_, percent, rtf);
+    std::fflush(stderr);
+  } else if (percent / 10 > last_decile_) {
+    last_decile_ = percent / 10;
+    fmt::print(stderr, "  {:.1f} / {:.1f} s simulated ({}%), {:.1f}x real time\n", sim_s, total_s_,
+               percent, rtf);
+  }
+}
+
+void Progress::Done() {
+  if (!quiet_ && tty_) fmt::print(stderr, "\n");
+}
+
+bool Outcome::passed() const {
+  return !input_error && std::all_of(expectations.begin(), expectations.end(),
+                                     [](const auto& e) { return e.passed; });
+}
+
+Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::path>& out_dir,
+                  Progress* progress) {
+  Outcome outcome;
+  outcome.file = loaded.file.string();
+  outcome.scenario_name = loaded.scenario.name;
+  const auto start = std::chrono::steady_clock::now();
+  sim::Simulation simulation(loaded);
+  if (progress) {
+    simulation.Run([progress](Time t) { progress->Update(ToSeconds(t)); });
+    progress->Done();
+  } else {
+    simulation.Run();
+  }
+  outcome.wall_seconds = WallSecondsSince(start);
+  outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
+  outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
+  if (out_dir) {
+    sim::WriteRunFolder(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds,
+                        *out_dir);
+  }
+  return outcome;
+}
+
+Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
+                const std::optional<fs::path>& out_dir) {
+  try {
+    return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr);
+  } catch (const sim::ConfigError& e) {
+    Outcome outcome;
+    outcome.file = file.string();
+    outcome.scenario_name = file.stem().string();
+    outcome.input_error = e.what();
+    return outcome;
+  }
+}
+
+void PrintVerdicts(const Outcome& outcome) {
+  for (const sim::ExpectationResult& e : outcome.expectations) {
+    fmt::print("  {} {}: {}\n", e.passed ? "pass" : "FAIL", e.name, e.detail);
+  }
+}
+
+}  // namespace autonomsim::cli

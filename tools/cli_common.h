@@ -1,0 +1,69 @@
+// Shared by the `autonomsim` subcommands: exit codes, progress, running and judging one scenario.
+// The CLI is the only place that reads the wall clock (for progress and the real-time factor).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/expectations.h"
+#include "sim/scenario.h"
+
+namespace autonomsim::cli {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitExpectationFailed = 1;
+inline constexpr int kExitUnusableInput = 2;
+
+// A subcommand: its CLI11 app, and what to do when it was the one given.
+struct Command {
+  CLI::App* app{nullptr};
+  std::function<int()> run;
+};
+
+Command AddRunCommand(CLI::App& parent);
+Command AddCheckCommand(CLI::App& parent);
+
+// Adds the repeatable --set KEY=VALUE option.
+void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);
+
+double WallSecondsSince(std::chrono::steady_clock::time_point start);
+
+// Progress on stderr: a line rewritten in place on a terminal, a line per 10% otherwise.
+class Progress {
+ public:
+  Progress(double total_s, bool quiet);
+  void Update(double sim_s);
+  void Done();
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  double total_s_;
+  bool quiet_;
+  bool tty_;
+  int last_decile_{0};
+};
+
+struct Outcome {
+  std::string scenario_name;
+  std::string file;
+  std::optional<std::string> input_error;  // unusable input: nothing ran
+  std::vector<sim::ExpectationResult> expectations;
+  double wall_seconds{0.0};
+  double sim_seconds{0.0};
+  bool passed() const;
+};
+
+// Runs and judges one loaded scenario; writes its folder when out_dir is given.
+Outcome RunLoaded(const sim::LoadedScenario& loaded,
+                  const std::optional<std::filesystem::path>& out_dir, Progress* progress);
+// Loads, runs and judges one scenario file; unusable input becomes the outcome's input_error.
+Outcome RunFile(const std::filesystem::path& file, const std::vector<std::string>& overrides,
+                const std::optional<std::filesystem::path>& out_dir);
+void PrintVerdicts(const Outcome& outcome);
+
+}  // namespace autonomsim::cli

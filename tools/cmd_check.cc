@@ -1,0 +1,193 @@
+// `autonomsim check SCENARIO|DIR...`: judge scenarios' expectations, for CI.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <fstream>
+#include <thread>
+
+#include "sim/config.h"
+#include "tools/cli_common.h"
+
+namespace autonomsim::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string XmlEscape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+void WriteJunit(const fs::path& file, const std::vector<Outcome>& outcomes) {
+  int tests = 0, failures = 0, errors = 0;
+  std::string cases;
+  for (const Outcome& o : outcomes) {
+    const std::string suite = XmlEscape(o.scenario_name);
+    if (o.input_error) {
+      ++tests;
+      ++errors;
+      cases += fmt::format(
+          "    <testcase classname=\"{}\" name=\"load\" time=\"0\">\n"
+          "      <error message=\"unusable input\">{}</error>\n    </testcase>\n",
+          suite, XmlEscape(*o.input_error));
+      continue;
+    }
+    const double per_case =
+        o.expectations.empty() ? 0.0 : o.wall_seconds / static_cast<double>(o.expectations.size());
+    for (const sim::ExpectationResult& e : o.expectations) {
+      ++tests;
+      cases += fmt::format("    <testcase classname=\"{}\" name=\"{}\" time=\"{:.3f}\">\n", suite,
+                           XmlEscape(e.name), per_case);
+      if (!e.passed) {
+        ++failures;
+        cases += fmt::format("      <failure message=\"{}\">{}</failure>\n", XmlEscape(e.detail),
+                             XmlEscape(e.detail));
+      } else {
+        cases += fmt::format("      <system-out>{}</system-out>\n", XmlEscape(e.detail));
+      }
+      cases += "    </testcase>\n";
+    }
+  }
+  std::ofstream out(file);
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << fmt::format("<testsuites tests=\"{}\" failures=\"{}\" errors=\"{}\">\n", tests, failures,
+                     errors)
+      << fmt::format(
+             "  <testsuite name=\"autonomsim check\" tests=\"{}\" failures=\"{}\" "
+             "errors=\"{}\">\n",
+             tests, failures, errors)
+      << cases << "  </testsuite>\n</testsuites>\n";
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+// SCENARIO|DIR... -> scenario files; a folder contributes the *.yaml files directly inside it,
+// except hidden ones (editor and tool droppings).
+std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
+  std::vector<fs::path> files;
+  for (const std::string& arg : args) {
+    const fs::path path(arg);
+    if (fs::is_directory(path)) {
+      std::vector<fs::path> found;
+      for (const auto& entry : fs::directory_iterator(path)) {
+        const std::string name = entry.path().filename().string();
+        if (entry.is_regular_file() && entry.path().extension() == ".yaml" && name[0] != '.') {
+          found.push_back(entry.path());
+        }
+      }
+      std::sort(found.begin(), found.end());
+      if (found.empty()) throw sim::ConfigError(arg + ": no *.yaml scenario files in this folder");
+      files.insert(files.end(), found.begin(), found.end());
+    } else {
+      files.push_back(path);
+    }
+  }
+  return files;
+}
+
+int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
+                 const std::optional<std::string>& out, const std::vector<std::string>& overrides,
+                 int jobs) {
+  std::vector<fs::path> files;
+  try {
+    files = ExpandScenarioArgs(args);
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
+  // Each scenario is an independent run: spread them over `jobs` threads; the verdicts do not
+  // depend on the order or the thread a run lands on.
+  std::vector<Outcome> outcomes(files.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i = next++; i < files.size(); i = next++) {
+      std::optional<fs::path> dir;
+      if (out) dir = fs::path(*out) / files[i].stem();
+      try {
+        outcomes[i] = RunFile(files[i], overrides, dir);
+      } catch (const std::exception& e) {
+        outcomes[i].file = files[i].string();
+        outcomes[i].scenario_name = files[i].stem().string();
+        outcomes[i].input_error = std::string("run failed: ") + e.what();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < std::min<int>(jobs, static_cast<int>(files.size())); ++t) {
+    threads.emplace_back(worker);
+  }
+  worker();
+  for (std::thread& t : threads) t.join();
+
+  int failed = 0, unusable = 0;
+  for (const Outcome& o : outcomes) {
+    if (o.input_error) {
+      ++unusable;
+      fmt::print("ERROR {}\n  {}\n", o.file, *o.input_error);
+      continue;
+    }
+    if (!o.passed()) ++failed;
+    fmt::print("{} {} ({} expectation(s), {:.0f} s simulated in {:.2f} s)\n",
+               o.passed() ? "PASS " : "FAIL ", o.file, o.expectations.size(), o.sim_seconds,
+               o.wall_seconds);
+    if (o.expectations.empty()) fmt::print("  warning: this scenario has no expectations\n");
+    if (!o.passed()) PrintVerdicts(o);
+  }
+  fmt::print("{} scenario(s): {} passed, {} failed, {} unusable\n", outcomes.size(),
+             outcomes.size() - static_cast<std::size_t>(failed + unusable), failed, unusable);
+  if (junit) {
+    WriteJunit(*junit, outcomes);
+    fmt::print("JUnit XML: {}\n", *junit);
+  }
+  if (unusable > 0) return kExitUnusableInput;
+  return failed > 0 ? kExitExpectationFailed : kExitOk;
+}
+
+}  // namespace
+
+Command AddCheckCommand(CLI::App& parent) {
+  struct Options {
+    std::vector<std::string> args;
+    std::optional<std::string> junit;
+    std::optional<std::string> out;
+    std::vector<std::string> overrides;
+    int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* check = parent.add_subcommand(
+      "check", "Run scenarios and judge their expect: clauses (for CI): exit 0 when all hold");
+  check
+      ->add_option("SCENARIO_OR_DIR", o->args,
+                   "Scenario files, or folders whose *.yaml files are scenarios")
+      ->required();
+  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML")->type_name("FILE");
+  check->add_option("--out", o->out, "Keep each run's result folder under DIR/<scenario>")
+      ->type_name("DIR");
+  check->add_option("--jobs,-j", o->jobs, "Scenarios run in parallel (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  AddSetOption(check, &o->overrides);
+  return {check, [o] { return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs); }};
+}
+
+}  // namespace autonomsim::cli
