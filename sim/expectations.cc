@@ -117,8 +117,8 @@ ExpectationResult MinObstacleGap(const ExpectArgs& args, const RunRecord& record
   for (const CarMetrics& car : record.cars) {
     if (!Concerns(args, car.id)) continue;
     if (!car.min_obstacle_gap_m) {
-      parts.push_back(fmt::format("car {}: no obstacle within {} m", car.id,
-                                  kObstacleGapHorizon_m));
+      parts.push_back(
+          fmt::format("car {}: no obstacle within {} m", car.id, kObstacleGapHorizon_m));
       continue;
     }
     passed = passed && *car.min_obstacle_gap_m >= *args.min_m;

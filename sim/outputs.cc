@@ -139,22 +139,23 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
   summary["passed"] = passed;
   nlohmann::json cars = nlohmann::json::array();
   for (const CarMetrics& c : record.cars) {
-    cars.push_back({{"id", c.id},
-                    {"route", c.route},
-                    {"route_length_m", c.route_length_m},
-                    {"laps", c.laps},
-                    {"lap_times_s", c.lap_times_s},
-                    {"collisions", c.collisions},
-                    {"max_lateral_error_m", c.max_lateral_error_m},
-                    {"rms_lateral_error_m", c.rms_lateral_error_m},
-                    {"distance_m", c.distance_m},
-                    {"mean_speed_mps", c.mean_speed_mps},
-                    {"intersection_entries", c.intersection_entries},
-                    {"waits", c.waits},
-                    {"total_wait_s", c.total_wait_s},
-                    {"max_wait_s", c.max_wait_s},
-                    {"min_obstacle_gap_m", c.min_obstacle_gap_m ? nlohmann::json(*c.min_obstacle_gap_m)
-                                                                : nlohmann::json()}});
+    cars.push_back(
+        {{"id", c.id},
+         {"route", c.route},
+         {"route_length_m", c.route_length_m},
+         {"laps", c.laps},
+         {"lap_times_s", c.lap_times_s},
+         {"collisions", c.collisions},
+         {"max_lateral_error_m", c.max_lateral_error_m},
+         {"rms_lateral_error_m", c.rms_lateral_error_m},
+         {"distance_m", c.distance_m},
+         {"mean_speed_mps", c.mean_speed_mps},
+         {"intersection_entries", c.intersection_entries},
+         {"waits", c.waits},
+         {"total_wait_s", c.total_wait_s},
+         {"max_wait_s", c.max_wait_s},
+         {"min_obstacle_gap_m",
+          c.min_obstacle_gap_m ? nlohmann::json(*c.min_obstacle_gap_m) : nlohmann::json()}});
   }
   summary["cars"] = cars;
   summary["server"] = {{"requests", record.server.requests},

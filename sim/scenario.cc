@@ -8,19 +8,10 @@
 
 #include "sim/hash.h"
 #include "sim/track_loader.h"
+#include "world/validation.h"
 
 namespace autonomsim::sim {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
-
-std::string Num(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 // A ConfigError located at `path` of the scenario file (line and column when the key is there).
 [[noreturn]] void FailAt(const YAML::Node& root, const ConfigSource& source,

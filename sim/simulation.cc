@@ -288,8 +288,8 @@ void Simulation::Impl::MeasureObstacleGaps() {
     for (std::size_t o = 0; o < physics.obstacle_count(); ++o) {
       if (!physics.obstacle_enabled(o)) continue;
       const vehicle::ObstacleBox& box = physics.obstacle(o);
-      const double reach = 0.5 * (std::hypot(car.length_m, car.width_m) +
-                                  std::hypot(box.length_m, box.width_m));
+      const double reach =
+          0.5 * (std::hypot(car.length_m, car.width_m) + std::hypot(box.length_m, box.width_m));
       if ((footprint.pose.position() - box.pose.position()).norm() - reach >
           kObstacleGapHorizon_m) {
         continue;  // too far for the exact distance to matter

@@ -7,9 +7,28 @@
 
 namespace autonomsim::sim {
 
+TrafficLightNode::TrafficLightNode(Kernel* kernel, std::unique_ptr<TrafficLightEndpoint> endpoint,
+                                   EventSink sink)
+    : kernel_(kernel), endpoint_(std::move(endpoint)), sink_(std::move(sink)) {
+  if (endpoint_ == nullptr) throw std::logic_error("TrafficLightNode: no endpoint");
+}
+
 TrafficLightNode::TrafficLightNode(Kernel* kernel, const world::TrafficLightServerParams& params,
                                    std::vector<int> intersection_ids, EventSink sink)
-    : kernel_(kernel), server_(params, std::move(intersection_ids)), sink_(std::move(sink)) {}
+    : TrafficLightNode(
+          kernel,
+          std::make_unique<EmbeddedTrafficLightEndpoint>(params, std::move(intersection_ids)),
+          std::move(sink)) {}
+
+const world::TrafficLightServer& TrafficLightNode::server() const {
+  const auto* embedded = dynamic_cast<const EmbeddedTrafficLightEndpoint*>(endpoint_.get());
+  if (embedded == nullptr) {
+    throw std::logic_error(
+        "TrafficLightNode::server(): the server does not run in this process; use Holder() and "
+        "counters()");
+  }
+  return embedded->server();
+}
 
 void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message) {
   const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
@@ -27,9 +46,9 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
       [&](const auto& payload) {
         using T = std::decay_t<decltype(payload)>;
         if constexpr (std::is_same_v<T, world::Request>) {
-          responses = server_.OnRequest(now, payload);
+          responses = endpoint_->OnRequest(now, payload);
         } else if constexpr (std::is_same_v<T, world::Free>) {
-          responses = server_.OnFree(now, payload);
+          responses = endpoint_->OnFree(now, payload);
         } else {
           // A response sent to the server is not for it: count it as malformed traffic.
           ++malformed_;
@@ -51,12 +70,12 @@ void TrafficLightNode::Publish(const std::vector<world::Response>& responses) {
 
 void TrafficLightNode::RescheduleTick() {
   kernel_->Cancel(tick_);
-  const std::optional<Time> deadline = server_.NextDeadline();
+  const std::optional<Time> deadline = endpoint_->NextDeadline();
   if (!deadline) return;
   tick_ = kernel_->ScheduleAt(
       std::max(*deadline, kernel_->Now()),
       [this] {
-        Publish(server_.OnTick(kernel_->Now()));
+        Publish(endpoint_->OnTick(kernel_->Now()));
         RescheduleTick();
       },
       kPriorityServer);

@@ -4,12 +4,10 @@
 #include <set>
 #include <stdexcept>
 
+#include "world/validation.h"
+
 namespace autonomsim::world {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 void ValidatePoints(const PointList& points, const std::string& key) {
   Require(points.size() >= 2,
