@@ -133,6 +133,21 @@ TEST(CliTest, CheckPassesTheShippedScenariosAndWritesJunit) {
   EXPECT_THAT(xml, ::testing::Not(HasSubstr("<failure")));
 }
 
+TEST(CliTest, CheckGivesTheSameResultsWhateverTheNumberOfJobs) {
+  const fs::path dir = Scratch();
+  ASSERT_EQ(Cli("check scenarios/ --jobs 1 --out " + (dir / "one").string()).exit_code, 0);
+  ASSERT_EQ(Cli("check scenarios/ --jobs 2 --out " + (dir / "two").string()).exit_code, 0);
+  int compared = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "one")) {
+    const auto hash = [](const fs::path& run) {
+      return nlohmann::json::parse(Read(run / "summary.json"))["result_sha256"];
+    };
+    EXPECT_EQ(hash(entry.path()), hash(dir / "two" / entry.path().filename()));
+    ++compared;
+  }
+  EXPECT_GE(compared, 3);
+}
+
 TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
   const fs::path dir = Scratch();
   const fs::path junit = dir / "check.xml";
