@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
       "Exit codes: 0 all expectations held, 1 an expectation failed, 2 unusable input."};
   app.set_version_flag("--version", std::string("autonomsim ") + AUTONOMSIM_VERSION);
   app.require_subcommand(1);
-  const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app)};
+  const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app),
+                                         AddTable1Command(app)};
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,188 @@
+// What the node graph and the platform did during a run, and the reports made from it: per node
+// rate, turnaround (min/p50/p95/max), CPU and drops; per topic rate and latency from the sensor
+// stamp (the end-to-end latency of a chain is the latency of its last topic); platform CPU load
+// over time; nodes.csv; a Chrome trace (trace.json) that opens in Perfetto (ui.perfetto.dev) or
+// chrome://tracing.
+//
+// CPU is in the paper's unit: 100 % = one core fully busy, 400 % = all four cores of the ZCU104.
+// Rates, CPU, turnaround and latency count only what happens from `measure_from` on (warm-up
+// excluded); the load-over-time series and the trace cover the whole run.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+struct MetricsOptions {
+  Time measure_from{0};
+  Duration load_bin{std::chrono::seconds(1)};
+  bool trace{true};
+  std::size_t trace_max_events{200000};
+};
+
+// Where a trace span is drawn: a node's executor (its jobs, on the CPU or in its slot), a node's
+// DDS receive thread, or an FPGA slot.
+enum class TraceLane { kExecutor, kReceive, kSlot };
+
+class RunMetrics {
+ public:
+  explicit RunMetrics(const MetricsOptions& options = {});
+
+  const MetricsOptions& options() const { return options_; }
+
+  // Registration; the returned index names the node (also the CPU owner) or the topic below.
+  int AddNode(const std::string& name, const std::string& mapping);
+  int AddTopic(const std::string& name, const std::string& transport, std::int64_t bytes);
+  void SetCores(int cores) { cores_ = cores; }
+
+  // CPU accounting: `cores` of the CPU were busy for `node` from t0 to t1 (a node owns its jobs and
+  // its DDS receive thread). AddBusy is the platform total.
+  void AddCpu(int node, Time t0, Time t1, double cores);
+  void AddBusy(Time t0, Time t1, double cores);
+  void BusyChanged(Time t, double cores);  // trace counter
+
+  // Node activity. `nominal_core_s` is the CPU a job was given to do (independent of contention).
+  void JobDone(int node, Time start, Time end, double nominal_core_s);
+  void ReceiveDone(int node, Time t, double core_s);
+  void Arrival(int node, int topic, Time t);
+  void Dropped(int node, int topic, Time t);
+  void LoanFailed(int node, int topic, Time t);
+  void TimerFired(int node, Time t);
+  void TimerOverrun(int node, Time t);
+  void Published(int node, int topic, Time t, Time stamp);
+
+  void Span(TraceLane lane, int id, const std::string& name, Time start, Time end);
+
+  struct NodeData {
+    std::string name;
+    std::string mapping;
+    std::uint64_t jobs{0}, arrivals{0}, drops{0}, loan_failures{0}, timer_ticks{0},
+        timer_overruns{0};
+    std::vector<double> turnaround_ms;
+    double cpu_core_s{0.0};
+    double job_core_s{0.0};      // nominal, summed over jobs counted in `jobs`
+    double receive_core_s{0.0};  // DDS receive thread
+  };
+  struct TopicData {
+    std::string name;
+    std::string transport;
+    std::int64_t bytes{0};
+    std::uint64_t published{0}, drops{0}, loan_failures{0};
+    std::vector<double> latency_ms;
+  };
+  struct TraceEvent {
+    char phase;  // 'X' span, 'C' counter
+    int pid;
+    int tid;
+    int name;  // index into trace_names
+    std::int64_t ts_ns;
+    std::int64_t dur_ns;
+    double value;
+  };
+
+  const std::vector<NodeData>& nodes() const { return nodes_; }
+  const std::vector<TopicData>& topics() const { return topics_; }
+  int cores() const { return cores_; }
+  double busy_core_s() const { return busy_core_s_; }
+  const std::vector<double>& load_bins_core_ns() const { return load_bins_core_ns_; }
+  const std::vector<TraceEvent>& trace_events() const { return trace_; }
+  const std::vector<std::string>& trace_names() const { return trace_names_; }
+  bool trace_truncated() const { return trace_truncated_; }
+
+ private:
+  bool Measured(Time t) const { return t >= options_.measure_from; }
+  // Seconds of [t0, t1] inside the measurement window.
+  double MeasuredSeconds(Time t0, Time t1) const;
+  int TraceName(const std::string& name);
+  void AddTrace(const TraceEvent& event);
+
+  MetricsOptions options_;
+  int cores_{1};
+  std::vector<NodeData> nodes_;
+  std::vector<TopicData> topics_;
+  double busy_core_s_{0.0};
+  std::vector<double> load_bins_core_ns_;
+  std::vector<TraceEvent> trace_;
+  std::vector<std::string> trace_names_;
+  bool trace_truncated_{false};
+  double last_busy_{-1.0};
+};
+
+// min / p50 / p95 / max of a sample (nearest-rank percentiles); all zero when empty.
+struct Stats {
+  std::size_t count{0};
+  double min{0.0}, p50{0.0}, p95{0.0}, max{0.0};
+};
+Stats ComputeStats(std::vector<double> samples);
+
+struct NodeReport {
+  std::string name;
+  std::string mapping;
+  std::uint64_t jobs{0}, arrivals{0}, timer_ticks{0}, drops{0}, loan_failures{0}, timer_overruns{0};
+  double input_hz{0.0};  // messages arrived and timer ticks per second
+  double rate_hz{0.0};   // jobs completed per second
+  Stats turnaround_ms;   // take to publish of one job, including waiting for a CPU share
+  double cpu_percent{0.0};
+  // CPU the node would need to serve every message and timer tick at its cost per job, plus its
+  // DDS receive thread: above cpu_percent when it drops or falls behind.
+  double demand_percent{0.0};
+};
+
+struct TopicReport {
+  std::string name;
+  std::string transport;
+  std::int64_t bytes{0};
+  std::uint64_t published{0}, drops{0}, loan_failures{0};
+  double rate_hz{0.0};
+  Stats latency_ms;  // publish time minus the sensor stamp it derives from
+};
+
+struct MetricsReport {
+  double window_s{0.0};
+  int cores{1};
+  double cpu_percent{0.0};         // platform busy, 100 = one core
+  double cpu_demand_percent{0.0};  // sum of the nodes' demand
+  Duration load_bin{std::chrono::seconds(1)};
+  std::vector<double> cpu_load_percent;  // per bin from t = 0
+  std::vector<NodeReport> nodes;
+  std::vector<TopicReport> topics;
+
+  const NodeReport* FindNode(const std::string& name) const;
+  const TopicReport* FindTopic(const std::string& name) const;
+};
+
+// `end` is the time the run stopped (the window is [measure_from, end]).
+MetricsReport BuildReport(const RunMetrics& metrics, Time end);
+
+// A run may have several boards (one ZCU104 per car); outputs name the board on every line.
+struct BoardReport {
+  std::string board;  // e.g. "car0"
+  MetricsReport report;
+};
+struct BoardMetrics {
+  std::string board;
+  const RunMetrics* metrics;
+};
+
+// nodes.csv: one row per board and node: board, node, mapping, jobs, input_hz, rate_hz,
+// turnaround_{min,p50,p95,max}_ms, cpu_percent, demand_percent, arrivals, timer_ticks, drops,
+// loan_failures, timer_overruns.
+std::string NodesCsv(const std::vector<BoardReport>& boards);
+// For summary.json, per board: {cores, window_s, cpu_percent, cpu_demand_percent, load_bin_s,
+// cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
+// min, p50, p95, max}, cpu_percent, demand_percent, arrivals, timer_ticks, drops, loan_failures,
+// timer_overruns}], topics: [{name, transport, bytes, published, rate_hz, latency_ms: {...},
+// drops, loan_failures}]}.
+nlohmann::json ReportJson(const MetricsReport& report);
+// trace.json in the Chrome trace event format (times in microseconds), for Perfetto
+// (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node
+// executor (its jobs, on the cores or in its slot), per DDS receive thread and per FPGA slot.
+std::string TraceJson(const std::vector<BoardMetrics>& boards);
+
+}  // namespace autonomsim::sim
