@@ -13,15 +13,14 @@
 #include <vector>
 
 #include "sim/kernel.h"
+#include "sim/priorities.h"
 #include "sim/node_metrics.h"
 #include "sim/platform_profile.h"
 
 namespace autonomsim::sim {
 
-// Kernel priority of the graph's and the platform's events. At one instant they run after the
-// V2I deliveries and the intersection clients and before the drivers read their inputs (see
-// sim/priorities.h); the closed loop may move it there.
-inline constexpr int kPriorityPlatform = 25;
+// The graph's and the platform's events run at kPriorityPlatform (sim/priorities.h): after the
+// V2I deliveries, the intersection clients and the sensors, before the drivers read their inputs.
 
 // ---- Transport costs (pure functions of the profile and the message size) ----
 

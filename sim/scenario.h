@@ -10,6 +10,7 @@
 
 #include "sim/config.h"
 #include "sim/oracle_driver.h"
+#include "sim/sensors.h"
 #include "stack/intersection_client.h"
 #include "vehicle/car.h"
 #include "vehicle/physics_world.h"
@@ -30,6 +31,7 @@ struct CarConfig {
   OracleDriverParams oracle;
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
+  SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/sensors.h)
 
   template <class V>
   void Describe(V& v) {
@@ -43,6 +45,7 @@ struct CarConfig {
     v("oracle", oracle);
     v("intersection_client", intersection_client);
     v("vehicle", vehicle);
+    v("sensors", sensors);
   }
   void Validate() const;
 };
@@ -158,6 +161,7 @@ struct Scenario {
   std::vector<ObstacleConfig> obstacles;
   std::vector<ExpectClause> expect;
   OutputConfig output;
+  vehicle::SceneAppearance appearance;  // how cars and obstacles look to the cameras
 
   template <class V>
   void Describe(V& v) {
@@ -173,6 +177,7 @@ struct Scenario {
     v("obstacles", obstacles);
     v("expect", expect);
     v("output", output);
+    v("appearance", appearance);
   }
   void Validate() const;
 };

@@ -9,10 +9,12 @@
 #include "sim/oracle_driver.h"
 #include "sim/priorities.h"
 #include "sim/random.h"
+#include "sim/sensors.h"
 #include "sim/traffic_light_node.h"
 #include "sim/v2i_link.h"
 #include "stack/intersection_client.h"
 #include "vehicle/physics_world.h"
+#include "world/floor_raster.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -90,6 +92,10 @@ struct Simulation::Impl {
   std::map<int, std::size_t> agent_index;  // car id -> agents index
   TrafficLightNode server;
   std::unique_ptr<EmbeddedV2ILink> link;
+  // the cars' sensors; camera frames are rendered only by whoever processes them
+  world::FloorRaster floor;
+  std::unique_ptr<SensorEnvironment> sensor_world;
+  std::vector<std::unique_ptr<SensorSuite>> sensors;
   RunRecord record;
 };
 
@@ -130,6 +136,15 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
     agent_index[config.id] = agents.size();
     agents.push_back(std::move(agent));
     car_ids.push_back(config.id);
+  }
+
+  // each car's sensors
+  floor = world::RasterizeFloor(loaded.track);
+  sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance);
+  for (const CarAgent& agent : agents) {
+    sensors.push_back(std::make_unique<SensorSuite>(&kernel, sensor_world.get(),
+                                                    agent.config->id, agent.config->sensors,
+                                                    streams, physics.step()));
   }
 
   // the V2I link between the cars and the server

@@ -1,0 +1,151 @@
+// The ray-cast cameras (issue 3). BM_RenderRgbd is the figure of merit: one 640×480 depth frame
+// (the depth camera) and one 640×480 colour frame (the colour camera, lens distortion on) of a car
+// on the lab track with another car and a box in view, on one thread. Target: <= 1 ms.
+//
+//     build/bin/bench_camera --benchmark_filter=BM_RenderRgbd
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim/track_loader.h"
+#include "vehicle/camera_model.h"
+#include "vehicle/ray_caster.h"
+#include "world/floor_raster.h"
+
+namespace autonomsim {
+namespace {
+
+struct Scene {
+  Scene() {
+    const world::Track track =
+        sim::LoadTrack(std::string(AUTONOMSIM_SOURCE_DIR) + "/scenarios/tracks/lab.yaml");
+    floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
+    color_rays = std::make_shared<const vehicle::CameraRays>(
+        vehicle::CameraModel(vehicle::ColorCameraParams()));
+    depth_rays = std::make_shared<const vehicle::CameraRays>(
+        vehicle::CameraModel(vehicle::DepthCameraParams()));
+    const vehicle::SceneAppearance appearance;
+    // the real car's start pose (reference §1), another car 1.2 m ahead on its lane, a box on the
+    // lane's left edge
+    prisms.push_back(
+        vehicle::Prism{world::OrientedBox{world::Pose2{2.16, -2.17, 0.05}, 0.525, 0.296}, 0.2,
+                       appearance.car_body(1)});
+    prisms.push_back(vehicle::Prism{world::OrientedBox{world::Pose2{1.9, -1.95, 0.3}, 0.2, 0.2},
+                                    0.2, appearance.obstacle()});
+  }
+
+  world::Pose2 pose{0.96, -2.18, 0.0};
+  std::shared_ptr<const vehicle::FloorTexture> floor;
+  std::shared_ptr<const vehicle::CameraRays> color_rays;
+  std::shared_ptr<const vehicle::CameraRays> depth_rays;
+  std::vector<vehicle::Prism> prisms;
+};
+
+const Scene& TheScene() {
+  static const Scene scene;
+  return scene;
+}
+
+vehicle::CameraRenderer Renderer(const std::shared_ptr<const vehicle::CameraRays>& rays) {
+  return vehicle::CameraRenderer(rays, TheScene().floor, vehicle::SceneAppearance{}.surround());
+}
+
+void BM_RenderRgbd(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
+  vehicle::CameraRenderer depth_camera = Renderer(scene.depth_rays);
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+  for (auto _ : state) {
+    color_camera.Render(scene.pose, scene.prisms, &color, nullptr);
+    depth_camera.Render(scene.pose, scene.prisms, nullptr, &depth);
+    benchmark::DoNotOptimize(color.bgr.data());
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetBytesProcessed(state.iterations() *
+                          static_cast<std::int64_t>(color.bgr.size() + 2 * depth.mm.size()));
+}
+BENCHMARK(BM_RenderRgbd)->Unit(benchmark::kMicrosecond);
+
+// The same without prisms: the floor alone.
+void BM_RenderRgbdEmptyTrack(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
+  vehicle::CameraRenderer depth_camera = Renderer(scene.depth_rays);
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+  for (auto _ : state) {
+    color_camera.Render(scene.pose, {}, &color, nullptr);
+    depth_camera.Render(scene.pose, {}, nullptr, &depth);
+    benchmark::DoNotOptimize(color.bgr.data());
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RenderRgbdEmptyTrack)->Unit(benchmark::kMicrosecond);
+
+void BM_RenderColor(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer camera = Renderer(scene.color_rays);
+  vehicle::ColorImage color;
+  for (auto _ : state) {
+    camera.Render(scene.pose, scene.prisms, &color, nullptr);
+    benchmark::DoNotOptimize(color.bgr.data());
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_RenderColor)->Unit(benchmark::kMicrosecond);
+
+void BM_RenderDepth(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer camera = Renderer(scene.depth_rays);
+  vehicle::DepthImage depth;
+  for (auto _ : state) {
+    camera.Render(scene.pose, scene.prisms, nullptr, &depth);
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_RenderDepth)->Unit(benchmark::kMicrosecond);
+
+// An RGB-D frame with the seeded noise on (both images).
+void BM_RenderRgbdWithNoise(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
+  vehicle::CameraRenderer depth_camera = Renderer(scene.depth_rays);
+  vehicle::CameraNoiseParams noise;
+  noise.enabled = true;
+  const vehicle::CameraParams color_params = vehicle::ColorCameraParams();
+  const vehicle::CameraParams depth_params = vehicle::DepthCameraParams();
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+  std::uint64_t seed = 0;
+  for (auto _ : state) {
+    color_camera.Render(scene.pose, scene.prisms, &color, nullptr);
+    vehicle::AddCameraNoise(noise, color_params, ++seed, &color, nullptr);
+    depth_camera.Render(scene.pose, scene.prisms, nullptr, &depth);
+    vehicle::AddCameraNoise(noise, depth_params, seed, nullptr, &depth);
+    benchmark::DoNotOptimize(color.bgr.data());
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_RenderRgbdWithNoise)->Unit(benchmark::kMicrosecond);
+
+// Once per distinct camera of a run: the per-pixel tables (lens undistortion included).
+void BM_BuildColorCameraRays(benchmark::State& state) {
+  const vehicle::CameraModel model(vehicle::ColorCameraParams());
+  for (auto _ : state) {
+    vehicle::CameraRays rays(model);
+    benchmark::DoNotOptimize(rays.dir_x().data());
+  }
+}
+BENCHMARK(BM_BuildColorCameraRays)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace autonomsim

@@ -1,0 +1,255 @@
+#include "vehicle/camera_model.h"
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace autonomsim::vehicle {
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+// Newton's method for the inverse of the distortion: iterations, and the residual (normalized
+// image units, ≈1e-10 px) at which it stops.
+constexpr int kUndistortIterations = 50;
+constexpr double kUndistortTolerance = 1e-13;
+// How far out (normalized radius) the radial model is searched for its monotone range, and in how
+// many steps; a lens never sees beyond r = 10 (84°).
+constexpr double kMaxSearchRadius = 10.0;
+constexpr int kRadiusSearchSteps = 10000;
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+std::string Num(double v) { return std::to_string(v); }
+
+void RequireFinite(double value, const std::string& key) {
+  Require(std::isfinite(value), key + " must be finite, got " + Num(value));
+}
+
+}  // namespace
+
+void CameraMount::Validate() const {
+  RequireFinite(x_m, "x_m");
+  RequireFinite(y_m, "y_m");
+  RequireFinite(z_m, "z_m");
+  for (const auto& [key, value] :
+       {std::pair{"roll_deg", roll_deg}, {"pitch_deg", pitch_deg}, {"yaw_deg", yaw_deg}}) {
+    Require(std::isfinite(value) && std::abs(value) <= 180.0,
+            std::string(key) + " must be within [-180, 180], got " + Num(value));
+  }
+}
+
+void CameraParams::Validate() const {
+  Require(!name.empty(), "name must not be empty");
+  Require(width_px > 0 && width_px <= 8192,
+          "width_px must be in [1, 8192], got " + std::to_string(width_px));
+  Require(height_px > 0 && height_px <= 8192,
+          "height_px must be in [1, 8192], got " + std::to_string(height_px));
+  for (std::size_t i = 0; i < K.size(); ++i) RequireFinite(K[i], "K[" + std::to_string(i) + "]");
+  for (std::size_t i = 0; i < D.size(); ++i) RequireFinite(D[i], "D[" + std::to_string(i) + "]");
+  for (std::size_t i = 0; i < P.size(); ++i) RequireFinite(P[i], "P[" + std::to_string(i) + "]");
+  Require(K[0] > 0.0 && K[4] > 0.0,
+          "K: fx (K[0]) and fy (K[4]) must be > 0, got " + Num(K[0]) + ", " + Num(K[4]));
+  Require(K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0,
+          "K must be [fx s cx; 0 fy cy; 0 0 1] (K[3], K[6], K[7] = 0, K[8] = 1)");
+  Require(P[0] > 0.0 && P[5] > 0.0,
+          "P: fx' (P[0]) and fy' (P[5]) must be > 0, got " + Num(P[0]) + ", " + Num(P[5]));
+  Require(P[4] == 0.0 && P[8] == 0.0 && P[9] == 0.0 && P[10] == 1.0 && P[11] == 0.0,
+          "P must be [fx' s cx' Tx; 0 fy' cy' Ty; 0 0 1 0]");
+  mount.Validate();
+  Require(std::isfinite(clip_near_m) && clip_near_m > 0.0,
+          "clip_near_m must be > 0, got " + Num(clip_near_m));
+  Require(std::isfinite(clip_far_m) && clip_far_m > clip_near_m && clip_far_m <= 65.535,
+          "clip_far_m must be > clip_near_m and <= 65.535 (uint16 millimetres), got " +
+              Num(clip_far_m));
+}
+
+CameraParams ColorCameraParams() {
+  CameraParams p;
+  p.name = "color_camera";
+  p.width_px = 640;  // reference §2: 640×480 bgr8 at 30 fps
+  p.height_px = 480;
+  // reference §2: the real calibration. (Their Gazebo camera, f = 288.128, c = (320.5, 240.5),
+  // HFOV 1.67552 rad, no distortion, can be set instead; it goes with a different mount, see
+  // the report of issue 3.)
+  p.K = {426.393, 0.0, 262.009, 0.0, 428.576, 302.229, 0.0, 0.0, 1.0};
+  p.D = {-0.210058, 0.043931, 0.004976, -0.004611, 0.0};
+  p.P = {357.711, 0.0, 237.640, 0.0, 0.0, 386.370, 313.674, 0.0, 0.0, 0.0, 1.0, 0.0};
+  p.lens_distortion = true;
+  // reference §2, derived from their PnP constants: x ≈ 0.137, y ≈ -0.007, height 0.133 m,
+  // pitched down ≈ 15.4°.
+  p.mount = CameraMount{.x_m = 0.137, .y_m = -0.007, .z_m = 0.133, .pitch_deg = 15.4};
+  // assumed: a colour camera has no depth range of its own; 1 cm keeps depth.png meaningful and
+  // 10 m covers the 5 m track from anywhere on it (diagonal 7.1 m); beyond is the lab's wall.
+  p.clip_near_m = 0.01;
+  p.clip_far_m = 10.0;
+  return p;
+}
+
+CameraParams DepthCameraParams() {
+  CameraParams p;
+  p.name = "depth_camera";
+  p.width_px = 640;  // reference §2: 640×480 mono16 (millimetres) at 30 fps
+  p.height_px = 480;
+  // assumed: square pixels from their Gazebo model's HFOV of 1.0472 rad (reference §2):
+  // fx = fy = (640 / 2) / tan(1.0472 / 2) = 554.255; the optical axis through the image centre,
+  // which is (319.5, 239.5) with pixel centres at integers (Gazebo writes (W + 1) / 2 = 320.5).
+  // The real Astra's intrinsics come from the device at run time and were not recorded.
+  const double f = 0.5 * p.width_px / std::tan(0.5 * 1.0472);
+  const double cx = 0.5 * (p.width_px - 1);
+  const double cy = 0.5 * (p.height_px - 1);
+  p.K = {f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0};
+  p.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+  p.P = {f, 0.0, cx, 0.0, 0.0, f, cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+  p.lens_distortion = false;
+  // reference §2: the obstacle code maps a point from the camera's forward/left/up frame (the
+  // frame its point cloud is in, reference §3) to base_link as p_base = R · p_cam + t (a 4×4
+  // homogeneous matrix applied to the point), with R a rotation about y by 0.15 rad and
+  // t = (-0.155, 0, 0.264). So t is the camera's position in base_link (15.5 cm behind the
+  // chassis centre, on the mast at 26.4 cm) and R pitches its forward axis down
+  // (R · x = (0.98875, 0, -0.14955)). The matrix's entries are those of 0.1501 rad to five digits;
+  // we take its angle, atan2(0.14955, 0.98875), so that the stack's transform is exactly ours.
+  // base_link is the chassis centre on the floor, as ours: the planner footprint is symmetric about
+  // it (reference §2) and the obstacle box starts at z = 0.02 m, just above the floor. Consistency
+  // check: the lowest image row then meets the floor 0.27 m ahead of the chassis centre, where that
+  // box (x >= 0.3) begins.
+  p.mount = CameraMount{.x_m = -0.155,
+                        .y_m = 0.0,
+                        .z_m = 0.264,
+                        .pitch_deg = std::atan2(0.14955, 0.98875) / kRadPerDeg};
+  p.clip_near_m = 0.6;  // reference §2: their Gazebo model's clip, 0.6–8 m
+  p.clip_far_m = 8.0;
+  return p;
+}
+
+Eigen::Isometry3d Lift(const world::Pose2& X_map_body) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::AngleAxisd(X_map_body.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  X.translation() = Eigen::Vector3d(X_map_body.x_m, X_map_body.y_m, 0.0);
+  return X;
+}
+
+CameraModel::CameraModel(const CameraParams& params) : params_(params) {
+  params_.Validate();
+  const CameraMount& m = params_.mount;
+  const Eigen::Matrix3d R_base_body =
+      (Eigen::AngleAxisd(m.yaw_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(m.pitch_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(m.roll_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  // optical x (right) = body -y, optical y (down) = body -z, optical z (forward) = body x
+  Eigen::Matrix3d R_body_optical;
+  R_body_optical << 0.0, 0.0, 1.0,  //
+      -1.0, 0.0, 0.0,               //
+      0.0, -1.0, 0.0;
+  X_base_camera_ = Eigen::Isometry3d::Identity();
+  X_base_camera_.linear() = R_base_body * R_body_optical;
+  X_base_camera_.translation() = Eigen::Vector3d(m.x_m, m.y_m, m.z_m);
+
+  bool any = false;
+  for (double d : params_.D) any = any || d != 0.0;
+  distort_ = params_.lens_distortion && any;
+
+  // The radial factor r · (1 + k1 r² + k2 r⁴ + k3 r⁶) must grow with r for the model to describe
+  // a lens; find where it first stops growing.
+  max_radius_sq_ = std::numeric_limits<double>::infinity();
+  if (distort_) {
+    const double k1 = params_.D[0];
+    const double k2 = params_.D[1];
+    const double k3 = params_.D[4];
+    for (int i = 1; i <= kRadiusSearchSteps; ++i) {
+      const double r = kMaxSearchRadius * i / kRadiusSearchSteps;
+      const double r2 = r * r;
+      const double slope = 1.0 + 3.0 * k1 * r2 + 5.0 * k2 * r2 * r2 + 7.0 * k3 * r2 * r2 * r2;
+      if (slope <= 0.0) {
+        max_radius_sq_ = r2;
+        break;
+      }
+    }
+  }
+}
+
+CameraInfo CameraModel::Info() const {
+  CameraInfo info;
+  info.width = params_.width_px;
+  info.height = params_.height_px;
+  info.K = params_.K;
+  if (params_.lens_distortion) {
+    info.D = params_.D;
+    info.P = params_.P;
+  } else {
+    info.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+    const auto& K = params_.K;
+    info.P = {K[0], K[1], K[2], 0.0, K[3], K[4], K[5], 0.0, K[6], K[7], K[8], 0.0};
+  }
+  return info;
+}
+
+Eigen::Isometry3d CameraModel::X_map_camera(const world::Pose2& X_map_car) const {
+  return Lift(X_map_car) * X_base_camera_;
+}
+
+Eigen::Vector2d CameraModel::Distort(const Eigen::Vector2d& p) const {
+  const double k1 = params_.D[0];
+  const double k2 = params_.D[1];
+  const double p1 = params_.D[2];
+  const double p2 = params_.D[3];
+  const double k3 = params_.D[4];
+  const double x = p.x();
+  const double y = p.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+          y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+}
+
+std::optional<Eigen::Vector2d> CameraModel::NormalizedRay(double u, double v) const {
+  const auto& K = params_.K;
+  const double yd = (v - K[5]) / K[4];
+  const double xd = (u - K[2] - K[1] * yd) / K[0];
+  const Eigen::Vector2d target(xd, yd);
+  if (!distort_) return target;
+
+  const double k1 = params_.D[0];
+  const double k2 = params_.D[1];
+  const double p1 = params_.D[2];
+  const double p2 = params_.D[3];
+  const double k3 = params_.D[4];
+  Eigen::Vector2d x = target;  // the distortion is mild near the axis: start from no distortion
+  for (int i = 0; i < kUndistortIterations; ++i) {
+    const Eigen::Vector2d residual = Distort(x) - target;
+    if (residual.norm() < kUndistortTolerance) {
+      if (x.squaredNorm() > max_radius_sq_) return std::nullopt;
+      return x;
+    }
+    const double r2 = x.squaredNorm();
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double g = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r²)
+    Eigen::Matrix2d J;
+    J(0, 0) = radial + 2.0 * g * x.x() * x.x() + 2.0 * p1 * x.y() + 6.0 * p2 * x.x();
+    J(0, 1) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
+    J(1, 0) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
+    J(1, 1) = radial + 2.0 * g * x.y() * x.y() + 6.0 * p1 * x.y() + 2.0 * p2 * x.x();
+    const double det = J.determinant();
+    if (!(det > 0.0)) return std::nullopt;  // beyond a fold of the model
+    x -= J.inverse() * residual;
+    if (!x.allFinite()) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+std::optional<Eigen::Vector2d> CameraModel::Project(const Eigen::Vector3d& p_camera) const {
+  if (!(p_camera.z() > 0.0)) return std::nullopt;
+  Eigen::Vector2d x(p_camera.x() / p_camera.z(), p_camera.y() / p_camera.z());
+  if (distort_) {
+    if (x.squaredNorm() > max_radius_sq_) return std::nullopt;
+    x = Distort(x);
+  }
+  const auto& K = params_.K;
+  return Eigen::Vector2d(K[0] * x.x() + K[1] * x.y() + K[2], K[4] * x.y() + K[5]);
+}
+
+}  // namespace autonomsim::vehicle

@@ -1,0 +1,519 @@
+#include "vehicle/ray_caster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace autonomsim::vehicle {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Four lanes of float or int32 (GCC/Clang vector extensions: SSE2 on x86-64, NEON on ARM, scalar
+// code elsewhere). The arithmetic is IEEE lane by lane, so a lane computes bit for bit what scalar
+// code would; a comparison gives -1 (true) or 0 per lane.
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+constexpr int kLanes = 4;
+
+F4 Splat(float x) { return F4{x, x, x, x}; }
+I4 SplatInt(std::int32_t x) { return I4{x, x, x, x}; }
+// Lanes [0, n) from p (n in 1..4); the others repeat p[0] and must be masked by the caller.
+F4 Load(const float* p, int n) {
+  F4 v = Splat(p[0]);
+  if (n == kLanes) {
+    std::memcpy(&v, p, sizeof v);
+  } else {
+    for (int k = 1; k < n; ++k) v[k] = p[k];
+  }
+  return v;
+}
+I4 FirstLanes(int n) { return I4{0, 1, 2, 3} < SplatInt(n); }
+F4 Min(F4 a, F4 b) { return a < b ? a : b; }
+F4 Max(F4 a, F4 b) { return a > b ? a : b; }
+bool Any(I4 mask) { return (mask[0] | mask[1] | mask[2] | mask[3]) != 0; }
+// Prism corners nearer to the image plane than this (optical z, m) are clipped before projection
+// (a surface within 1 mm of a lens is not drawn).
+constexpr double kProjectionNearZ_m = 1e-3;
+// Face shading, so that a box's faces are told apart: ambient + diffuse · max(0, n · light), one
+// fixed light from above (map frame; the lab's ceiling lights are not described).
+constexpr double kAmbient = 0.6;
+constexpr double kDiffuse = 0.4;
+const Eigen::Vector3d kLightDirection = Eigen::Vector3d(0.3, 0.4, 0.866).normalized();
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+Bgr ToBgr(const std::array<int, 3>& rgb) {
+  return {static_cast<std::uint8_t>(rgb[2]), static_cast<std::uint8_t>(rgb[1]),
+          static_cast<std::uint8_t>(rgb[0])};
+}
+
+void RequireRgb(const std::array<int, 3>& rgb, const std::string& key) {
+  for (int c : rgb) {
+    Require(c >= 0 && c <= 255, key + ": channels must be in [0, 255], got " + std::to_string(c));
+  }
+}
+
+// Rounded half up; t_m within the clip range is positive.
+std::uint16_t DepthMillimetres(double t_m, double near_m, double far_m) {
+  if (!(t_m >= near_m && t_m <= far_m)) return 0;
+  return static_cast<std::uint16_t>(t_m * 1000.0 + 0.5);
+}
+
+// SplitMix64's output function (Steele, Lea & Flood 2014): a bijection with full avalanche, used
+// as a counter-based generator (its input a seed plus the draw's index).
+constexpr std::uint64_t Mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ULL;
+// Separate the depth and colour draws of one seed.
+constexpr std::uint64_t kDepthDomain = 0x6465707468ULL;  // "depth"
+constexpr std::uint64_t kColorDomain = 0x636f6c6f72ULL;  // "color"
+
+// An approximately standard normal variate from 64 random bits: the sum of four 16-bit uniforms
+// (Irwin–Hall), centred and scaled to unit variance; range ±3.46.
+double ApproxNormal(std::uint64_t bits) {
+  const double sum = static_cast<double>((bits & 0xffff) + ((bits >> 16) & 0xffff) +
+                                         ((bits >> 32) & 0xffff) + (bits >> 48)) +
+                     2.0;                             // + 4 × 0.5: the lanes' midpoints
+  return (sum / 65536.0 - 2.0) * 1.7320508075688772;  // √3: Var(sum of 4 U(0,1)) = 1/3
+}
+
+// An approximately standard normal variate from the low 21 of `bits`: the sum of three 7-bit
+// uniforms (Irwin–Hall), centred and scaled to unit variance; range ±3.
+float ApproxNormal21(std::uint64_t bits) {
+  const auto sum = static_cast<float>((bits & 0x7f) + ((bits >> 7) & 0x7f) + ((bits >> 14) & 0x7f));
+  return ((sum + 1.5f) / 128.0f - 1.5f) * 2.0f;  // Var(sum of 3 U(0,1)) = 1/4
+}
+
+}  // namespace
+
+void SceneAppearance::Validate() const {
+  RequireRgb(surround_rgb, "surround_rgb");
+  RequireRgb(obstacle_rgb, "obstacle_rgb");
+  Require(!car_body_rgb.empty(), "car_body_rgb must list at least one colour");
+  for (std::size_t i = 0; i < car_body_rgb.size(); ++i) {
+    RequireRgb(car_body_rgb[i], "car_body_rgb[" + std::to_string(i) + "]");
+  }
+}
+
+Bgr SceneAppearance::surround() const { return ToBgr(surround_rgb); }
+Bgr SceneAppearance::obstacle() const { return ToBgr(obstacle_rgb); }
+Bgr SceneAppearance::car_body(int car_id) const {
+  const auto n = static_cast<int>(car_body_rgb.size());
+  return ToBgr(car_body_rgb[static_cast<std::size_t>(((car_id % n) + n) % n)]);
+}
+
+void CameraNoiseParams::Validate() const {
+  Require(depth_stddev_per_m >= 0.0 && depth_stddev_per_m <= 0.1,
+          "depth_stddev_per_m must be in [0, 0.1], got " + std::to_string(depth_stddev_per_m));
+  Require(color_stddev >= 0.0 && color_stddev <= 64.0,
+          "color_stddev must be in [0, 64], got " + std::to_string(color_stddev));
+}
+
+FloorTexture::FloorTexture(const world::FloorRaster& raster)
+    : width_(raster.width_px),
+      height_(raster.height_px),
+      m_per_px_(raster.m_per_px),
+      origin_m_(raster.origin_m) {
+  Require(width_ > 0 && height_ > 0 && std::isfinite(m_per_px_) && m_per_px_ > 0.0,
+          "FloorTexture: the raster needs a positive size and m_per_px");
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  Require(raster.bgr.size() == 3 * n, "FloorTexture: raster.bgr must hold 3 bytes per pixel");
+  texels_.assign(n + 1, 0u);
+  for (std::size_t i = 0; i < n; ++i) std::memcpy(&texels_[i], &raster.bgr[3 * i], 3);
+  std::memcpy(&texels_[n], raster.floor_bgr.data(), 3);
+}
+
+CameraRays::CameraRays(const CameraModel& camera)
+    : camera_(camera), width_(camera.width()), height_(camera.height()) {
+  const CameraParams& params = camera_.params();
+  const Eigen::Isometry3d& X_base_camera = camera_.X_base_camera();
+  origin_base_ = X_base_camera.translation();
+  Require(origin_base_.z() > 0.0, params.name +
+                                      ": the camera must be above the floor (mount.z_m > 0), got " +
+                                      std::to_string(origin_base_.z()));
+  const Eigen::Matrix3d R = X_base_camera.linear();
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  dir_x_.resize(n);
+  dir_y_.resize(n);
+  dir_z_.resize(n);
+  floor_x_.resize(n);
+  floor_y_.resize(n);
+  floor_t_.resize(n);
+  floor_depth_mm_.resize(n);
+  ray_x_.resize(n);
+  ray_y_.resize(n);
+
+  for (int v = 0; v < height_; ++v) {
+    for (int u = 0; u < width_; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+      const std::optional<Eigen::Vector2d> ray = camera_.NormalizedRay(u, v);
+      Require(ray.has_value(), params.name +
+                                   ": the lens distortion D cannot be inverted at pixel (" +
+                                   std::to_string(u) + ", " + std::to_string(v) + ")");
+      ray_x_[i] = static_cast<float>(ray->x());
+      ray_y_[i] = static_cast<float>(ray->y());
+      const Eigen::Vector3d d = R * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
+      dir_x_[i] = static_cast<float>(d.x());
+      dir_y_[i] = static_cast<float>(d.y());
+      dir_z_[i] = static_cast<float>(d.z());
+      floor_t_[i] = kInf;
+      floor_depth_mm_[i] = 0;
+      if (d.z() < 0.0) {
+        const double t = -origin_base_.z() / d.z();  // the optical depth, since d's optical z is 1
+        if (t <= params.clip_far_m) {
+          floor_t_[i] = static_cast<float>(t);
+          floor_x_[i] = static_cast<float>(origin_base_.x() + t * d.x());
+          floor_y_[i] = static_cast<float>(origin_base_.y() + t * d.y());
+          floor_depth_mm_[i] = DepthMillimetres(t, params.clip_near_m, params.clip_far_m);
+        }
+      }
+    }
+  }
+
+  for (int v = 0; v < height_; ++v) {
+    const int row = v * width_;
+    int u = 0;
+    while (u < width_) {
+      const bool floor = floor_t_[static_cast<std::size_t>(row + u)] < kInf;
+      int end = u + 1;
+      while (end < width_ && (floor_t_[static_cast<std::size_t>(row + end)] < kInf) == floor) {
+        ++end;
+      }
+      (floor ? floor_runs_ : surround_runs_).push_back(Run{row + u, row + end});
+      u = end;
+    }
+  }
+
+  for (int v0 = 0; v0 < height_; v0 += kTileSize) {
+    for (int u0 = 0; u0 < width_; u0 += kTileSize) {
+      Tile tile{u0,
+                v0,
+                std::min(u0 + kTileSize, width_),
+                std::min(v0 + kTileSize, height_),
+                kInf,
+                -kInf,
+                kInf,
+                -kInf};
+      for (int v = tile.v0; v < tile.v1; ++v) {
+        for (int u = tile.u0; u < tile.u1; ++u) {
+          const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+          tile.x_min = std::min(tile.x_min, ray_x_[i]);
+          tile.x_max = std::max(tile.x_max, ray_x_[i]);
+          tile.y_min = std::min(tile.y_min, ray_y_[i]);
+          tile.y_max = std::max(tile.y_max, ray_y_[i]);
+        }
+      }
+      tiles_.push_back(tile);
+    }
+  }
+}
+
+CameraRenderer::CameraRenderer(std::shared_ptr<const CameraRays> rays,
+                               std::shared_ptr<const FloorTexture> floor, Bgr surround)
+    : rays_(std::move(rays)), floor_(std::move(floor)), surround_(surround) {
+  Require(rays_ != nullptr && floor_ != nullptr, "CameraRenderer needs rays and a floor texture");
+  nearest_t_.resize(rays_->floor_t().size());
+  tile_stamp_.assign(rays_->tiles().size(), 0u);
+}
+
+void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                            ColorImage* color, DepthImage* depth) {
+  const int w = rays_->width();
+  const int h = rays_->height();
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (color != nullptr) {
+    color->width = w;
+    color->height = h;
+    color->bgr.resize(3 * n);
+  }
+  if (depth != nullptr) {
+    depth->width = w;
+    depth->height = h;
+    depth->mm.resize(n);
+  }
+  if (color == nullptr && depth == nullptr) return;
+  // A new frame: every tile's nearest_t_ is stale until a prism touches it.
+  if (++frame_ == 0) {
+    std::fill(tile_stamp_.begin(), tile_stamp_.end(), 0u);
+    frame_ = 1;
+  }
+  RenderFloor(X_map_car, color, depth);
+  for (const Prism& prism : prisms) RenderPrism(X_map_car, prism, color, depth);
+}
+
+void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
+                                 DepthImage* depth) const {
+  const CameraRays& r = *rays_;
+  if (depth != nullptr) {
+    std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
+  }
+  if (color == nullptr) return;
+
+  std::uint8_t* out = color->bgr.data();
+  for (const CameraRays::Run& run : r.surround_runs()) {
+    for (int i = run.begin; i < run.end; ++i) std::memcpy(out + 3 * i, surround_.data(), 3);
+  }
+
+  // base frame (x, y) -> texture (column, row), continuous: column = (x_map - origin_x) / m,
+  // row = (origin_y - y_map) / m, with p_map = p_car + R(yaw) · p_base.
+  const FloorTexture& tex = *floor_;
+  const double c = std::cos(X_map_car.yaw_rad);
+  const double s = std::sin(X_map_car.yaw_rad);
+  const double m = tex.m_per_px();
+  const float a00 = static_cast<float>(c / m);
+  const float a01 = static_cast<float>(-s / m);
+  const float a02 = static_cast<float>((X_map_car.x_m - tex.origin_m().x()) / m);
+  const float a10 = static_cast<float>(-s / m);
+  const float a11 = static_cast<float>(-c / m);
+  const float a12 = static_cast<float>((tex.origin_m().y() - X_map_car.y_m) / m);
+  const F4 cols = Splat(static_cast<float>(tex.width()));
+  const F4 rows = Splat(static_cast<float>(tex.height()));
+  const F4 zero = Splat(0.0f);
+  const I4 width = SplatInt(tex.width());
+  const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
+  const std::uint32_t* texels = tex.texels();
+  const float* fx = r.floor_x().data();
+  const float* fy = r.floor_y().data();
+  for (const CameraRays::Run& run : r.floor_runs()) {
+    for (int i = run.begin; i < run.end; i += kLanes) {
+      const int n = std::min(kLanes, run.end - i);
+      const F4 x = Load(fx + i, n);
+      const F4 y = Load(fy + i, n);
+      const F4 col = a00 * x + a01 * y + a02;
+      const F4 row = a10 * x + a11 * y + a12;
+      const I4 inside = (col >= zero) & (col < cols) & (row >= zero) & (row < rows);
+      const I4 texel_col = __builtin_convertvector(inside ? col : zero, I4);
+      const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
+      const I4 index = inside ? texel_row * width + texel_col : outside;
+      for (int k = 0; k < n; ++k) {
+        // 4 bytes where the next pixel of the run overwrites the fourth, 3 at the run's end
+        if (i + k + 1 < run.end) {
+          std::memcpy(out + 3 * (i + k), &texels[index[k]], 4);
+        } else {
+          std::memcpy(out + 3 * (i + k), &texels[index[k]], 3);
+        }
+      }
+    }
+  }
+}
+
+void CameraRenderer::InitTileDepth(std::size_t tile_index) {
+  const CameraRays::Tile& tile = rays_->tiles()[tile_index];
+  const int w = rays_->width();
+  const float* floor_t = rays_->floor_t().data();
+  for (int v = tile.v0; v < tile.v1; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * w;
+    std::copy(floor_t + row + tile.u0, floor_t + row + tile.u1, nearest_t_.data() + row + tile.u0);
+  }
+  tile_stamp_[tile_index] = frame_;
+}
+
+void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
+                                 ColorImage* color, DepthImage* depth) {
+  const CameraRays& r = *rays_;
+  const CameraParams& params = r.camera().params();
+  const world::OrientedBox& box = prism.footprint;
+  const double half_length = 0.5 * box.length_m;
+  const double half_width = 0.5 * box.width_m;
+  const double height = prism.height_m;
+  if (!(half_length > 0.0 && half_width > 0.0 && height > 0.0)) return;
+
+  // the prism in the car's base frame: centre p, yaw psi
+  const double cy = std::cos(X_map_car.yaw_rad);
+  const double sy = std::sin(X_map_car.yaw_rad);
+  const double rel_x = box.pose.x_m - X_map_car.x_m;
+  const double rel_y = box.pose.y_m - X_map_car.y_m;
+  const Eigen::Vector2d p_base(cy * rel_x + sy * rel_y, -sy * rel_x + cy * rel_y);
+  const double psi = box.pose.yaw_rad - X_map_car.yaw_rad;
+  const double cp = std::cos(psi);
+  const double sp = std::sin(psi);
+
+  // cull and bound: the corners in the optical frame, clipped to z >= kProjectionNearZ_m
+  const Eigen::Isometry3d X_camera_base = r.camera().X_base_camera().inverse();
+  std::array<Eigen::Vector3d, 8> corners;
+  double z_min = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 8; ++k) {
+    const double lx = (k & 1) ? half_length : -half_length;
+    const double ly = (k & 2) ? half_width : -half_width;
+    const double lz = (k & 4) ? height : 0.0;
+    const Eigen::Vector3d p(p_base.x() + cp * lx - sp * ly, p_base.y() + sp * lx + cp * ly, lz);
+    corners[k] = X_camera_base * p;
+    z_min = std::min(z_min, corners[k].z());
+  }
+  if (z_min > params.clip_far_m) return;  // wholly beyond the far clip
+  float x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
+  auto include = [&](const Eigen::Vector3d& q) {
+    const auto qx = static_cast<float>(q.x() / q.z());
+    const auto qy = static_cast<float>(q.y() / q.z());
+    x_lo = std::min(x_lo, qx);
+    x_hi = std::max(x_hi, qx);
+    y_lo = std::min(y_lo, qy);
+    y_hi = std::max(y_hi, qy);
+  };
+  for (int k = 0; k < 8; ++k) {
+    if (corners[k].z() >= kProjectionNearZ_m) include(corners[k]);
+    for (int bit = 1; bit < 8; bit <<= 1) {  // the box's 12 edges: corners one bit apart
+      const int j = k | bit;
+      if ((k & bit) != 0) continue;
+      const double za = corners[k].z() - kProjectionNearZ_m;
+      const double zb = corners[j].z() - kProjectionNearZ_m;
+      if ((za < 0.0) != (zb < 0.0)) {
+        const double f = za / (za - zb);
+        include(corners[k] + f * (corners[j] - corners[k]));
+      }
+    }
+  }
+  if (!(x_lo <= x_hi)) return;  // wholly behind the camera
+
+  // per-face colours: -x, +x, -y, +y, top, bottom (local axes)
+  const double cw = std::cos(box.pose.yaw_rad);
+  const double sw = std::sin(box.pose.yaw_rad);
+  const std::array<Eigen::Vector3d, 6> normals{
+      Eigen::Vector3d(-cw, -sw, 0.0), Eigen::Vector3d(cw, sw, 0.0),
+      Eigen::Vector3d(sw, -cw, 0.0),  Eigen::Vector3d(-sw, cw, 0.0),
+      Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.0, 0.0, -1.0)};
+  std::array<Bgr, 7> face_bgr;  // [6]: the camera is inside the prism
+  for (std::size_t f = 0; f < 7; ++f) {
+    const double shade =
+        f < 6 ? kAmbient + kDiffuse * std::max(0.0, normals[f].dot(kLightDirection)) : 1.0;
+    for (int ch = 0; ch < 3; ++ch) {
+      face_bgr[f][ch] = static_cast<std::uint8_t>(std::lround(prism.bgr[ch] * shade));
+    }
+  }
+
+  // the ray test in the prism's frame: origin o, direction R(-psi) · dir; the slabs' bounds
+  // relative to o
+  const Eigen::Vector3d& origin = r.origin_base();
+  const double ox_b = origin.x() - p_base.x();
+  const double oy_b = origin.y() - p_base.y();
+  const double ox = cp * ox_b + sp * oy_b;
+  const double oy = -sp * ox_b + cp * oy_b;
+  const F4 x_lo_o = Splat(static_cast<float>(-half_length - ox));
+  const F4 x_hi_o = Splat(static_cast<float>(half_length - ox));
+  const F4 y_lo_o = Splat(static_cast<float>(-half_width - oy));
+  const F4 y_hi_o = Splat(static_cast<float>(half_width - oy));
+  const F4 z_lo_o = Splat(static_cast<float>(-origin.z()));
+  const F4 z_hi_o = Splat(static_cast<float>(height - origin.z()));
+  const F4 rc = Splat(static_cast<float>(cp));
+  const F4 rs = Splat(static_cast<float>(sp));
+  const F4 box_x_lo = Splat(x_lo), box_x_hi = Splat(x_hi);
+  const F4 box_y_lo = Splat(y_lo), box_y_hi = Splat(y_hi);
+  const F4 zero = Splat(0.0f);
+  const F4 one = Splat(1.0f);
+  const F4 far = Splat(static_cast<float>(params.clip_far_m));
+  const float near_m = static_cast<float>(params.clip_near_m);
+  const float far_m = static_cast<float>(params.clip_far_m);
+  const float* ray_x = r.ray_x().data();
+  const float* ray_y = r.ray_y().data();
+  const float* dir_x = r.dir_x().data();
+  const float* dir_y = r.dir_y().data();
+  const float* dir_z = r.dir_z().data();
+  const int w = r.width();
+  std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
+  std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
+
+  const std::vector<CameraRays::Tile>& tiles = r.tiles();
+  for (std::size_t ti = 0; ti < tiles.size(); ++ti) {
+    const CameraRays::Tile& tile = tiles[ti];
+    if (tile.x_max < x_lo || tile.x_min > x_hi || tile.y_max < y_lo || tile.y_min > y_hi) continue;
+    if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
+    for (int v = tile.v0; v < tile.v1; ++v) {
+      for (int u = tile.u0; u < tile.u1; u += kLanes) {
+        const int i = v * w + u;
+        const int n = std::min(kLanes, tile.u1 - u);
+        // within the prism's bounds on the image?
+        const F4 nx = Load(ray_x + i, n);
+        const F4 ny = Load(ray_y + i, n);
+        const I4 in_box = FirstLanes(n) & (nx >= box_x_lo) & (nx <= box_x_hi) & (ny >= box_y_lo) &
+                          (ny <= box_y_hi);
+        if (!Any(in_box)) continue;
+        // slabs: a zero direction gives infinite bounds of the right signs
+        const F4 dx = Load(dir_x + i, n);
+        const F4 dy = Load(dir_y + i, n);
+        const F4 dz = Load(dir_z + i, n);
+        const F4 lx = rc * dx + rs * dy;
+        const F4 ly = rc * dy - rs * dx;
+        const F4 ix = one / lx;
+        const F4 iy = one / ly;
+        const F4 iz = one / dz;
+        const F4 tx_a = x_lo_o * ix, tx_b = x_hi_o * ix;
+        const F4 ty_a = y_lo_o * iy, ty_b = y_hi_o * iy;
+        const F4 tz_a = z_lo_o * iz, tz_b = z_hi_o * iz;
+        const F4 tx_min = Min(tx_a, tx_b), ty_min = Min(ty_a, ty_b), tz_min = Min(tz_a, tz_b);
+        const F4 t_in = Max(Max(tx_min, ty_min), tz_min);
+        const F4 t_out = Min(Min(Max(tx_a, tx_b), Max(ty_a, ty_b)), Max(tz_a, tz_b));
+        const F4 t = Max(t_in, zero);  // 0: the camera is inside the prism
+        const F4 nearest = Load(nearest_t_.data() + i, n);
+        const I4 hit = in_box & (t_in <= t_out) & (t_out > zero) & (t <= far) & (t < nearest);
+        if (!Any(hit)) continue;
+        for (int k = 0; k < n; ++k) {
+          if (!hit[k]) continue;
+          // the face it enters through: the slab that set t_in
+          int face = 6;
+          if (t_in[k] > 0.0f) {
+            if (t_in[k] == tx_min[k]) {
+              face = lx[k] > 0.0f ? 0 : 1;
+            } else if (t_in[k] == ty_min[k]) {
+              face = ly[k] > 0.0f ? 2 : 3;
+            } else {
+              face = dz[k] > 0.0f ? 5 : 4;
+            }
+          }
+          const std::size_t p = static_cast<std::size_t>(i + k);
+          nearest_t_[p] = t[k];
+          if (out != nullptr)
+            std::memcpy(out + 3 * p, face_bgr[static_cast<std::size_t>(face)].data(), 3);
+          if (depth_mm != nullptr) {
+            depth_mm[p] = t[k] >= near_m && t[k] <= far_m
+                              ? static_cast<std::uint16_t>(t[k] * 1000.0f + 0.5f)
+                              : std::uint16_t{0};
+          }
+        }
+      }
+    }
+  }
+}
+
+void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, std::uint64_t seed,
+                    ColorImage* color, DepthImage* depth) {
+  if (!noise.enabled) return;
+  if (depth != nullptr && noise.depth_stddev_per_m > 0.0) {
+    const std::uint64_t base = Mix64(seed ^ kDepthDomain);
+    for (std::size_t i = 0; i < depth->mm.size(); ++i) {
+      const std::uint16_t mm = depth->mm[i];
+      if (mm == 0) continue;
+      const double z = mm / 1000.0;
+      const double noisy =
+          z + noise.depth_stddev_per_m * z * z * ApproxNormal(Mix64(base + (i + 1) * kGolden));
+      depth->mm[i] = DepthMillimetres(noisy, camera.clip_near_m, camera.clip_far_m);
+    }
+  }
+  if (color != nullptr && noise.color_stddev > 0.0) {
+    // one 64-bit draw per pixel gives its three channels' normals (21 bits each)
+    const std::uint64_t base = Mix64(seed ^ kColorDomain);
+    const auto stddev = static_cast<float>(noise.color_stddev);
+    const std::size_t pixels = color->bgr.size() / 3;
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const std::uint64_t bits = Mix64(base + (p + 1) * kGolden);
+      for (int c = 0; c < 3; ++c) {
+        std::uint8_t& channel = color->bgr[3 * p + static_cast<std::size_t>(c)];
+        const float value = channel + stddev * ApproxNormal21(bits >> (21 * c));
+        // round half up (the +256 keeps the truncated value positive), then saturate
+        const int rounded = static_cast<int>(value + 256.5f) - 256;
+        channel = static_cast<std::uint8_t>(std::clamp(rounded, 0, 255));
+      }
+    }
+  }
+}
+
+}  // namespace autonomsim::vehicle

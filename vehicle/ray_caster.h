@@ -1,0 +1,215 @@
+// Synthesizes a camera's colour and depth images by ray casting through the 2D world: the painted
+// floor (a raster), vertical prisms standing on it (obstacle boxes, other cars) and a plain
+// surround.
+//
+// The structure of the problem does the work. The car moves in the plane and its cameras are
+// rigidly mounted, so every pixel's ray, its floor hit in the car's frame and that hit's depth are
+// constants of the camera (CameraRays, computed once, lens distortion included). A frame then
+// costs, per floor pixel, one 2D rigid transform and one raster look-up, and the empty floor's
+// depth image is a copy. Prisms are culled to those in front of the camera; each one's corners
+// bound it on the image, and only the pixels of the tiles under that bound get the exact
+// ray–prism test, which keeps the nearest surface.
+//
+// Depth is the optical-axis z of the surface (what a real depth camera reports, and what
+// back-projection with P expects: a pixel's point is z · (x, y, 1) in the optical frame), in
+// millimetres as uint16, 0 for no return: nothing hit within the far clip, or the hit is nearer
+// than the near clip. Colour is BGR8. Surfaces beyond the far clip are not drawn: the surround
+// colour and no depth.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "vehicle/camera_model.h"
+#include "world/floor_raster.h"
+#include "world/geometry.h"
+
+namespace autonomsim::vehicle {
+
+using Bgr = std::array<std::uint8_t, 3>;
+
+// A vertical prism standing on the floor (z from 0 to height_m): an obstacle box or a car body.
+struct Prism {
+  world::OrientedBox footprint;  // map frame
+  double height_m{0.0};
+  Bgr bgr{0, 0, 0};
+};
+
+struct ColorImage {
+  int width{0};
+  int height{0};
+  std::vector<std::uint8_t> bgr;  // row-major, 3 bytes per pixel (bgr8)
+};
+
+struct DepthImage {
+  int width{0};
+  int height{0};
+  std::vector<std::uint16_t> mm;  // row-major, millimetres of optical z (mono16); 0 = no return
+};
+
+// What the world looks like where the track's raster says nothing. Colours are RGB 0..255, as in
+// track files. The defaults are picked to stay clear of the lane detection's white and yellow HSV
+// thresholds (reference §5, both sets): grey below their brightness, reds, blues and purples
+// outside their hues.
+struct SceneAppearance {
+  std::array<int, 3> surround_rgb{110, 110, 110};  // assumed: the lab's wall, mid grey
+  std::array<int, 3> obstacle_rgb{190, 40, 40};    // assumed: the reference shows no obstacles
+  // assumed: the real cars' bodies are not described; a car takes entry id % size.
+  std::vector<std::array<int, 3>> car_body_rgb{{30, 80, 200},  {170, 40, 170}, {110, 50, 200},
+                                               {210, 80, 140}, {20, 30, 120},  {170, 30, 60}};
+
+  template <class V>
+  void Describe(V& v) {
+    v("surround_rgb", surround_rgb);
+    v("obstacle_rgb", obstacle_rgb);
+    v("car_body_rgb", car_body_rgb);
+  }
+  void Validate() const;  // every channel in [0, 255], at least one car colour
+
+  Bgr surround() const;
+  Bgr obstacle() const;
+  Bgr car_body(int car_id) const;
+};
+
+// Seeded sensor noise, off or on per camera. The figures are assumed: the reference gives none.
+struct CameraNoiseParams {
+  bool enabled{false};
+  // assumed: σ(z) = c · z², the structured-light error model of Khoshelham & Elberink (2012) for
+  // the Kinect (≈1.5 mm at 1 m, ≈4 cm at 5 m); the Astra is a structured-light camera of the
+  // same kind.
+  double depth_stddev_per_m{0.0016};
+  // assumed: a few counts of sensor noise per channel for a small CMOS camera in a lit lab.
+  double color_stddev{2.0};
+
+  template <class V>
+  void Describe(V& v) {
+    v("enabled", enabled);
+    v("depth_stddev_per_m", depth_stddev_per_m);
+    v("color_stddev", color_stddev);
+  }
+  void Validate() const;  // depth_stddev_per_m in [0, 0.1], color_stddev in [0, 64]
+};
+
+// The floor raster as the ray caster reads it: one 32-bit texel (B, G, R, 0 in memory) per raster
+// pixel, and one more after them for the bare floor beyond the raster.
+class FloorTexture {
+ public:
+  explicit FloorTexture(const world::FloorRaster& raster);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  double m_per_px() const { return m_per_px_; }
+  const world::Vec2& origin_m() const { return origin_m_; }
+  const std::uint32_t* texels() const { return texels_.data(); }
+  std::uint32_t outside_index() const { return static_cast<std::uint32_t>(texels_.size() - 1); }
+
+ private:
+  int width_;
+  int height_;
+  double m_per_px_;
+  world::Vec2 origin_m_;
+  std::vector<std::uint32_t> texels_;
+};
+
+// Per-pixel geometry of one camera on a car, in the car's base frame: immutable, and shareable by
+// every car carrying the same camera. About 22 bytes per pixel (6.7 MB at 640×480).
+class CameraRays {
+ public:
+  // Throws std::invalid_argument if the lens distortion cannot be inverted at some pixel.
+  explicit CameraRays(const CameraModel& camera);
+
+  const CameraModel& camera() const { return camera_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+  // A row segment of pixels [begin, end), as indices into the row-major image.
+  struct Run {
+    int begin;
+    int end;
+  };
+  // The image tiles that prisms are tested by: their pixels and the bounds of their pixels'
+  // normalized rays (x/z, y/z in the optical frame).
+  struct Tile {
+    int u0, v0, u1, v1;  // pixel columns [u0, u1), rows [v0, v1)
+    float x_min, x_max, y_min, y_max;
+  };
+  static constexpr int kTileSize = 16;
+
+  const Eigen::Vector3d& origin_base() const { return origin_base_; }
+  // Each pixel's normalized ray in the optical frame (x/z, y/z; undistorted).
+  const std::vector<float>& ray_x() const { return ray_x_; }
+  const std::vector<float>& ray_y() const { return ray_y_; }
+  // The ray of each pixel in the base frame, scaled so that the optical z is 1: the point at
+  // optical depth t is origin_base() + t · dir.
+  const std::vector<float>& dir_x() const { return dir_x_; }
+  const std::vector<float>& dir_y() const { return dir_y_; }
+  const std::vector<float>& dir_z() const { return dir_z_; }
+  // Where each pixel's ray meets the floor (base frame, metres), and at what optical depth;
+  // floor_t is +inf where it does not within the far clip.
+  const std::vector<float>& floor_x() const { return floor_x_; }
+  const std::vector<float>& floor_y() const { return floor_y_; }
+  const std::vector<float>& floor_t() const { return floor_t_; }
+  // The depth image of the bare floor.
+  const std::vector<std::uint16_t>& floor_depth_mm() const { return floor_depth_mm_; }
+  const std::vector<Run>& floor_runs() const { return floor_runs_; }        // see the floor
+  const std::vector<Run>& surround_runs() const { return surround_runs_; }  // see nothing
+  const std::vector<Tile>& tiles() const { return tiles_; }
+
+ private:
+  CameraModel camera_;
+  int width_;
+  int height_;
+  Eigen::Vector3d origin_base_;
+  std::vector<float> ray_x_, ray_y_;
+  std::vector<float> dir_x_, dir_y_, dir_z_;
+  std::vector<float> floor_x_, floor_y_, floor_t_;
+  std::vector<std::uint16_t> floor_depth_mm_;
+  std::vector<Run> floor_runs_;
+  std::vector<Run> surround_runs_;
+  std::vector<Tile> tiles_;
+};
+
+// Renders one camera. Owns its scratch memory, so frames allocate nothing once the output images
+// have their size; one renderer per thread. A frame depends only on its inputs, never on the
+// frames rendered before it.
+class CameraRenderer {
+ public:
+  CameraRenderer(std::shared_ptr<const CameraRays> rays, std::shared_ptr<const FloorTexture> floor,
+                 Bgr surround);
+
+  const CameraRays& rays() const { return *rays_; }
+  const CameraModel& camera() const { return rays_->camera(); }
+
+  // The images with the car at X_map_car among `prisms` (the car's own body must not be among
+  // them: its box would enclose the colour camera). Either output may be null; both are resized
+  // to the camera's size.
+  void Render(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
+              DepthImage* depth);
+
+ private:
+  void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth) const;
+  void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, ColorImage* color,
+                   DepthImage* depth);
+  void InitTileDepth(std::size_t tile);
+
+  std::shared_ptr<const CameraRays> rays_;
+  std::shared_ptr<const FloorTexture> floor_;
+  Bgr surround_;
+  std::vector<float> nearest_t_;           // per pixel, valid in tiles stamped with frame_
+  std::vector<std::uint32_t> tile_stamp_;  // the frame in which a tile's nearest_t_ was set
+  std::uint32_t frame_{0};
+};
+
+// Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a
+// result outside the clip range reads 0; colour + N(0, σ²) per channel, rounded and saturated.
+// Pixels without a return stay 0. The draws come from `seed` and the pixel's index alone (a
+// counter-based generator), so a frame's noise does not depend on any other frame. The normals are
+// approximated by sums of uniforms (Irwin–Hall; variance matched, tails cut at ±3.5 σ for depth
+// and ±3 σ for colour), which is fast: one 64-bit draw per pixel.
+void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, std::uint64_t seed,
+                    ColorImage* color, DepthImage* depth);
+
+}  // namespace autonomsim::vehicle
