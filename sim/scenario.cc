@@ -62,8 +62,8 @@ void ObstacleConfig::Validate() const {
 }
 
 void V2IConfig::Validate() const {
-  Require(link == "embedded",
-          "link must be 'embedded' (the mqtt link comes later), got '" + link + "'");
+  Require(link == "embedded" || link == "mqtt",
+          "link must be 'embedded' or 'mqtt', got '" + link + "'");
   Require(latency >= kZeroTime, "latency_s must be >= 0");
   Require(jitter >= kZeroTime, "jitter_s must be >= 0");
   Require(loss >= 0.0 && loss < 1.0, "loss must be in [0, 1), got " + Num(loss));

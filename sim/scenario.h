@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/config.h"
+#include "sim/mqtt_link_config.h"
 #include "sim/oracle_driver.h"
 #include "sim/sensors.h"
 #include "stack/intersection_client.h"
@@ -81,10 +82,14 @@ struct ObstacleConfig {
 // The car ↔ traffic-light-server link. "embedded": in-process, with a modeled WLAN delay and loss
 // per message and direction.
 struct V2IConfig {
+  // "embedded": the server runs in process. "mqtt": the cars' messages go through a real
+  // mosquitto broker to a `tlserver --sim-clock` process in lock-step (sim/mqtt_endpoint.h); the
+  // run's result is the same. The modeled latency, jitter and loss apply to both.
   std::string link{"embedded"};
   Duration latency{std::chrono::milliseconds(20)};  // assumed: one-way WLAN + broker delay
   Duration jitter{std::chrono::milliseconds(5)};    // assumed: uniform extra delay in [0, jitter]
   double loss{0.0};                                 // probability that one message is lost
+  MqttLinkConfig mqtt;                              // link: mqtt only
 
   template <class V>
   void Describe(V& v) {
@@ -92,6 +97,7 @@ struct V2IConfig {
     v("latency_s", latency);
     v("jitter_s", jitter);
     v("loss", loss);
+    v("mqtt", mqtt);
   }
   void Validate() const;
 };

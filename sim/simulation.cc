@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sim/kernel.h"
+#include "sim/mqtt_endpoint.h"
 #include "sim/oracle_driver.h"
 #include "sim/priorities.h"
 #include "sim/random.h"
@@ -66,6 +67,17 @@ Duration Phase(const RngStreams& streams, const std::string& name, Duration peri
       static_cast<std::int64_t>(rng.Uniform01() * static_cast<double>(period_ms)));
 }
 
+// The traffic-light server: in process, or a tlserver behind a broker (v2i.link: mqtt).
+std::unique_ptr<TrafficLightEndpoint> MakeServerEndpoint(const LoadedScenario& loaded) {
+  std::vector<int> ids;
+  for (const world::IntersectionSpec& i : loaded.track.spec().intersections) ids.push_back(i.id);
+  const Scenario& scenario = loaded.scenario;
+  if (scenario.v2i.link == "mqtt") {
+    return MakeMqttEndpoint(scenario.v2i.mqtt, scenario.traffic_lights, std::move(ids));
+  }
+  return std::make_unique<EmbeddedTrafficLightEndpoint>(scenario.traffic_lights, std::move(ids));
+}
+
 }  // namespace
 
 struct Simulation::Impl {
@@ -105,16 +117,8 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
       end(loaded_scenario.scenario.duration),
       streams(loaded_scenario.scenario.seed),
       physics(loaded_scenario.scenario.physics),
-      server(
-          &kernel, scenario.traffic_lights,
-          [&] {
-            std::vector<int> ids;
-            for (const world::IntersectionSpec& i : loaded_scenario.track.spec().intersections) {
-              ids.push_back(i.id);
-            }
-            return ids;
-          }(),
-          [this](Event event) { Emit(std::move(event)); }) {
+      server(&kernel, MakeServerEndpoint(loaded_scenario),
+             [this](Event event) { Emit(std::move(event)); }) {
   // cars, each on its route
   std::vector<int> car_ids;
   agents.reserve(scenario.cars.size());
@@ -363,7 +367,7 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
       Emit(Event{.t = t, .type = "exit", .car = id, .intersection = agent->area});
     }
     if (area >= 0) {
-      const std::optional<int> holder = server.server().Holder(area);
+      const std::optional<int> holder = server.Holder(area);
       Emit(Event{.t = t,
                  .type = "enter",
                  .car = id,
@@ -405,7 +409,7 @@ void Simulation::Impl::Finish() {
     agent.metrics.mean_speed_mps = agent.metrics.distance_m / ToSeconds(end);
     record.cars.push_back(agent.metrics);
   }
-  const world::TrafficLightServer::Counters c = server.server().counters();
+  const world::TrafficLightServer::Counters c = server.counters();
   record.server = {c.requests, c.grants, c.denials, c.frees, c.lease_expiries, server.malformed()};
   record.v2i = {link->sent(), link->delivered(), link->lost()};
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "sim/mqtt_client.h"
 #include "sim/outputs.h"
 #include "sim/simulation.h"
 
@@ -81,6 +82,12 @@ Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
   try {
     return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr);
   } catch (const sim::ConfigError& e) {
+    Outcome outcome;
+    outcome.file = file.string();
+    outcome.scenario_name = file.stem().string();
+    outcome.input_error = e.what();
+    return outcome;
+  } catch (const sim::MqttError& e) {  // v2i.link: mqtt, and the broker or tlserver failed us
     Outcome outcome;
     outcome.file = file.string();
     outcome.scenario_name = file.stem().string();

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "sim/config.h"
+#include "sim/mqtt_client.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {
@@ -26,7 +27,13 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
                scenario_file, loaded->scenario.cars.size(), duration_s, loaded->scenario.seed);
   }
   Progress progress(duration_s, quiet);
-  const Outcome outcome = RunLoaded(*loaded, out_dir, &progress);
+  Outcome outcome;
+  try {
+    outcome = RunLoaded(*loaded, out_dir, &progress);
+  } catch (const sim::MqttError& e) {  // the broker or tlserver of v2i.link: mqtt failed us
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
   PrintVerdicts(outcome);
   fmt::print("{:.1f} s simulated in {:.2f} s wall ({:.1f}x real time)\n", outcome.sim_seconds,
              outcome.wall_seconds,
@@ -43,6 +50,7 @@ Command AddRunCommand(CLI::App& parent) {
     std::optional<std::string> out;
     std::optional<std::uint64_t> seed;
     std::vector<std::string> overrides;
+    std::optional<std::string> broker;
     bool quiet{false};
   };
   auto o = std::make_shared<Options>();
@@ -57,8 +65,20 @@ Command AddRunCommand(CLI::App& parent) {
       ->type_name("DIR");
   run->add_option("--seed", o->seed, "Override the scenario's seed")->type_name("N");
   AddSetOption(run, &o->overrides);
+  run->add_option("--broker", o->broker,
+                  "Send the cars' V2I traffic through this MQTT broker to the `tlserver "
+                  "--sim-clock` serving it (same as --set v2i.link=mqtt --set "
+                  "v2i.mqtt.broker=HOST:PORT); credentials and TLS via --set v2i.mqtt.*")
+      ->type_name("HOST:PORT");
   run->add_flag("--quiet,-q", o->quiet, "No progress output");
-  return {run, [o] { return RunCommand(o->scenario, o->out, o->seed, o->overrides, o->quiet); }};
+  return {run, [o] {
+            std::vector<std::string> overrides = o->overrides;
+            if (o->broker) {
+              overrides.push_back("v2i.link=mqtt");
+              overrides.push_back("v2i.mqtt.broker=" + *o->broker);
+            }
+            return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet);
+          }};
 }
 
 }  // namespace autonomsim::cli

@@ -9,6 +9,7 @@ packages=(
   mosquitto mosquitto-clients libmosquitto-dev
   libyaml-cpp-dev nlohmann-json3-dev libssl-dev libcli11-dev libfmt-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  openssl  # the TLS test makes its certificates with it
 )
 
 missing=()
