@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sim/config.h"
+#include "sim/files.h"
 #include "sim/hash.h"
 #include "world/floor_raster.h"
 
@@ -21,13 +22,6 @@
 
 namespace autonomsim::sim {
 namespace {
-
-void WriteFile(const std::filesystem::path& file, const std::string& content) {
-  std::ofstream out(file, std::ios::binary);
-  out << content;
-  out.close();
-  if (!out) throw std::runtime_error("cannot write " + file.string());
-}
 
 // Car colours in track.png (BGR), chosen to stand out on black, white and yellow.
 constexpr std::array<std::array<int, 3>, 6> kCarColours{
@@ -178,13 +172,7 @@ void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
                     const std::vector<ExpectationResult>& expectations, double wall_seconds,
                     const std::filesystem::path& out_dir) {
   namespace fs = std::filesystem;
-  const fs::path target = fs::absolute(out_dir).lexically_normal();
-  const std::string suffix = std::to_string(::getpid());
-  const fs::path partial = target.string() + ".partial-" + suffix;
-  fs::create_directories(target.parent_path());
-  fs::remove_all(partial);
-  fs::create_directory(partial);
-  try {
+  WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
     WriteFile(partial / "trajectory.csv", TrajectoryCsv(record));
     WriteFile(partial / "events.jsonl", EventsJsonl(record));
     WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
@@ -194,19 +182,7 @@ void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
     // summary.json last: its presence marks a complete folder
     WriteFile(partial / "summary.json",
               Summary(loaded, record, expectations, wall_seconds).dump(2) + "\n");
-    if (fs::exists(target)) {
-      const fs::path old = target.string() + ".old-" + suffix;
-      fs::rename(target, old);
-      fs::rename(partial, target);
-      fs::remove_all(old);
-    } else {
-      fs::rename(partial, target);
-    }
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(partial, ignored);
-    throw;
-  }
+  });
 }
 
 }  // namespace autonomsim::sim

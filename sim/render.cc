@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "sim/files.h"
 #include "sim/simulation.h"
 #include "world/floor_raster.h"
 
@@ -19,13 +20,6 @@ namespace autonomsim::sim {
 namespace {
 
 namespace fs = std::filesystem;
-
-void WriteFile(const fs::path& file, const std::string& content) {
-  std::ofstream out(file, std::ios::binary);
-  out << content;
-  out.close();
-  if (!out) throw std::runtime_error("cannot write " + file.string());
-}
 
 void WritePng(const fs::path& file, const cv::Mat& image) {
   if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
@@ -172,13 +166,7 @@ std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double 
 
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
                        const fs::path& out_dir) {
-  const fs::path target = fs::absolute(out_dir).lexically_normal();
-  const std::string suffix = std::to_string(::getpid());
-  const fs::path partial = target.string() + ".partial-" + suffix;
-  fs::create_directories(target.parent_path());
-  fs::remove_all(partial);
-  fs::create_directory(partial);
-  try {
+  WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
     for (const RenderedCamera& camera : cameras) {
       const fs::path dir = partial / camera.name;
       fs::create_directory(dir);
@@ -193,19 +181,7 @@ void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int c
                cv::Mat(camera.depth.height, camera.depth.width, CV_8UC3, preview.data()));
       WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
     }
-    if (fs::exists(target)) {
-      const fs::path old = target.string() + ".old-" + suffix;
-      fs::rename(target, old);
-      fs::rename(partial, target);
-      fs::remove_all(old);
-    } else {
-      fs::rename(partial, target);
-    }
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(partial, ignored);
-    throw;
-  }
+  });
 }
 
 }  // namespace autonomsim::sim
