@@ -5,12 +5,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "world/validation.h"
+
 namespace autonomsim::sim {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 std::string Num(double value) {
   std::ostringstream out;

@@ -6,14 +6,12 @@
 #include <string>
 #include <utility>
 
+#include "world/validation.h"
+
 namespace autonomsim::sim {
 namespace {
 
 constexpr double kMaxRate_hz = 1e6;  // a sample every microsecond at most
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 void RequireRate(double rate_hz) {
   Require(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRate_hz,

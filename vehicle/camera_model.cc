@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
 
@@ -18,10 +20,6 @@ constexpr double kUndistortTolerance = 1e-13;
 // many steps; a lens never sees beyond r = 10 (84°).
 constexpr double kMaxSearchRadius = 10.0;
 constexpr int kRadiusSearchSteps = 10000;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 std::string Num(double v) { return std::to_string(v); }
 

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
 
@@ -16,10 +18,6 @@ constexpr double kGravity_mps2 = 9.81;
 // uniform box of the car's proportions the normalized coupling is ≈0.07), so a few passes solve
 // them to rounding; more are cheap.
 constexpr int kTireIterations = 8;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 void RequirePositive(double value, const char* key) {
   Require(std::isfinite(value) && value > 0.0,

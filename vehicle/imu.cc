@@ -4,12 +4,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 void RequireStddev(double value, const char* key) {
   Require(std::isfinite(value) && value >= 0.0,

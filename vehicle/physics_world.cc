@@ -8,12 +8,10 @@
 #include <tuple>
 #include <utility>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 // Longest step accepted: the tyre impulses act once per step on the velocities left by the last
 // one, which stays accurate while the heading turns little per step.

@@ -8,6 +8,8 @@
 #include <string>
 #include <utility>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
 
@@ -44,10 +46,6 @@ constexpr double kProjectionNearZ_m = 1e-3;
 constexpr double kAmbient = 0.6;
 constexpr double kDiffuse = 0.4;
 const Eigen::Vector3d kLightDirection = Eigen::Vector3d(0.3, 0.4, 0.866).normalized();
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 Bgr ToBgr(const std::array<int, 3>& rgb) {
   return {static_cast<std::uint8_t>(rgb[2]), static_cast<std::uint8_t>(rgb[1]),

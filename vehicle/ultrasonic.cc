@@ -7,14 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 double Cross(const world::Vec2& a, const world::Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 

@@ -4,14 +4,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::vehicle {
-namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
-
-}  // namespace
+namespace {}  // namespace
 
 void WheelEncoderParams::Validate() const {
   Require(pulses_per_revolution > 0,
