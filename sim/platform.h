@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "sim/kernel.h"
-#include "sim/priorities.h"
 #include "sim/node_metrics.h"
 #include "sim/platform_profile.h"
+#include "sim/priorities.h"
 
 namespace autonomsim::sim {
 

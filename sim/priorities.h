@@ -13,9 +13,9 @@ inline constexpr int kPriorityClient = 20;       // the cars' intersection clien
 // sensors sample the state at t before anything acts on it.
 inline constexpr int kPrioritySensorIntegrate = 22;
 inline constexpr int kPrioritySensor = 23;
-inline constexpr int kPriorityPlatform = 25;     // node timers, job completions on the platform
-inline constexpr int kPriorityDriver = 30;       // drivers compute actuator commands
-inline constexpr int kPriorityRecord = 40;       // trajectory samples, progress
-inline constexpr int kPriorityPhysics = 50;      // the world advances
+inline constexpr int kPriorityPlatform = 25;  // node timers, job completions on the platform
+inline constexpr int kPriorityDriver = 30;    // drivers compute actuator commands
+inline constexpr int kPriorityRecord = 40;    // trajectory samples, progress
+inline constexpr int kPriorityPhysics = 50;   // the world advances
 
 }  // namespace autonomsim::sim

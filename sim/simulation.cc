@@ -146,9 +146,9 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
   floor = world::RasterizeFloor(loaded.track);
   sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance);
   for (const CarAgent& agent : agents) {
-    sensors.push_back(std::make_unique<SensorSuite>(&kernel, sensor_world.get(),
-                                                    agent.config->id, agent.config->sensors,
-                                                    streams, physics.step()));
+    sensors.push_back(std::make_unique<SensorSuite>(&kernel, sensor_world.get(), agent.config->id,
+                                                    agent.config->sensors, streams,
+                                                    physics.step()));
   }
 
   // the V2I link between the cars and the server
