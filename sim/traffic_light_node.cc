@@ -20,16 +20,6 @@ TrafficLightNode::TrafficLightNode(Kernel* kernel, const world::TrafficLightServ
           std::make_unique<EmbeddedTrafficLightEndpoint>(params, std::move(intersection_ids)),
           std::move(sink)) {}
 
-const world::TrafficLightServer& TrafficLightNode::server() const {
-  const auto* embedded = dynamic_cast<const EmbeddedTrafficLightEndpoint*>(endpoint_.get());
-  if (embedded == nullptr) {
-    throw std::logic_error(
-        "TrafficLightNode::server(): the server does not run in this process; use Holder() and "
-        "counters()");
-  }
-  return embedded->server();
-}
-
 void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message) {
   const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
   if (!decoded) {

@@ -73,9 +73,6 @@ class TrafficLightNode {
   std::optional<int> Holder(int intersection) const { return endpoint_->Holder(intersection); }
   world::TrafficLightServer::Counters counters() const { return endpoint_->counters(); }
   const TrafficLightEndpoint& endpoint() const { return *endpoint_; }
-  // The in-process server; throws std::logic_error when the server runs elsewhere (use Holder()
-  // and counters(), which work for every endpoint).
-  const world::TrafficLightServer& server() const;
   std::uint64_t malformed() const { return malformed_; }
 
  private:
