@@ -1,0 +1,1 @@
+// Issue 5: to be written.
