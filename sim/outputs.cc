@@ -14,6 +14,7 @@
 #include "sim/config.h"
 #include "sim/files.h"
 #include "sim/hash.h"
+#include "sim/node_metrics.h"
 #include "world/floor_raster.h"
 
 #ifndef AUTONOMSIM_VERSION
@@ -106,6 +107,7 @@ std::string ResultSha256(const RunRecord& record) {
   Sha256 hash;
   hash.Update(TrajectoryCsv(record));
   hash.Update(EventsJsonl(record));
+  if (!record.boards.empty()) hash.Update(NodesCsv(record.boards));
   return hash.Hex();
 }
 
@@ -160,6 +162,11 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
                        {"malformed", record.server.malformed}};
   summary["v2i"] = {
       {"sent", record.v2i.sent}, {"delivered", record.v2i.delivered}, {"lost", record.v2i.lost}};
+  if (!record.boards.empty()) {
+    nlohmann::json platform = nlohmann::json::object();
+    for (const BoardReport& board : record.boards) platform[board.board] = ReportJson(board.report);
+    summary["platform"] = platform;
+  }
   summary["versions"] = {
       {"autonomsim", AUTONOMSIM_VERSION},
       {"box2d", fmt::format("{}.{}.{}", b2_version.major, b2_version.minor, b2_version.revision)},
@@ -175,6 +182,8 @@ void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
   WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
     WriteFile(partial / "trajectory.csv", TrajectoryCsv(record));
     WriteFile(partial / "events.jsonl", EventsJsonl(record));
+    if (!record.boards.empty()) WriteFile(partial / "nodes.csv", NodesCsv(record.boards));
+    if (!record.trace_json.empty()) WriteFile(partial / "trace.json", record.trace_json);
     WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
     if (!cv::imwrite((partial / "track.png").string(), DrawTrack(loaded, record))) {
       throw std::runtime_error("cannot write track.png");

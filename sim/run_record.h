@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/node_metrics.h"
 #include "world/time.h"
 
 namespace autonomsim::sim {
@@ -75,6 +76,10 @@ struct RunRecord {
   struct LinkCounters {
     std::uint64_t sent{0}, delivered{0}, lost{0};
   } v2i;
+  // The cars' compute boards (those that have one): per-node and platform metrics, and the
+  // Chrome trace of their jobs (empty when no board records one).
+  std::vector<BoardReport> boards;
+  std::string trace_json;
 };
 
 }  // namespace autonomsim::sim

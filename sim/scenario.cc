@@ -151,6 +151,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   std::vector<world::Route> routes;
   std::vector<double> start_s;
   std::vector<world::Pose2> start_poses;
+  std::vector<std::optional<PlatformProfile>> profiles;
   std::set<int> car_ids;
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
     const CarConfig& car = scenario.cars[i];
@@ -198,6 +199,16 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     if (car.laps && !route.cyclic) {
       FailAt(root, source, {"cars", i, "laps"}, "laps needs a route that is a loop");
     }
+    if (car.has_board()) {
+      const std::filesystem::path profile_file = file.parent_path() / car.platform.profile;
+      try {
+        profiles.push_back(LoadPlatformProfile(profile_file));
+      } catch (const ConfigError& e) {
+        FailAt(root, source, {"cars", i, "platform", "profile"}, e.what());
+      }
+    } else {
+      profiles.emplace_back();
+    }
     routes.push_back(std::move(route));
     start_s.push_back(s);
     start_poses.push_back(pose);
@@ -210,6 +221,11 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   }
 
   nlohmann::json resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(track.spec())}};
+  for (std::size_t i = 0; i < profiles.size(); ++i) {  // a board's profile is part of the run
+    if (profiles[i]) {
+      resolved["platforms"]["car" + std::to_string(scenario.cars[i].id)] = ToJson(*profiles[i]);
+    }
+  }
   const std::string sha = Sha256Hex(resolved.dump());
   return LoadedScenario{file,
                         std::move(scenario),
@@ -217,6 +233,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                         std::move(routes),
                         std::move(start_s),
                         std::move(start_poses),
+                        std::move(profiles),
                         sha,
                         std::move(resolved)};
 }

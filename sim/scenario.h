@@ -11,6 +11,7 @@
 #include "sim/config.h"
 #include "sim/mqtt_link_config.h"
 #include "sim/oracle_driver.h"
+#include "sim/platform_profile.h"
 #include "sim/sensors.h"
 #include "stack/intersection_client.h"
 #include "vehicle/car.h"
@@ -33,6 +34,15 @@ struct CarConfig {
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
   SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/sensors.h)
+  // Run the perception nodes (point cloud, obstacle detection, lane detection) on the car's
+  // board, on its camera frames, with their timing from the platform model.
+  bool perception{false};
+  // The car's compute board: profile, per-node mapping (sw/hw), per-topic transport
+  // (sim/platform_profile.h). Used when the car has nodes to run (perception).
+  PlatformConfig platform;
+
+  // Whether the car runs anything on a modeled board.
+  bool has_board() const { return perception; }
 
   template <class V>
   void Describe(V& v) {
@@ -47,6 +57,8 @@ struct CarConfig {
     v("intersection_client", intersection_client);
     v("vehicle", vehicle);
     v("sensors", sensors);
+    v("perception", perception);
+    v("platform", platform);
   }
   void Validate() const;
 };
@@ -196,8 +208,11 @@ struct LoadedScenario {
   std::vector<world::Route> routes;       // one per car, in scenario order
   std::vector<double> start_s_m;          // per car: where on its route it starts
   std::vector<world::Pose2> start_poses;  // per car: its initial chassis pose
-  std::string sha256;                     // of the resolved scenario and track (canonical JSON)
-  nlohmann::json resolved;                // {"scenario": ..., "track": ...} with every default
+  // per car: its board's profile (loaded from platform.profile, relative to the scenario's
+  // folder), for the cars that have a board (CarConfig::has_board)
+  std::vector<std::optional<PlatformProfile>> profiles;
+  std::string sha256;       // of the resolved scenario and track (canonical JSON)
+  nlohmann::json resolved;  // {"scenario": ..., "track": ...} with every default
 };
 
 // Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,

@@ -7,6 +7,7 @@
 
 #include "sim/kernel.h"
 #include "sim/mqtt_endpoint.h"
+#include "sim/node_graph.h"
 #include "sim/oracle_driver.h"
 #include "sim/priorities.h"
 #include "sim/random.h"
@@ -92,6 +93,8 @@ struct Simulation::Impl {
   void StepClient(CarAgent* agent);
   void Sample();
   void ReceiveAtCar(int car_id, const world::V2IMessage& message);
+  std::unique_ptr<Board> MakeBoard(const CarConfig& config, const PlatformProfile& profile,
+                                   SensorSuite* suite);
   void Finish();
 
   const LoadedScenario& loaded;
@@ -108,6 +111,8 @@ struct Simulation::Impl {
   world::FloorRaster floor;
   std::unique_ptr<SensorEnvironment> sensor_world;
   std::vector<std::unique_ptr<SensorSuite>> sensors;
+  // per car (agents' order): its compute board, for the cars that run nodes on one
+  std::vector<std::unique_ptr<Board>> boards;
   RunRecord record;
 };
 
@@ -145,10 +150,15 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
   // each car's sensors
   floor = world::RasterizeFloor(loaded.track);
   sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance);
-  for (const CarAgent& agent : agents) {
-    sensors.push_back(std::make_unique<SensorSuite>(&kernel, sensor_world.get(), agent.config->id,
-                                                    agent.config->sensors, streams,
-                                                    physics.step()));
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    const CarConfig& config = *agents[i].config;
+    // On a board the cameras are the graph's source nodes, which capture the frames.
+    const SensorSuiteOptions options{.camera_timers = !config.has_board()};
+    sensors.push_back(std::make_unique<SensorSuite>(
+        &kernel, sensor_world.get(), config.id, config.sensors, streams, physics.step(), options));
+    boards.push_back(config.has_board()
+                         ? MakeBoard(config, *loaded.profiles[i], sensors.back().get())
+                         : nullptr);
   }
 
   // the V2I link between the cars and the server
@@ -212,6 +222,32 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
       kZeroTime, scenario.output.trajectory_period, [this] { Sample(); }, kPriorityRecord);
   kernel.SchedulePeriodic(
       kZeroTime, physics.step(), [this] { StepPhysics(); }, kPriorityPhysics);
+}
+
+std::unique_ptr<Board> Simulation::Impl::MakeBoard(const CarConfig& config,
+                                                   const PlatformProfile& profile,
+                                                   SensorSuite* suite) {
+  const std::string name = "car" + std::to_string(config.id);
+  auto board = std::make_unique<Board>(kernel, name, config.platform, profile, &streams);
+  NodeGraph& graph = board->graph();
+  // The camera drivers: each publishes its frames, captured at its stream's instants.
+  const auto camera_topic = [&](const SensorStream& stream) {
+    return graph.AddTopic<CameraFrame>(
+        {.name = stream.topic, .type = MessageType{stream.type.name, stream.type.bytes, true}});
+  };
+  const NodeMappingConfig camera_cost{.cost = "camera_publisher"};
+  const SensorStream& color = suite->color_stream();
+  const SensorStream& depth = suite->depth_stream();
+  const TopicId<CameraFrame> image = camera_topic(color);
+  const TopicId<CameraFrame> depth_image = camera_topic(depth);
+  AddSourceNode(
+      graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
+      image, color.first, color.period, [suite](Time) { return suite->CaptureColorFrame(); });
+  AddSourceNode(
+      graph, NodeSpec{.name = suite->depth_camera().params().camera.name, .mapping = camera_cost},
+      depth_image, depth.first, depth.period, [suite](Time) { return suite->CaptureDepthFrame(); });
+  board->Finish(kZeroTime);
+  return board;
 }
 
 void Simulation::Impl::StepClient(CarAgent* agent) {
@@ -412,6 +448,15 @@ void Simulation::Impl::Finish() {
   const world::TrafficLightServer::Counters c = server.counters();
   record.server = {c.requests, c.grants, c.denials, c.frees, c.lease_expiries, server.malformed()};
   record.v2i = {link->sent(), link->delivered(), link->lost()};
+  std::vector<BoardMetrics> traced;
+  for (std::size_t i = 0; i < boards.size(); ++i) {
+    if (!boards[i]) continue;
+    record.boards.push_back(boards[i]->Report(end));
+    if (agents[i].config->platform.trace) {
+      traced.push_back({boards[i]->name(), &boards[i]->metrics()});
+    }
+  }
+  if (!traced.empty()) record.trace_json = TraceJson(traced);
 }
 
 Simulation::Simulation(const LoadedScenario& scenario) : impl_(std::make_unique<Impl>(scenario)) {}

@@ -121,3 +121,37 @@ TEST(SimulationTest, WithoutTheGroundTruthStopTheCarHitsTheObstacle) {
 
 }  // namespace
 }  // namespace autonomsim::sim
+
+namespace autonomsim::sim {
+namespace {
+
+TEST(SimulationBoardTest, OnlyACarWithNodesToRunGetsABoardAndItsCamerasPublishAtTheirRate) {
+  const LoadedScenario scenario =
+      LoadScenario(kDefault, {"cars[1].perception=true", "duration_s=6"});
+  ASSERT_FALSE(scenario.profiles[0].has_value());
+  ASSERT_TRUE(scenario.profiles[1].has_value());
+  EXPECT_EQ(scenario.profiles[1]->name, "zcu104");
+  EXPECT_TRUE(scenario.resolved.contains("platforms"));
+  const RunRecord record = RunScenario(scenario);
+  ASSERT_EQ(record.boards.size(), 1u);
+  EXPECT_EQ(record.boards[0].board, "car1");
+  for (const char* camera : {"color_camera", "depth_camera"}) {
+    const NodeReport* node = record.boards[0].report.FindNode(camera);
+    ASSERT_NE(node, nullptr) << camera;
+    EXPECT_NEAR(node->rate_hz, 30.0, 0.5) << camera;  // reference §2: both cameras at 30 fps
+  }
+  EXPECT_NE(record.trace_json.find("\"traceEvents\""), std::string::npos);
+}
+
+TEST(SimulationBoardTest, ABoardsProfileThatCannotBeLoadedIsAnErrorAtTheCarsKey) {
+  try {
+    LoadScenario(kDefault, {"cars[0].perception=true", "cars[0].platform.profile=nope.yaml"});
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("cars[0].platform.profile"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("nope.yaml"));
+  }
+}
+
+}  // namespace
+}  // namespace autonomsim::sim
