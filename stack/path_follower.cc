@@ -116,8 +116,8 @@ double PurePursuitCurvature(const world::Vec2& p_base_carrot) {
 double RegulatedSpeed(const RegulatedPurePursuitParams& params, double curvature_per_m,
                       double lookahead_dist_m, double carrot_dist_m) {
   double speed = params.desired_speed_mps;
-  if (params.use_regulated_speed_scaling) {
-    const double radius = std::abs(1.0 / curvature_per_m);  // inf on a straight line
+  if (params.use_regulated_speed_scaling && curvature_per_m != 0.0) {
+    const double radius = 1.0 / std::abs(curvature_per_m);
     const double r_min = params.regulated_min_radius_m;
     if (radius < r_min) speed *= 1.0 - std::abs(radius - r_min) / r_min;
   }
