@@ -1,0 +1,56 @@
+#include "stack/lane_controller.h"
+
+#include <cmath>
+#include <string>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+
+void LaneControllerParams::Validate() const {
+  pursuit.Validate();
+  collision.Validate();
+}
+
+LaneControllerOutput StepLaneController(const LaneControllerParams& params,
+                                        const LaneControllerInput& input) {
+  Require(std::isfinite(input.speed_mps),
+          "lane controller: speed_mps must be finite, got " + Num(input.speed_mps));
+  Require(std::isfinite(input.X_F_base.x_m) && std::isfinite(input.X_F_base.y_m) &&
+              std::isfinite(input.X_F_base.yaw_rad),
+          "lane controller: the pose must be finite");
+  LaneControllerOutput out;
+
+  // carrot: the nearest point at range >= L (first of equals)
+  const double lookahead_m = LookaheadDistance(params.pursuit, input.speed_mps);
+  if (input.lanes_valid) {
+    double best_m = 0.0;
+    for (std::size_t i = 0; i < input.lane_points_base.size(); ++i) {
+      const world::Vec2& p = input.lane_points_base[i];
+      Require(std::isfinite(p.x()) && std::isfinite(p.y()),
+              "lane controller: lane point " + std::to_string(i) + " is not finite");
+      const double range_m = p.norm();
+      if (range_m >= lookahead_m && (!out.carrot_base || range_m < best_m)) {
+        out.carrot_base = p;
+        best_m = range_m;
+      }
+    }
+  }
+  if (!out.carrot_base) return out;
+
+  // curvature, speed, and the collision check on the resulting arc
+  out.curvature_per_m = PurePursuitCurvature(*out.carrot_base);
+  const double speed =
+      RegulatedSpeed(params.pursuit, out.curvature_per_m, lookahead_m, out.carrot_base->norm());
+  const double yaw_rate = speed * out.curvature_per_m;
+  if (input.is_lethal &&
+      IsCollisionImminent(params.collision, input.X_F_base, speed, yaw_rate, input.is_lethal)) {
+    out.collision_ahead = true;
+    return out;
+  }
+  out.speed_mps = speed;
+  out.yaw_rate_rad_per_s = yaw_rate;
+  return out;
+}
+
+}  // namespace autonomsim::stack

@@ -1,0 +1,235 @@
+#include "stack/path_follower.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+namespace {
+
+// Nav2 RPP: a carrot nearer than this (squared, m²) gives no curvature.
+constexpr double kMinCarrotDist2_m2 = 0.001;
+// Tolerance on "elapsed time <= horizon" so that 5 steps of 0.2 s reach exactly 1.0 s.
+constexpr double kHorizonEpsilon_s = 1e-9;
+
+void RequirePositive(double x, const std::string& key) {
+  Require(std::isfinite(x) && x > 0.0, key + " must be > 0, got " + Num(x));
+}
+
+void RequireNonNegative(double x, const std::string& key) {
+  Require(std::isfinite(x) && x >= 0.0, key + " must be >= 0, got " + Num(x));
+}
+
+bool Finite(const world::Vec2& p) { return std::isfinite(p.x()) && std::isfinite(p.y()); }
+
+bool Finite(const world::Pose2& X) {
+  return std::isfinite(X.x_m) && std::isfinite(X.y_m) && std::isfinite(X.yaw_rad);
+}
+
+// p_F expressed in the base frame of X_F_base.
+world::Vec2 ToBase(const world::Pose2& X_F_base, const world::Vec2& p_F) {
+  const double c = std::cos(X_F_base.yaw_rad);
+  const double s = std::sin(X_F_base.yaw_rad);
+  const double dx = p_F.x() - X_F_base.x_m;
+  const double dy = p_F.y() - X_F_base.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
+double Distance(const world::Pose2& X, const world::Vec2& p) {
+  return std::hypot(p.x() - X.x_m, p.y() - X.y_m);
+}
+
+bool FootprintHits(const std::vector<world::Vec2>& samples, const world::Pose2& X_F_base,
+                   const LethalQuery& is_lethal) {
+  const double c = std::cos(X_F_base.yaw_rad);
+  const double s = std::sin(X_F_base.yaw_rad);
+  for (const world::Vec2& p : samples) {
+    const world::Vec2 p_F{X_F_base.x_m + c * p.x() - s * p.y(),
+                          X_F_base.y_m + s * p.x() + c * p.y()};
+    if (is_lethal(p_F)) return true;
+  }
+  return false;
+}
+
+// Evenly spaced points over the footprint rectangle, edges included, at most `spacing` apart.
+std::vector<world::Vec2> FootprintSamples(const CollisionCheckParams& params) {
+  auto axis = [&](double half) {
+    const int n = static_cast<int>(std::ceil(2.0 * half / params.footprint_sample_spacing_m));
+    std::vector<double> v;
+    for (int i = 0; i <= n; ++i) v.push_back(-half + 2.0 * half * i / n);
+    return v;
+  };
+  std::vector<world::Vec2> samples;
+  for (double x : axis(params.footprint_half_length_m)) {
+    for (double y : axis(params.footprint_half_width_m)) samples.emplace_back(x, y);
+  }
+  return samples;
+}
+
+}  // namespace
+
+void RegulatedPurePursuitParams::Validate() const {
+  RequirePositive(desired_speed_mps, "desired_speed_mps");
+  RequirePositive(lookahead_dist_m, "lookahead_dist_m");
+  RequirePositive(min_lookahead_dist_m, "min_lookahead_dist_m");
+  RequirePositive(max_lookahead_dist_m, "max_lookahead_dist_m");
+  Require(min_lookahead_dist_m <= max_lookahead_dist_m,
+          "min_lookahead_dist_m must be <= max_lookahead_dist_m, got " + Num(min_lookahead_dist_m) +
+              " and " + Num(max_lookahead_dist_m));
+  RequirePositive(lookahead_time_s, "lookahead_time_s");
+  RequirePositive(regulated_min_radius_m, "regulated_min_radius_m");
+  RequireNonNegative(regulated_min_speed_mps, "regulated_min_speed_mps");
+  RequireNonNegative(min_approach_speed_mps, "min_approach_speed_mps");
+  RequireNonNegative(approach_min_dist_error_m, "approach_min_dist_error_m");
+}
+
+void CollisionCheckParams::Validate() const {
+  RequireNonNegative(horizon_s, "horizon_s");
+  RequirePositive(step_m, "step_m");
+  RequirePositive(footprint_half_length_m, "footprint_half_length_m");
+  RequirePositive(footprint_half_width_m, "footprint_half_width_m");
+  RequirePositive(footprint_sample_spacing_m, "footprint_sample_spacing_m");
+}
+
+void PathFollowerParams::Validate() const {
+  pursuit.Validate();
+  collision.Validate();
+  RequirePositive(goal_tolerance_m, "goal_tolerance_m");
+  RequirePositive(yaw_goal_tolerance_rad, "yaw_goal_tolerance_rad");
+  RequirePositive(max_robot_pose_search_dist_m, "max_robot_pose_search_dist_m");
+  RequirePositive(max_costmap_extent_m, "max_costmap_extent_m");
+}
+
+double LookaheadDistance(const RegulatedPurePursuitParams& params, double speed_mps) {
+  if (!params.use_velocity_scaled_lookahead) return params.lookahead_dist_m;
+  return std::clamp(std::abs(speed_mps) * params.lookahead_time_s, params.min_lookahead_dist_m,
+                    params.max_lookahead_dist_m);
+}
+
+double PurePursuitCurvature(const world::Vec2& p_base_carrot) {
+  const double dist2 = p_base_carrot.squaredNorm();
+  return dist2 > kMinCarrotDist2_m2 ? 2.0 * p_base_carrot.y() / dist2 : 0.0;
+}
+
+double RegulatedSpeed(const RegulatedPurePursuitParams& params, double curvature_per_m,
+                      double lookahead_dist_m, double carrot_dist_m) {
+  double speed = params.desired_speed_mps;
+  if (params.use_regulated_speed_scaling && curvature_per_m != 0.0) {
+    const double radius = 1.0 / std::abs(curvature_per_m);
+    const double r_min = params.regulated_min_radius_m;
+    if (radius < r_min) speed *= 1.0 - std::abs(radius - r_min) / r_min;
+  }
+  speed = std::max(speed, params.regulated_min_speed_mps);
+  const double dist_error = std::abs(lookahead_dist_m - carrot_dist_m);
+  if (params.use_approach_speed_scaling && dist_error > params.approach_min_dist_error_m) {
+    const double scaling = 1.0 - dist_error / lookahead_dist_m;
+    const double approach = params.desired_speed_mps * scaling < params.min_approach_speed_mps
+                                ? params.min_approach_speed_mps
+                                : params.desired_speed_mps * scaling;
+    speed = std::min(speed, approach);
+  }
+  return std::clamp(speed, 0.0, params.desired_speed_mps);
+}
+
+bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2& X_F_base,
+                         double speed_mps, double yaw_rate_rad_per_s,
+                         const LethalQuery& is_lethal) {
+  const std::vector<world::Vec2> samples = FootprintSamples(params);
+  if (FootprintHits(samples, X_F_base, is_lethal)) return true;
+  if (speed_mps == 0.0) return false;
+  const double dt_s = params.step_m / std::abs(speed_mps);
+  world::Pose2 X = X_F_base;
+  for (int i = 1; i * dt_s <= params.horizon_s + kHorizonEpsilon_s; ++i) {
+    X.x_m += dt_s * speed_mps * std::cos(X.yaw_rad);
+    X.y_m += dt_s * speed_mps * std::sin(X.yaw_rad);
+    X.yaw_rad += dt_s * yaw_rate_rad_per_s;
+    if (FootprintHits(samples, X, is_lethal)) return true;
+  }
+  return false;
+}
+
+PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
+                                    const PathFollowerInput& input, PathFollowerState* state) {
+  Require(Finite(input.X_F_base), "path follower: the pose must be finite");
+  Require(std::isfinite(input.speed_mps),
+          "path follower: speed_mps must be finite, got " + Num(input.speed_mps));
+  for (std::size_t i = 0; i < input.path.size(); ++i) {
+    Require(Finite(input.path[i]),
+            "path follower: path point " + std::to_string(i) + " is not finite");
+  }
+  PathFollowerState& s = *state;
+  PathFollowerOutput out;
+  const std::span<const world::Vec2> path = input.path;
+  if (path.empty()) {
+    out.no_path = true;
+    return out;
+  }
+  if (s.path_id != input.path_id || s.begin >= path.size()) {
+    s.path_id = input.path_id;
+    s.begin = 0;
+  }
+
+  // goal
+  const world::Pose2& X = input.X_F_base;
+  bool reached = Distance(X, path.back()) <= params.goal_tolerance_m;
+  if (reached && input.goal_yaw_rad) {
+    reached = std::abs(world::WrapAngle(*input.goal_yaw_rad - X.yaw_rad)) <=
+              params.yaw_goal_tolerance_rad;
+  }
+  if (reached) {
+    out.goal_reached = true;
+    return out;
+  }
+
+  // prune: the closest point within the search distance (first of equals), never backwards
+  std::size_t search_end = path.size();
+  double along_m = 0.0;
+  for (std::size_t i = s.begin; i + 1 < path.size(); ++i) {
+    along_m += (path[i + 1] - path[i]).norm();
+    if (along_m > params.max_robot_pose_search_dist_m) {
+      search_end = i + 1;
+      break;
+    }
+  }
+  std::size_t closest = s.begin;
+  for (std::size_t i = s.begin + 1; i < search_end; ++i) {
+    if (Distance(X, path[i]) < Distance(X, path[closest])) closest = i;
+  }
+  s.begin = closest;
+  std::size_t end = closest;
+  while (end < path.size() && Distance(X, path[end]) <= params.max_costmap_extent_m) ++end;
+  if (end == closest) {  // even the closest point is beyond the local costmap
+    out.no_path = true;
+    return out;
+  }
+
+  // carrot and curvature
+  const double lookahead_m = LookaheadDistance(params.pursuit, input.speed_mps);
+  std::size_t carrot = end - 1;
+  for (std::size_t i = closest; i < end; ++i) {
+    if (ToBase(X, path[i]).norm() >= lookahead_m) {
+      carrot = i;
+      break;
+    }
+  }
+  const world::Vec2 p_base_carrot = ToBase(X, path[carrot]);
+  out.carrot = path[carrot];
+  out.curvature_per_m = PurePursuitCurvature(p_base_carrot);
+
+  // speed and the collision check on the resulting arc
+  const double speed =
+      RegulatedSpeed(params.pursuit, out.curvature_per_m, lookahead_m, p_base_carrot.norm());
+  const double yaw_rate = speed * out.curvature_per_m;
+  if (input.is_lethal &&
+      IsCollisionImminent(params.collision, X, speed, yaw_rate, input.is_lethal)) {
+    out.collision_ahead = true;
+    return out;
+  }
+  out.speed_mps = speed;
+  out.yaw_rate_rad_per_s = yaw_rate;
+  return out;
+}
+
+}  // namespace autonomsim::stack

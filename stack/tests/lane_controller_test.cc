@@ -1,0 +1,160 @@
+#include "stack/lane_controller.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace autonomsim::stack {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using world::Vec2;
+
+// 30 points like LanePoints (reference §5): far to near, 0.89 m → 0.28 m ahead, on a left-hand
+// circle of radius r_m tangent to the car's heading (r_m = 0: straight ahead).
+std::vector<Vec2> LanePoints(double r_m) {
+  std::vector<Vec2> points;
+  for (int i = 0; i < 30; ++i) {
+    const double s_m = 0.89 - (0.89 - 0.28) * i / 29.0;  // arc length
+    if (r_m == 0.0) {
+      points.emplace_back(s_m, 0.0);
+    } else {
+      const double a = s_m / r_m;
+      points.emplace_back(r_m * std::sin(a), r_m * (1.0 - std::cos(a)));
+    }
+  }
+  return points;
+}
+
+LaneControllerOutput Control(const std::vector<Vec2>& points, bool valid = true,
+                             LaneControllerParams params = {}, LethalQuery lethal = {}) {
+  LaneControllerInput input;
+  input.lane_points_base = points;
+  input.lanes_valid = valid;
+  input.speed_mps = 0.25;
+  input.is_lethal = std::move(lethal);
+  return StepLaneController(params, input);
+}
+
+TEST(LaneControllerParamsTest, DefaultsKeysAndValidation) {
+  LaneControllerParams params;
+  EXPECT_EQ(params.pursuit.desired_speed_mps, 0.25);
+  EXPECT_EQ(params.pursuit.lookahead_dist_m, 0.6);
+  EXPECT_EQ(params.pursuit.regulated_min_radius_m, 0.9);
+  EXPECT_NO_THROW(params.Validate());
+  std::vector<std::string> keys;
+  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  params.Describe(visit);
+  EXPECT_THAT(keys, ElementsAre("pursuit", "collision"));
+  params.pursuit.desired_speed_mps = 0.0;
+  try {
+    params.Validate();
+    FAIL() << "accepted desired_speed_mps = 0";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("desired_speed_mps"));
+  }
+}
+
+TEST(LaneControllerTest, StraightLaneDrivesStraightAtTheDesiredSpeed) {
+  const LaneControllerOutput out = Control(LanePoints(0.0));
+  ASSERT_TRUE(out.carrot_base.has_value());
+  EXPECT_GE(out.carrot_base->norm(), 0.6);
+  EXPECT_LT(out.carrot_base->norm(), 0.6 + 0.61 / 29.0);  // the nearest such point
+  EXPECT_EQ(out.curvature_per_m, 0.0);
+  EXPECT_EQ(out.speed_mps, 0.25);
+  EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
+}
+
+TEST(LaneControllerTest, CarrotCurvatureAndSpeedByHand) {
+  // Ranges 0.51, 0.628, 0.728 m: the carrot is (0.62, 0.1), κ = 2 · 0.1 / 0.3944.
+  std::vector<Vec2> points = {{0.7, 0.2}, {0.62, 0.1}, {0.5, 0.1}};
+  LaneControllerOutput out = Control(points);
+  ASSERT_TRUE(out.carrot_base.has_value());
+  EXPECT_EQ(*out.carrot_base, Vec2(0.62, 0.1));
+  const double kappa = 0.2 / (0.62 * 0.62 + 0.1 * 0.1);
+  EXPECT_NEAR(out.curvature_per_m, kappa, 1e-12);
+  EXPECT_EQ(out.speed_mps, 0.25);  // r = 1.97 m > 0.9 m, carrot 0.028 m beyond L
+  EXPECT_NEAR(out.yaw_rate_rad_per_s, 0.25 * kappa, 1e-12);
+  // The order of the points does not matter.
+  std::reverse(points.begin(), points.end());
+  EXPECT_EQ(*Control(points).carrot_base, Vec2(0.62, 0.1));
+  // To the right: negative curvature and yaw rate.
+  out = Control({{0.62, -0.1}});
+  EXPECT_NEAR(out.curvature_per_m, -kappa, 1e-12);
+  EXPECT_LT(out.yaw_rate_rad_per_s, 0.0);
+}
+
+TEST(LaneControllerTest, CurvedLaneGivesOneOverR) {
+  for (const double r_m : {1.0, 2.0, 5.0}) {
+    const LaneControllerOutput out = Control(LanePoints(r_m));
+    EXPECT_NEAR(out.curvature_per_m, 1.0 / r_m, 1e-9) << "R = " << r_m;
+    EXPECT_EQ(out.speed_mps, 0.25);
+  }
+}
+
+TEST(LaneControllerTest, CurvatureSlowDownBelowPointNineMetres) {
+  // Carrot (0.64, 0.48): range 0.8, κ = 2 · 0.48 / 0.64 = 1.5, r = 2/3 m.
+  const std::vector<Vec2> points = {{0.64, 0.48}};
+  LaneControllerParams params;
+  params.pursuit.use_approach_speed_scaling = false;
+  // The car's floor (regulated_min_speed 0.25) keeps 0.25 m/s.
+  EXPECT_EQ(Control(points, true, params).speed_mps, 0.25);
+  // With a lower floor, Nav2's rule: v · r / r_min = 0.25 · (2/3) / 0.9.
+  params.pursuit.regulated_min_speed_mps = 0.05;
+  LaneControllerOutput out = Control(points, true, params);
+  EXPECT_NEAR(out.curvature_per_m, 1.5, 1e-12);
+  EXPECT_NEAR(out.speed_mps, 0.25 * (2.0 / 3.0) / 0.9, 1e-12);
+  EXPECT_NEAR(out.yaw_rate_rad_per_s, out.speed_mps * 1.5, 1e-15);
+  // With approach scaling too (the carrot is 0.2 m beyond L): min(0.185, 0.25 · 2/3).
+  params.pursuit.use_approach_speed_scaling = true;
+  out = Control(points, true, params);
+  EXPECT_NEAR(out.speed_mps, 0.25 * (1.0 - 0.2 / 0.6), 1e-12);
+}
+
+TEST(LaneControllerTest, NoCarrotOrInvalidLanesStop) {
+  // All points nearer than 0.6 m.
+  LaneControllerOutput out = Control({{0.3, 0.0}, {0.5, 0.1}, {0.59, 0.0}});
+  EXPECT_FALSE(out.carrot_base.has_value());
+  EXPECT_EQ(out.speed_mps, 0.0);
+  EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
+  // Good points, but the message says invalid.
+  out = Control(LanePoints(0.0), false);
+  EXPECT_FALSE(out.carrot_base.has_value());
+  EXPECT_EQ(out.speed_mps, 0.0);
+  // No points at all.
+  EXPECT_EQ(Control({}).speed_mps, 0.0);
+}
+
+TEST(LaneControllerTest, CollisionAheadStops) {
+  LethalQuery wall = [](const Vec2& p) { return p.x() >= 0.45 && p.x() <= 0.5; };
+  LaneControllerOutput out = Control(LanePoints(0.0), true, {}, wall);
+  EXPECT_TRUE(out.collision_ahead);
+  EXPECT_EQ(out.speed_mps, 0.0);
+  EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
+  LethalQuery far_wall = [](const Vec2& p) { return p.x() >= 0.6; };
+  out = Control(LanePoints(0.0), true, {}, far_wall);
+  EXPECT_FALSE(out.collision_ahead);
+  EXPECT_EQ(out.speed_mps, 0.25);
+}
+
+TEST(LaneControllerTest, NonFiniteValidPointsThrowInvalidOnesAreIgnored) {
+  std::vector<Vec2> points = LanePoints(0.0);
+  points[4].y() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    Control(points);
+    FAIL() << "accepted a NaN lane point";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("lane point 4"));
+  }
+  EXPECT_EQ(Control(points, false).speed_mps, 0.0);
+}
+
+}  // namespace
+}  // namespace autonomsim::stack

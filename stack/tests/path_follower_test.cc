@@ -1,0 +1,276 @@
+#include "stack/path_follower.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace autonomsim::stack {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using world::Pose2;
+using world::Vec2;
+
+// Points along +x from x0_m to x1_m, 0.05 m apart (a planner's 0.05 m grid).
+std::vector<Vec2> StraightPath(double x0_m, double x1_m, double y_m = 0.0) {
+  std::vector<Vec2> path;
+  const int n = static_cast<int>(std::lround((x1_m - x0_m) / 0.05));
+  for (int i = 0; i <= n; ++i) path.emplace_back(x0_m + 0.05 * i, y_m);
+  return path;
+}
+
+// A left-hand arc of radius r_m starting at the origin heading +x, points 0.01 m apart.
+std::vector<Vec2> ArcPath(double r_m, double length_m) {
+  std::vector<Vec2> path;
+  const int n = static_cast<int>(std::lround(length_m / 0.01));
+  for (int i = 0; i <= n; ++i) {
+    const double a = 0.01 * i / r_m;
+    path.emplace_back(r_m * std::sin(a), r_m * (1.0 - std::cos(a)));
+  }
+  return path;
+}
+
+// Lethal inside an axis-aligned box.
+LethalQuery Obstacle(double x_min, double x_max, double y_min, double y_max) {
+  return [=](const Vec2& p) {
+    return p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max;
+  };
+}
+
+PathFollowerOutput Follow(const std::vector<Vec2>& path, const Pose2& X, LethalQuery lethal = {},
+                          PathFollowerParams params = {}) {
+  PathFollowerState state;
+  PathFollowerInput input;
+  input.path = path;
+  input.X_F_base = X;
+  input.speed_mps = 0.25;
+  input.is_lethal = std::move(lethal);
+  return StepPathFollower(params, input, &state);
+}
+
+TEST(PathFollowerParamsTest, DefaultsKeysAndValidation) {
+  PathFollowerParams params;
+  EXPECT_EQ(params.pursuit.desired_speed_mps, 0.25);
+  EXPECT_EQ(params.pursuit.lookahead_dist_m, 0.6);
+  EXPECT_EQ(params.pursuit.regulated_min_radius_m, 0.9);
+  EXPECT_EQ(params.goal_tolerance_m, 0.25);
+  EXPECT_EQ(params.collision.horizon_s, 1.0);
+  EXPECT_EQ(params.collision.footprint_half_length_m, 0.265);
+  EXPECT_EQ(params.collision.footprint_half_width_m, 0.135);
+  EXPECT_NO_THROW(params.Validate());
+  std::vector<std::string> keys;
+  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  params.Describe(visit);
+  EXPECT_THAT(keys,
+              ElementsAre("pursuit", "collision", "goal_tolerance_m", "yaw_goal_tolerance_rad",
+                          "max_robot_pose_search_dist_m", "max_costmap_extent_m"));
+  std::vector<std::string> pursuit_keys;
+  auto visit_pursuit = [&](const std::string& key, auto&) { pursuit_keys.push_back(key); };
+  params.pursuit.Describe(visit_pursuit);
+  EXPECT_EQ(pursuit_keys.size(), 12u);
+
+  params.pursuit.min_lookahead_dist_m = 1.0;
+  try {
+    params.Validate();
+    FAIL() << "accepted min_lookahead_dist_m > max_lookahead_dist_m";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("min_lookahead_dist_m"));
+  }
+  params = {};
+  params.collision.step_m = 0.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = {};
+  params.goal_tolerance_m = -0.25;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
+TEST(PurePursuitTest, CurvatureAndLookaheadByHand) {
+  EXPECT_NEAR(PurePursuitCurvature({0.6, 0.0}), 0.0, 1e-15);
+  EXPECT_NEAR(PurePursuitCurvature({0.6, 0.1}), 2.0 * 0.1 / 0.37, 1e-12);
+  EXPECT_NEAR(PurePursuitCurvature({0.6, -0.1}), -2.0 * 0.1 / 0.37, 1e-12);
+  EXPECT_EQ(PurePursuitCurvature({0.02, 0.02}), 0.0);  // L² = 0.0008 <= 0.001
+
+  RegulatedPurePursuitParams params;
+  EXPECT_EQ(LookaheadDistance(params, 0.25), 0.6);
+  params.use_velocity_scaled_lookahead = true;
+  EXPECT_NEAR(LookaheadDistance(params, 0.4), 0.6, 1e-12);  // 0.4 · 1.5
+  EXPECT_EQ(LookaheadDistance(params, 0.1), 0.3);           // clamped to min
+  EXPECT_EQ(LookaheadDistance(params, -1.0), 0.9);          // |v|, clamped to max
+}
+
+TEST(PurePursuitTest, RegulatedSpeedByHand) {
+  RegulatedPurePursuitParams params;
+  // Straight and gentle: the desired speed.
+  EXPECT_EQ(RegulatedSpeed(params, 0.0, 0.6, 0.6), 0.25);
+  EXPECT_EQ(RegulatedSpeed(params, 1.0, 0.6, 0.6), 0.25);
+  // r = 0.5 < 0.9: the slow-down gives 0.25 · 0.5 / 0.9, but the car's floor of 0.25 wins.
+  EXPECT_EQ(RegulatedSpeed(params, 2.0, 0.6, 0.6), 0.25);
+  params.regulated_min_speed_mps = 0.05;
+  EXPECT_NEAR(RegulatedSpeed(params, 2.0, 0.6, 0.6), 0.25 * 0.5 / 0.9, 1e-15);
+  EXPECT_NEAR(RegulatedSpeed(params, -2.0, 0.6, 0.6), 0.25 * 0.5 / 0.9, 1e-15);
+  // Tighter than the floor allows: r = 0.1 → 0.0278, floored at 0.05.
+  EXPECT_EQ(RegulatedSpeed(params, 10.0, 0.6, 0.6), 0.05);
+  // Approach scaling: the carrot 0.2 m beyond L = 0.6 scales by 1 − 0.2/0.6.
+  params = {};
+  EXPECT_NEAR(RegulatedSpeed(params, 0.0, 0.6, 0.8), 0.25 * (1.0 - 0.2 / 0.6), 1e-12);
+  // ... but not within 0.1 m (2 cells) of L.
+  EXPECT_EQ(RegulatedSpeed(params, 0.0, 0.6, 0.69), 0.25);
+  // ... and not below min_approach_speed_mps: 0.25 · (1 − 0.55/0.6) = 0.0208 → 0.05.
+  EXPECT_EQ(RegulatedSpeed(params, 0.0, 0.6, 0.05), 0.05);
+  params.use_approach_speed_scaling = false;
+  EXPECT_EQ(RegulatedSpeed(params, 0.0, 0.6, 0.05), 0.25);
+}
+
+TEST(PathFollowerTest, StraightPathDrivesStraight) {
+  const std::vector<Vec2> path = StraightPath(0.0, 3.0);
+  const PathFollowerOutput out = Follow(path, Pose2{0.0, 0.0, 0.0});
+  ASSERT_TRUE(out.carrot.has_value());
+  EXPECT_NEAR(out.carrot->x(), 0.6, 0.05 + 1e-9);
+  EXPECT_NEAR(out.curvature_per_m, 0.0, 1e-12);
+  EXPECT_EQ(out.speed_mps, 0.25);
+  EXPECT_NEAR(out.yaw_rate_rad_per_s, 0.0, 1e-12);
+  EXPECT_FALSE(out.goal_reached);
+  EXPECT_FALSE(out.collision_ahead);
+  EXPECT_FALSE(out.no_path);
+}
+
+TEST(PathFollowerTest, OffsetFromTheStraightPathSteersBack) {
+  // 0.1 m left of a path along +x: turns right.
+  const PathFollowerOutput out = Follow(StraightPath(0.0, 3.0), Pose2{0.0, 0.1, 0.0});
+  EXPECT_LT(out.curvature_per_m, 0.0);
+  EXPECT_NEAR(out.yaw_rate_rad_per_s, out.speed_mps * out.curvature_per_m, 1e-15);
+}
+
+TEST(PathFollowerTest, ArcPathGivesOneOverR) {
+  for (const double r_m : {1.0, 1.5, 3.0}) {
+    const PathFollowerOutput out = Follow(ArcPath(r_m, 2.0), Pose2{0.0, 0.0, 0.0});
+    // A carrot on the circle through the car, tangent to its heading, gives κ = 1/R exactly.
+    EXPECT_NEAR(out.curvature_per_m, 1.0 / r_m, 1e-9) << "R = " << r_m;
+    EXPECT_EQ(out.speed_mps, 0.25);
+    EXPECT_NEAR(out.yaw_rate_rad_per_s, 0.25 / r_m, 1e-9);
+  }
+  // A right-hand arc: mirror the points.
+  std::vector<Vec2> right = ArcPath(1.5, 2.0);
+  for (Vec2& p : right) p.y() = -p.y();
+  EXPECT_NEAR(Follow(right, Pose2{0.0, 0.0, 0.0}).curvature_per_m, -1.0 / 1.5, 1e-9);
+  // Below 0.9 m with a lower floor, the curvature slow-down acts: v = 0.25 · 0.5 / 0.9.
+  PathFollowerParams params;
+  params.pursuit.regulated_min_speed_mps = 0.05;
+  const PathFollowerOutput tight = Follow(ArcPath(0.5, 1.5), Pose2{0.0, 0.0, 0.0}, {}, params);
+  EXPECT_NEAR(tight.curvature_per_m, 2.0, 1e-9);
+  EXPECT_NEAR(tight.speed_mps, 0.25 * 0.5 / 0.9, 1e-9);
+}
+
+TEST(PathFollowerTest, GoalReachedWithinTolerance) {
+  const std::vector<Vec2> path = StraightPath(0.0, 2.0);
+  PathFollowerOutput out = Follow(path, Pose2{1.8, 0.0, 0.0});  // 0.2 m short
+  EXPECT_TRUE(out.goal_reached);
+  EXPECT_EQ(out.speed_mps, 0.0);
+  EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
+  EXPECT_TRUE(Follow(path, Pose2{2.0, 0.25, 0.0}).goal_reached);  // exactly at tolerance
+  out = Follow(path, Pose2{1.7, 0.0, 0.0});                       // 0.3 m short
+  EXPECT_FALSE(out.goal_reached);
+  EXPECT_GT(out.speed_mps, 0.0);  // approaching: the carrot is the goal, 0.3 m < L
+
+  // With a goal yaw, the heading must be within 0.25 rad too.
+  PathFollowerState state;
+  PathFollowerInput input;
+  input.path = path;
+  input.X_F_base = Pose2{1.9, 0.0, 0.3};
+  input.goal_yaw_rad = 0.0;
+  EXPECT_FALSE(StepPathFollower(PathFollowerParams{}, input, &state).goal_reached);
+  input.X_F_base.yaw_rad = 0.2;
+  EXPECT_TRUE(StepPathFollower(PathFollowerParams{}, input, &state).goal_reached);
+  input.X_F_base.yaw_rad = 2.0 * std::numbers::pi + 0.2;  // wrapped
+  EXPECT_TRUE(StepPathFollower(PathFollowerParams{}, input, &state).goal_reached);
+}
+
+TEST(PathFollowerTest, CollisionAheadStopsAndClearGoes) {
+  const std::vector<Vec2> path = StraightPath(0.0, 3.0);
+  const Pose2 X{0.0, 0.0, 0.0};
+  // In 1 s at 0.25 m/s the front (0.265 m) sweeps to 0.515 m.
+  PathFollowerOutput out = Follow(path, X, Obstacle(0.45, 0.5, -0.02, 0.02));
+  EXPECT_TRUE(out.collision_ahead);
+  EXPECT_EQ(out.speed_mps, 0.0);
+  EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
+  out = Follow(path, X, Obstacle(0.55, 0.6, -0.02, 0.02));  // beyond the 1 s arc
+  EXPECT_FALSE(out.collision_ahead);
+  EXPECT_EQ(out.speed_mps, 0.25);
+  // Beside the path: the footprint is ±0.135 m wide.
+  EXPECT_FALSE(Follow(path, X, Obstacle(0.3, 0.35, 0.15, 0.2)).collision_ahead);
+  EXPECT_TRUE(Follow(path, X, Obstacle(0.3, 0.35, 0.12, 0.2)).collision_ahead);
+  // A 5 cm cell under the car now: the footprint's sample grid is at most 5 cm apart.
+  EXPECT_TRUE(Follow(path, X, Obstacle(-0.1, -0.05, 0.0, 0.05)).collision_ahead);
+}
+
+TEST(CollisionCheckTest, ArcIsSteppedForOneSecond) {
+  const CollisionCheckParams params;
+  // Exactly at the 1 s horizon: the front reaches 0.265 + 0.25 = 0.515 m.
+  EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, 0.25, 0.0, Obstacle(0.514, 0.6, -0.1, 0.1)));
+  EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.25, 0.0, Obstacle(0.52, 0.6, -0.1, 0.1)));
+  // Standing still: only the current footprint.
+  EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.0, 0.5, Obstacle(0.3, 0.6, -0.1, 0.1)));
+  // Reversing sweeps the rear.
+  EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, -0.25, 0.0, Obstacle(-0.5, -0.45, -0.1, 0.1)));
+  // Turning left at ω = 1 rad/s (R = 0.25 m) sweeps to the left, not straight ahead.
+  EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.25, 1.0, Obstacle(0.5, 0.6, -0.1, 0.1)));
+  EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, 0.25, 1.0, Obstacle(0.0, 0.6, 0.3, 0.4)));
+  // The pose's frame: the same obstacle relative to a rotated, shifted car.
+  const Pose2 X{1.0, 2.0, std::numbers::pi / 2.0};
+  EXPECT_TRUE(IsCollisionImminent(params, X, 0.25, 0.0, Obstacle(0.9, 1.1, 2.45, 2.5)));
+  EXPECT_FALSE(IsCollisionImminent(params, X, 0.25, 0.0, Obstacle(1.45, 1.5, 1.9, 2.1)));
+}
+
+TEST(PathFollowerTest, PruningNeverGoesBackOnTheSamePath) {
+  const std::vector<Vec2> path = StraightPath(0.0, 3.0);
+  PathFollowerState state;
+  PathFollowerInput input;
+  input.path = path;
+  input.path_id = 7;
+  input.X_F_base = Pose2{1.0, 0.0, 0.0};
+  StepPathFollower(PathFollowerParams{}, input, &state);
+  EXPECT_EQ(state.begin, 20u);
+  // Estimated back at the start: the passed part stays pruned, the carrot is the closest
+  // remaining point at range >= L.
+  input.X_F_base = Pose2{0.0, 0.0, 0.0};
+  PathFollowerOutput out = StepPathFollower(PathFollowerParams{}, input, &state);
+  EXPECT_EQ(state.begin, 20u);
+  ASSERT_TRUE(out.carrot.has_value());
+  EXPECT_NEAR(out.carrot->x(), 1.0, 1e-12);
+  // A new path starts over.
+  input.path_id = 8;
+  out = StepPathFollower(PathFollowerParams{}, input, &state);
+  EXPECT_EQ(state.begin, 0u);
+  EXPECT_NEAR(out.carrot->x(), 0.6, 0.05 + 1e-9);
+}
+
+TEST(PathFollowerTest, NoPathStopsAndBadInputThrows) {
+  const std::vector<Vec2> empty;
+  PathFollowerOutput out = Follow(empty, Pose2{});
+  EXPECT_TRUE(out.no_path);
+  EXPECT_EQ(out.speed_mps, 0.0);
+  // The whole path beyond the local costmap (2.5 m): no path either.
+  out = Follow(StraightPath(4.0, 6.0), Pose2{});
+  EXPECT_TRUE(out.no_path);
+
+  std::vector<Vec2> path = StraightPath(0.0, 1.0);
+  path[3].x() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    Follow(path, Pose2{});
+    FAIL() << "accepted a NaN path point";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("path point 3"));
+  }
+  EXPECT_THROW(Follow(StraightPath(0.0, 1.0), Pose2{0.0, std::nan(""), 0.0}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace autonomsim::stack
