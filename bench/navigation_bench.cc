@@ -1,0 +1,87 @@
+// Issue 6: the costmaps and the global planner on the lab track (scenarios/tracks/lab.yaml; run
+// from the repository root).
+//   BM_GlobalPlanLab       A* from the real car's start (outer south lane) to the outer north lane
+//                          on the inflated 100 × 100 global costmap (reference §1, §6).
+//   BM_InflateGlobal       static layer + inflation rebuild of the global costmap.
+//   BM_LocalCostmapUpdate  one 5 × 5 m rolling local costmap update with the 234 marks of the
+//                          obstacle grid (reference §4), the car moving along the lane.
+#include <benchmark/benchmark.h>
+
+#include <cstddef>
+#include <vector>
+
+#include "sim/track_loader.h"
+#include "stack/costmap.h"
+#include "stack/global_planner.h"
+#include "world/occupancy_map.h"
+
+namespace {
+
+using autonomsim::stack::CostmapMark;
+using autonomsim::world::Vec2;
+
+const autonomsim::world::OccupancyMap& LabMap() {
+  static const autonomsim::world::OccupancyMap map = autonomsim::world::BuildStaticMap(
+      autonomsim::sim::LoadTrack("scenarios/tracks/lab.yaml"), 0.05);
+  return map;
+}
+
+void BM_GlobalPlanLab(benchmark::State& state) {
+  const autonomsim::stack::GlobalCostmap global({}, LabMap());
+  const autonomsim::stack::GlobalPlannerParams params;
+  int expansions = 0;
+  double length_m = 0.0;
+  for (auto _ : state) {
+    const auto plan =
+        PlanGlobalPath(params, global.costmap(), Vec2(0.96, -2.18), Vec2(-0.96, 2.17));
+    if (!plan.ok()) state.SkipWithError("no plan");
+    expansions = plan.expansions;
+    length_m = plan.length_m;
+    benchmark::DoNotOptimize(plan.path_m.data());
+  }
+  state.counters["expansions"] = expansions;
+  state.counters["length_m"] = length_m;
+}
+BENCHMARK(BM_GlobalPlanLab)->Unit(benchmark::kMicrosecond);
+
+void BM_InflateGlobal(benchmark::State& state) {
+  autonomsim::stack::GlobalCostmap global({}, LabMap());
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(global.Update().costs().data());
+  }
+}
+BENCHMARK(BM_InflateGlobal)->Unit(benchmark::kMicrosecond);
+
+// The obstacle grid's 18 × 13 cells (reference §4), centres at (gx·0.05 + 0.3, gy·0.05 − 0.325)
+// in base_link, for a car at (x, y) heading +x; a 2 × 3-cell obstacle straight ahead.
+std::vector<CostmapMark> GridMarks(double x_m, double y_m) {
+  std::vector<CostmapMark> marks;
+  marks.reserve(18 * 13);
+  for (int gx = 0; gx < 18; ++gx) {
+    for (int gy = 0; gy < 13; ++gy) {
+      const bool lethal = (gx == 10 || gx == 11) && gy >= 5 && gy <= 7;
+      marks.push_back({Vec2(x_m + gx * 0.05 + 0.3, y_m + gy * 0.05 - 0.325), lethal});
+    }
+  }
+  return marks;
+}
+
+void BM_LocalCostmapUpdate(benchmark::State& state) {
+  autonomsim::stack::LocalCostmap local({});
+  // Along the outer south lane at 0.25 m/s, updated at 5 Hz (reference §6): 0.05 m, one cell,
+  // per update, so every update rolls the window.
+  std::vector<autonomsim::stack::LocalCostmapInput> inputs;
+  for (int k = 0; k <= 80; ++k) {
+    const double x_m = -2.0 + 0.05 * k;
+    inputs.push_back({.p_robot = Vec2(x_m, -2.17), .marks = GridMarks(x_m, -2.17)});
+  }
+  std::size_t k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(local.Step(inputs[k]).costs().data());
+    k = (k + 1) % inputs.size();
+  }
+  state.counters["marks"] = 18 * 13;
+}
+BENCHMARK(BM_LocalCostmapUpdate)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

@@ -1,0 +1,357 @@
+#include "stack/costmap.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+namespace {
+
+// Whole cells in `length_m` at `resolution_m`; 1e-9 absorbs the rounding of 5.0 / 0.05.
+int CellsIn(double length_m, double resolution_m) {
+  return static_cast<int>(std::ceil(length_m / resolution_m - 1e-9));
+}
+
+void RequireSameGeometry(const Costmap2D& a, const Costmap2D& b) {
+  Require(a.SameGeometry(b), "costmap layers differ in geometry: " + Num(a.size_x_cells()) + " x " +
+                                 Num(a.size_y_cells()) + " at " + Num(a.resolution_m()) + " m vs " +
+                                 Num(b.size_x_cells()) + " x " + Num(b.size_y_cells()) + " at " +
+                                 Num(b.resolution_m()) + " m");
+}
+
+}  // namespace
+
+// --- Costmap2D ---------------------------------------------------------------------------------
+
+Costmap2D::Costmap2D(int size_x_cells, int size_y_cells, double resolution_m,
+                     const world::Vec2& origin_m, std::uint8_t fill)
+    : size_x_(size_x_cells),
+      size_y_(size_y_cells),
+      resolution_m_(resolution_m),
+      anchor_m_(origin_m) {
+  Require(size_x_cells > 0 && size_y_cells > 0,
+          "costmap size must be > 0 cells, got " + Num(size_x_cells) + " x " + Num(size_y_cells));
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          "costmap resolution_m must be > 0, got " + Num(resolution_m));
+  Require(origin_m.allFinite(), "costmap origin must be finite");
+  costs_.assign(static_cast<std::size_t>(size_x_cells) * size_y_cells, fill);
+}
+
+world::Vec2 Costmap2D::origin_m() const {
+  return {anchor_m_.x() + origin_cx_ * resolution_m_, anchor_m_.y() + origin_cy_ * resolution_m_};
+}
+
+bool Costmap2D::SameGeometry(const Costmap2D& other) const {
+  return size_x_ == other.size_x_ && size_y_ == other.size_y_ &&
+         resolution_m_ == other.resolution_m_ && anchor_m_ == other.anchor_m_ &&
+         origin_cx_ == other.origin_cx_ && origin_cy_ == other.origin_cy_;
+}
+
+std::optional<CellIndex> Costmap2D::WorldToMap(const world::Vec2& p) const {
+  const double mx = std::floor((p.x() - anchor_m_.x()) / resolution_m_) - origin_cx_;
+  const double my = std::floor((p.y() - anchor_m_.y()) / resolution_m_) - origin_cy_;
+  if (!(mx >= 0.0 && mx < size_x_ && my >= 0.0 && my < size_y_)) return std::nullopt;
+  return CellIndex{static_cast<int>(mx), static_cast<int>(my)};
+}
+
+world::Vec2 Costmap2D::MapToWorld(int mx, int my) const {
+  return {anchor_m_.x() + (origin_cx_ + mx + 0.5) * resolution_m_,
+          anchor_m_.y() + (origin_cy_ + my + 0.5) * resolution_m_};
+}
+
+std::size_t Costmap2D::Index(int mx, int my) const {
+  if (!Contains(mx, my)) {
+    throw std::out_of_range("cell (" + std::to_string(mx) + ", " + std::to_string(my) +
+                            ") outside the " + std::to_string(size_x_) + " x " +
+                            std::to_string(size_y_) + " costmap");
+  }
+  return static_cast<std::size_t>(my) * size_x_ + mx;
+}
+
+CellIndex Costmap2D::Cell(std::size_t index) const {
+  if (index >= costs_.size()) {
+    throw std::out_of_range("cell index " + std::to_string(index) + " outside the " +
+                            std::to_string(costs_.size()) + "-cell costmap");
+  }
+  return {static_cast<int>(index % size_x_), static_cast<int>(index / size_x_)};
+}
+
+std::optional<std::uint8_t> Costmap2D::CostAt(const world::Vec2& p) const {
+  const auto cell = WorldToMap(p);
+  if (!cell) return std::nullopt;
+  return Cost(cell->mx, cell->my);
+}
+
+// --- footprint and inflation -------------------------------------------------------------------
+
+void FootprintParams::Validate() const {
+  Require(std::isfinite(half_length_m) && half_length_m > 0.0,
+          "half_length_m must be > 0, got " + Num(half_length_m));
+  Require(std::isfinite(half_width_m) && half_width_m > 0.0,
+          "half_width_m must be > 0, got " + Num(half_width_m));
+}
+
+std::vector<world::Vec2> FootprintParams::Polygon() const {
+  return {{half_length_m, -half_width_m},
+          {half_length_m, half_width_m},
+          {-half_length_m, half_width_m},
+          {-half_length_m, -half_width_m}};
+}
+
+double InscribedRadius_m(const std::vector<world::Vec2>& footprint) {
+  Require(footprint.size() >= 3,
+          "a footprint needs at least 3 points, got " + Num(footprint.size()));
+  double radius = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < footprint.size(); ++i) {
+    const world::Vec2& a = footprint[i];
+    const world::Vec2& b = footprint[(i + 1) % footprint.size()];
+    const world::Vec2 ab = b - a;
+    const double t =
+        ab.squaredNorm() > 0.0 ? std::clamp(-a.dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    radius = std::min(radius, (a + ab * t).norm());
+  }
+  return radius;
+}
+
+void InflationParams::Validate() const {
+  Require(std::isfinite(inflation_radius_m) && inflation_radius_m >= 0.0,
+          "inflation_radius_m must be >= 0, got " + Num(inflation_radius_m));
+  Require(std::isfinite(cost_scaling_factor) && cost_scaling_factor >= 0.0,
+          "cost_scaling_factor must be >= 0, got " + Num(cost_scaling_factor));
+}
+
+Inflation::Inflation(const InflationParams& params, double inscribed_radius_m, double resolution_m)
+    : resolution_m_(resolution_m),
+      inscribed_radius_m_(inscribed_radius_m),
+      cost_scaling_factor_(params.cost_scaling_factor) {
+  params.Validate();
+  Require(std::isfinite(inscribed_radius_m) && inscribed_radius_m >= 0.0,
+          "inscribed radius must be >= 0 m, got " + Num(inscribed_radius_m));
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          "resolution_m must be > 0, got " + Num(resolution_m));
+  // Nav2 Costmap2D::cellDistance: ceil, without a tolerance (0.4 / 0.05 -> 8, 0.3 / 0.05 -> 6).
+  cell_radius_ = static_cast<int>(std::ceil(params.inflation_radius_m / resolution_m));
+  cost_by_distance_sq_.resize(static_cast<std::size_t>(cell_radius_) * cell_radius_ + 1);
+  for (std::size_t d2 = 0; d2 < cost_by_distance_sq_.size(); ++d2) {
+    cost_by_distance_sq_[d2] = CostAtCellDistance(std::sqrt(static_cast<double>(d2)));
+  }
+}
+
+std::uint8_t Inflation::CostAtCellDistance(double distance_cells) const {
+  if (distance_cells == 0.0) return kLethalObstacle;
+  const double distance_m = distance_cells * resolution_m_;
+  if (distance_m <= inscribed_radius_m_) return kInscribedInflatedObstacle;
+  const double factor = std::exp(-cost_scaling_factor_ * (distance_m - inscribed_radius_m_));
+  return static_cast<std::uint8_t>(kMaxNonInscribedCost * factor);
+}
+
+// Exact Euclidean distance transform, bounded to the inflation radius, in two separable passes
+// (Saito-Toriwaki / Meijster): first each cell's distance along its column to the nearest LETHAL
+// cell, then, along each row, min over dx of dx² + column_distance(x + dx)². All integer, so the
+// result is exact and the same on every machine. Nav2 reaches the same distances with a brushfire
+// ordered by distance (a cell takes the distance to the obstacle whose wave reached it first); an
+// exact transform is simpler, has no queue and cannot be off where two waves meet. OpenCV's
+// cv::distanceTransform (DIST_MASK_PRECISE) would give the same distances as float32; the integer
+// squared distances here index the cost cache directly.
+void Inflation::Apply(Costmap2D* grid) const {
+  if (cell_radius_ == 0) return;
+  const int nx = grid->size_x_cells();
+  const int ny = grid->size_y_cells();
+  std::vector<std::uint8_t>& costs = grid->mutable_costs();
+  const int far = cell_radius_ + 1;  // "no obstacle within the radius"
+  const int radius_sq = cell_radius_ * cell_radius_;
+
+  std::vector<int> column_distance(costs.size());
+  for (int x = 0; x < nx; ++x) {
+    int d = far;
+    for (int y = 0; y < ny; ++y) {
+      const std::size_t i = static_cast<std::size_t>(y) * nx + x;
+      d = costs[i] == kLethalObstacle ? 0 : std::min(d + 1, far);
+      column_distance[i] = d;
+    }
+    d = far;
+    for (int y = ny - 1; y >= 0; --y) {
+      const std::size_t i = static_cast<std::size_t>(y) * nx + x;
+      d = costs[i] == kLethalObstacle ? 0 : std::min(d + 1, far);
+      column_distance[i] = std::min(column_distance[i], d);
+    }
+  }
+
+  for (int y = 0; y < ny; ++y) {
+    const int* row_distance = column_distance.data() + static_cast<std::size_t>(y) * nx;
+    std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
+    for (int x = 0; x < nx; ++x) {
+      if (row_distance[x] == 0) continue;  // the obstacle itself
+      int best = radius_sq + 1;
+      const int lo = std::max(0, x - cell_radius_);
+      const int hi = std::min(nx - 1, x + cell_radius_);
+      for (int xx = lo; xx <= hi; ++xx) {
+        const int g = row_distance[xx];
+        if (g >= far) continue;
+        best = std::min(best, (xx - x) * (xx - x) + g * g);
+      }
+      if (best > radius_sq) continue;
+      const std::uint8_t inflated = cost_by_distance_sq_[best];
+      std::uint8_t& cell = row_costs[x];
+      if (cell == kNoInformation) {
+        if (inflated >= kInscribedInflatedObstacle) cell = inflated;
+      } else {
+        cell = std::max(cell, inflated);
+      }
+    }
+  }
+}
+
+// --- layers ------------------------------------------------------------------------------------
+
+Costmap2D StaticLayer(const world::OccupancyMap& map) {
+  Require(map.width_cells > 0 && map.height_cells > 0 &&
+              map.cells.size() == static_cast<std::size_t>(map.width_cells) * map.height_cells,
+          "static map: " + Num(map.cells.size()) + " cells for " + Num(map.width_cells) + " x " +
+              Num(map.height_cells));
+  Costmap2D layer(map.width_cells, map.height_cells, map.resolution_m, map.origin_m);
+  std::vector<std::uint8_t>& costs = layer.mutable_costs();
+  for (std::size_t i = 0; i < map.cells.size(); ++i) {
+    // Nav2 StaticLayer::interpretValue with trinary_costmap and lethal_cost_threshold 100.
+    const std::int8_t value = map.cells[i];
+    costs[i] = value < 0                                 ? kNoInformation
+               : value >= world::OccupancyMap::kOccupied ? kLethalObstacle
+                                                         : kFreeSpace;
+  }
+  return layer;
+}
+
+int ApplyMarks(const std::vector<CostmapMark>& marks, Costmap2D* obstacle_layer) {
+  int landed = 0;
+  for (const CostmapMark& mark : marks) {
+    const auto cell = obstacle_layer->WorldToMap(mark.p);
+    if (!cell) continue;
+    obstacle_layer->SetCost(cell->mx, cell->my, mark.lethal ? kLethalObstacle : kFreeSpace);
+    ++landed;
+  }
+  return landed;
+}
+
+void CombineMax(const Costmap2D& layer, Costmap2D* master) {
+  RequireSameGeometry(layer, *master);
+  const std::vector<std::uint8_t>& from = layer.costs();
+  std::vector<std::uint8_t>& to = master->mutable_costs();
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    if (from[i] == kNoInformation) continue;
+    if (to[i] == kNoInformation || to[i] < from[i]) to[i] = from[i];
+  }
+}
+
+// --- global costmap ----------------------------------------------------------------------------
+
+void GlobalCostmapParams::Validate() const {
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          "resolution_m must be > 0, got " + Num(resolution_m));
+  inflation.Validate();
+  footprint.Validate();
+}
+
+namespace {
+
+const GlobalCostmapParams& Validated(const GlobalCostmapParams& params) {
+  params.Validate();
+  return params;
+}
+
+const LocalCostmapParams& Validated(const LocalCostmapParams& params) {
+  params.Validate();
+  return params;
+}
+
+}  // namespace
+
+GlobalCostmap::GlobalCostmap(const GlobalCostmapParams& params, const world::OccupancyMap& map)
+    : inflation_(Validated(params).inflation, InscribedRadius_m(params.footprint.Polygon()),
+                 params.resolution_m),
+      static_(StaticLayer(map)) {
+  Require(map.resolution_m == params.resolution_m,
+          "resolution_m: the static map is at " + Num(map.resolution_m) +
+              " m, the global costmap at " + Num(params.resolution_m) + " m");
+  obstacles_ = Costmap2D(static_.size_x_cells(), static_.size_y_cells(), static_.resolution_m(),
+                         static_.origin_m(), kFreeSpace);
+  Update();
+}
+
+const Costmap2D& GlobalCostmap::Update(const std::vector<CostmapMark>& marks) {
+  ApplyMarks(marks, &obstacles_);
+  // The static layer overwrites the master grid (Nav2 StaticLayer, use_maximum false).
+  master_ = static_;
+  CombineMax(obstacles_, &master_);
+  inflation_.Apply(&master_);
+  return master_;
+}
+
+// --- rolling window and local costmap ----------------------------------------------------------
+
+RollingWindow::RollingWindow(int size_x_cells, int size_y_cells, double resolution_m,
+                             std::uint8_t fill)
+    : grid_(size_x_cells, size_y_cells, resolution_m, world::Vec2::Zero(), fill), fill_(fill) {
+  grid_.origin_cx_ = -(size_x_cells / 2);
+  grid_.origin_cy_ = -(size_y_cells / 2);
+}
+
+void RollingWindow::Recentre(const world::Vec2& p) {
+  Require(p.allFinite(), "rolling window: non-finite robot position");
+  const int nx = grid_.size_x_;
+  const int ny = grid_.size_y_;
+  const int new_cx = static_cast<int>(std::floor(p.x() / grid_.resolution_m_)) - nx / 2;
+  const int new_cy = static_cast<int>(std::floor(p.y() / grid_.resolution_m_)) - ny / 2;
+  const int shift_x = new_cx - grid_.origin_cx_;
+  const int shift_y = new_cy - grid_.origin_cy_;
+  if (shift_x == 0 && shift_y == 0) return;
+
+  // New cell (mx, my) is old cell (mx + shift_x, my + shift_y): copy the overlap row by row.
+  std::vector<std::uint8_t> moved(grid_.costs_.size(), fill_);
+  const int x_lo = std::max(0, -shift_x);
+  const int x_hi = std::min(nx, nx - shift_x);  // exclusive
+  for (int my = std::max(0, -shift_y); my < std::min(ny, ny - shift_y) && x_lo < x_hi; ++my) {
+    const std::size_t from = static_cast<std::size_t>(my + shift_y) * nx + (x_lo + shift_x);
+    const std::size_t to = static_cast<std::size_t>(my) * nx + x_lo;
+    std::copy_n(grid_.costs_.begin() + from, x_hi - x_lo, moved.begin() + to);
+  }
+  grid_.costs_ = std::move(moved);
+  grid_.origin_cx_ = new_cx;
+  grid_.origin_cy_ = new_cy;
+}
+
+void LocalCostmapParams::Validate() const {
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          "resolution_m must be > 0, got " + Num(resolution_m));
+  Require(std::isfinite(width_m) && width_m >= resolution_m,
+          "width_m must be >= resolution_m, got " + Num(width_m));
+  Require(std::isfinite(height_m) && height_m >= resolution_m,
+          "height_m must be >= resolution_m, got " + Num(height_m));
+  Require(std::isfinite(update_rate_hz) && update_rate_hz > 0.0,
+          "update_rate_hz must be > 0, got " + Num(update_rate_hz));
+  inflation.Validate();
+  footprint.Validate();
+}
+
+LocalCostmap::LocalCostmap(const LocalCostmapParams& params)
+    : inflation_(Validated(params).inflation, InscribedRadius_m(params.footprint.Polygon()),
+                 params.resolution_m),
+      obstacles_(CellsIn(params.width_m, params.resolution_m),
+                 CellsIn(params.height_m, params.resolution_m), params.resolution_m, kFreeSpace),
+      master_(obstacles_.grid()) {}
+
+const Costmap2D& LocalCostmap::Step(const LocalCostmapInput& input) {
+  obstacles_.Recentre(input.p_robot);
+  ApplyMarks(input.marks, &obstacles_.mutable_grid());
+  const Costmap2D& layer = obstacles_.grid();
+  master_ = layer;  // the geometry; the master grid restarts FREE (no static layer here)
+  std::fill(master_.mutable_costs().begin(), master_.mutable_costs().end(), kFreeSpace);
+  CombineMax(layer, &master_);
+  inflation_.Apply(&master_);
+  return master_;
+}
+
+}  // namespace autonomsim::stack

@@ -1,0 +1,191 @@
+#include "stack/global_planner.h"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <queue>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+namespace {
+
+// assumed: far below a cell (0.05 m), far above the rounding of cell-centre coordinates.
+constexpr double kSameDistance_m = 1e-9;
+
+struct OpenEntry {
+  double f;  // g + h, metres
+  double h;  // heuristic, metres: among equal f, the one nearer the goal first
+  int index;
+};
+
+// std::priority_queue is a max-heap: "greater" puts the least (f, h, index) on top.
+struct WorseEntry {
+  bool operator()(const OpenEntry& a, const OpenEntry& b) const {
+    if (a.f != b.f) return a.f > b.f;
+    if (a.h != b.h) return a.h > b.h;
+    return a.index > b.index;
+  }
+};
+
+std::vector<world::Vec2> Backtrace(const Costmap2D& costmap, const std::vector<int>& parent,
+                                   int end) {
+  std::vector<world::Vec2> path;
+  for (int i = end; i >= 0; i = parent[i]) {
+    const CellIndex cell = costmap.Cell(static_cast<std::size_t>(i));
+    path.push_back(costmap.MapToWorld(cell.mx, cell.my));
+  }
+  return {path.rbegin(), path.rend()};
+}
+
+double Length_m(const std::vector<world::Vec2>& path) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+  return length;
+}
+
+}  // namespace
+
+void GlobalPlannerParams::Validate() const {
+  Require(std::isfinite(tolerance_m) && tolerance_m >= 0.0,
+          "tolerance_m must be >= 0, got " + Num(tolerance_m));
+  Require(std::isfinite(cost_travel_multiplier) && cost_travel_multiplier >= 0.0,
+          "cost_travel_multiplier must be >= 0, got " + Num(cost_travel_multiplier));
+  Require(max_expansions > 0, "max_expansions must be > 0, got " + Num(max_expansions));
+}
+
+std::string ToString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kOk:
+      return "ok";
+    case PlanStatus::kStartOutsideMap:
+      return "start outside the costmap";
+    case PlanStatus::kGoalOutsideMap:
+      return "goal outside the costmap";
+    case PlanStatus::kNoPath:
+      return "no path within tolerance of the goal";
+    case PlanStatus::kExpansionLimit:
+      return "expansion limit reached";
+  }
+  return "unknown";
+}
+
+GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
+                          const world::Vec2& start, const world::Vec2& goal) {
+  params.Validate();
+  GlobalPlan plan;
+  const auto start_cell = costmap.WorldToMap(start);
+  if (!start_cell) {
+    plan.status = PlanStatus::kStartOutsideMap;
+    return plan;
+  }
+  const auto goal_cell = costmap.WorldToMap(goal);
+  if (!goal_cell) {
+    plan.status = PlanStatus::kGoalOutsideMap;
+    return plan;
+  }
+
+  const int nx = costmap.size_x_cells();
+  const int ny = costmap.size_y_cells();
+  const double resolution_m = costmap.resolution_m();
+  const std::vector<std::uint8_t>& costs = costmap.costs();
+  const int start_index = static_cast<int>(costmap.Index(start_cell->mx, start_cell->my));
+  const int goal_index = static_cast<int>(costmap.Index(goal_cell->mx, goal_cell->my));
+
+  auto traversable = [&](int i) {
+    const std::uint8_t c = costs[i];
+    return c == kNoInformation ? params.allow_unknown : c < kInscribedInflatedObstacle;
+  };
+  auto heuristic_m = [&](int mx, int my) {
+    const double dx = mx - goal_cell->mx;
+    const double dy = my - goal_cell->my;
+    return resolution_m * std::sqrt(dx * dx + dy * dy);
+  };
+  // Smac's neighbour order (cardinal moves first), as (dx, dy, step in cells).
+  struct Move {
+    int dx;
+    int dy;
+    double step;
+  };
+  const double diagonal = std::sqrt(2.0);
+  const Move moves[8] = {{-1, 0, 1.0},      {1, 0, 1.0},        {0, -1, 1.0},
+                         {0, 1, 1.0},       {-1, -1, diagonal}, {1, -1, diagonal},
+                         {-1, 1, diagonal}, {1, 1, diagonal}};
+
+  const std::size_t n = costs.size();
+  std::vector<double> g(n, std::numeric_limits<double>::infinity());
+  std::vector<int> parent(n, -1);
+  std::vector<std::uint8_t> closed(n, 0);
+  std::priority_queue<OpenEntry, std::vector<OpenEntry>, WorseEntry> open;
+
+  g[start_index] = 0.0;
+  const double h_start = heuristic_m(start_cell->mx, start_cell->my);
+  open.push({h_start, h_start, start_index});
+
+  // The closed cell nearest the goal point (among equals the cheapest, then the lowest index),
+  // for the tolerance.
+  int nearest = -1;
+  double nearest_distance_m = std::numeric_limits<double>::infinity();
+  auto finish = [&](int end, bool exact) {
+    plan.status = PlanStatus::kOk;
+    plan.path_m = Backtrace(costmap, parent, end);
+    plan.cost = g[end];
+    plan.length_m = Length_m(plan.path_m);
+    plan.exact_goal = exact;
+  };
+  auto finish_within_tolerance = [&](PlanStatus otherwise) {
+    if (nearest >= 0 && nearest_distance_m <= params.tolerance_m) {
+      finish(nearest, false);
+    } else {
+      plan.status = otherwise;
+    }
+  };
+
+  while (!open.empty()) {
+    const OpenEntry top = open.top();
+    open.pop();
+    const int i = top.index;
+    if (closed[i]) continue;  // a stale entry: the cell was closed at a lower cost
+    closed[i] = 1;
+    ++plan.expansions;
+
+    if (i == goal_index) {
+      finish(i, true);
+      return plan;
+    }
+    const int mx = i % nx;
+    const int my = i / nx;
+    const double distance_m = (costmap.MapToWorld(mx, my) - goal).norm();
+    // Distances within kSameDistance_m are ties: rounding must not pick among equidistant cells.
+    const bool nearer = distance_m < nearest_distance_m - kSameDistance_m;
+    const bool tie = !nearer && distance_m <= nearest_distance_m + kSameDistance_m;
+    if (nearer || (tie && (g[i] < g[nearest] || (g[i] == g[nearest] && i < nearest)))) {
+      nearest_distance_m = distance_m;
+      nearest = i;
+    }
+    if (plan.expansions >= params.max_expansions) {
+      finish_within_tolerance(PlanStatus::kExpansionLimit);
+      return plan;
+    }
+
+    for (const Move& move : moves) {
+      const int cx = mx + move.dx;
+      const int cy = my + move.dy;
+      if (cx < 0 || cx >= nx || cy < 0 || cy >= ny) continue;
+      const int j = cy * nx + cx;
+      if (closed[j] || !traversable(j)) continue;
+      const double weight = 1.0 + params.cost_travel_multiplier *
+                                      (static_cast<double>(costs[j]) / kMaxNonInscribedCost);
+      const double g_new = g[i] + resolution_m * move.step * weight;
+      if (!(g_new < g[j])) continue;
+      g[j] = g_new;
+      parent[j] = i;
+      const double h = heuristic_m(cx, cy);
+      open.push({g_new + h, h, j});
+    }
+  }
+  finish_within_tolerance(PlanStatus::kNoPath);
+  return plan;
+}
+
+}  // namespace autonomsim::stack
