@@ -1,1 +1,61 @@
-// Issue 5: to be written.
+// Lane detection on a rendered lab-track frame (issue 5): the whole step, the plain OpenCV
+// mask+warp stage (the reference) and LaneDetector's own mask+warp stage, all on the same frame.
+// Runs with the repository root as working directory (it reads scenarios/tracks/lab.yaml).
+#include <benchmark/benchmark.h>
+
+#include "stack/lane_detection.h"
+#include "stack/tests/track_frames.h"
+#include "vehicle/camera_model.h"
+
+namespace autonomsim::stack {
+namespace {
+
+struct LaneBenchFrame {
+  LaneBenchFrame() {
+    const auto& camera = frames.color_camera();
+    calibration.K = camera.params().K;
+    calibration.D = camera.params().D;
+    calibration.X_base_camera = camera.X_base_camera();
+    // outer lane, south straight: the yellow centre line and the white boundary in view
+    frame = frames.Render(frames.PoseOnRoute("outer_loop", 2.5));
+    image = cv::Mat(frame.color.height, frame.color.width, CV_8UC3, frame.color.bgr.data());
+  }
+  testing::TrackFrames frames;
+  LaneCameraCalibration calibration;
+  testing::RgbdFrame frame;
+  cv::Mat image;
+};
+
+const LaneBenchFrame& Frame() {
+  static const LaneBenchFrame frame;
+  return frame;
+}
+
+void BM_LaneDetection(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  for (auto _ : state) benchmark::DoNotOptimize(detector.Step(Frame().image));
+}
+BENCHMARK(BM_LaneDetection)->Unit(benchmark::kMicrosecond);
+
+void BM_LaneMasksOpenCV(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  BirdsEyeMasks masks;
+  for (auto _ : state) {
+    LaneMasksReference(Frame().image, detector.thresholds(), detector.image_to_birds_eye(), &masks);
+    benchmark::DoNotOptimize(masks.yellow.data);
+  }
+}
+BENCHMARK(BM_LaneMasksOpenCV)->Unit(benchmark::kMicrosecond);
+
+void BM_LaneMasksFast(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  BirdsEyeMasks masks;
+  for (auto _ : state) {
+    detector.ComputeMasks(Frame().image, &masks);
+    benchmark::DoNotOptimize(masks.yellow.data);
+  }
+}
+BENCHMARK(BM_LaneMasksFast)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace autonomsim::stack

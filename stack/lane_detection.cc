@@ -1,1 +1,590 @@
-// Issue 5: to be written.
+#include "stack/lane_detection.h"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+namespace {
+
+// OpenCV's fixed-point warp (imgproc, warpPerspective/remap with INTER_LINEAR): source
+// coordinates carry 5 fractional bits, and the 32 × 32 fractional positions index a table of
+// bilinear weights (hence 1024 alpha indices).
+constexpr int kInterBits = 5;
+constexpr int kInterTabSize = 1 << kInterBits;
+constexpr int kAlphaCount = kInterTabSize * kInterTabSize;
+// warpPerspective computes coordinates in blocks of its own: BLOCK_SZ = 32 gives, for a 640-wide
+// output, blocks of 64 columns × 16 rows, and each block restarts its row's sum at its first
+// column. Reproducing the blocks reproduces the exact doubles.
+constexpr int kWarpBlockSize = 32;
+// OpenCV's 8-bit HSV: 12 fractional bits in its division tables.
+constexpr int kHsvShift = 12;
+// Our skipping granularity: output tiles of 16 × 16 px, source cells of 8 × 8 px. Assumed: small
+// enough that a line's tiles are few, large enough that the bookkeeping costs little.
+constexpr int kTileSize = 16;
+constexpr int kCellSize = 8;
+// Newton's method for the inverse of the lens distortion (as the vehicle's camera model does).
+constexpr int kUndistortIterations = 50;
+constexpr double kUndistortTolerance = 1e-13;
+
+using Point = std::array<double, 2>;
+
+double Cross(const Point& o, const Point& a, const Point& b) {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+// Near left, near right, far left, far right → a convex quadrilateral (walked NL, NR, FR, FL).
+void RequireQuadrilateral(const std::array<Point, 4>& q, const std::string& key) {
+  for (const Point& p : q) {
+    Require(std::isfinite(p[0]) && std::isfinite(p[1]), key + " must be finite");
+  }
+  const std::array<Point, 4> ring{q[0], q[1], q[3], q[2]};
+  int positive = 0;
+  int negative = 0;
+  for (int i = 0; i < 4; ++i) {
+    const double c = Cross(ring[i], ring[(i + 1) % 4], ring[(i + 2) % 4]);
+    positive += c > 0.0;
+    negative += c < 0.0;
+  }
+  Require(positive == 4 || negative == 4,
+          key + " must be a convex quadrilateral: near left, near right, far left, far right");
+}
+
+void RequireHsv(const HsvRange& range, const std::string& key) {
+  const std::array<int, 3> max{179, 255, 255};
+  for (int i = 0; i < 3; ++i) {
+    Require(range.lower_hsv[i] >= 0 && range.upper_hsv[i] <= max[i] &&
+                range.lower_hsv[i] <= range.upper_hsv[i],
+            key + ": channel " + std::to_string(i) + " range [" + Num(range.lower_hsv[i]) + ", " +
+                Num(range.upper_hsv[i]) + "] must lie in [0, " + Num(max[i]) +
+                "] with lower <= upper");
+  }
+}
+
+bool InRange(const HsvRange& range, const std::array<std::uint8_t, 3>& hsv) {
+  for (int i = 0; i < 3; ++i) {
+    if (hsv[i] < range.lower_hsv[i] || hsv[i] > range.upper_hsv[i]) return false;
+  }
+  return true;
+}
+
+std::vector<cv::Point2f> ToCv(const std::array<Point, 4>& points) {
+  std::vector<cv::Point2f> out;
+  for (const Point& p : points) {
+    out.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]));
+  }
+  return out;
+}
+
+void RequireImage(const cv::Mat& bgr) {
+  Require(bgr.type() == CV_8UC3 && bgr.cols == kLaneImageWidth && bgr.rows == kLaneImageHeight,
+          "lane detection needs a 640x480 bgr8 image, got " + Num(bgr.cols) + "x" + Num(bgr.rows) +
+              " of type " + Num(bgr.type()));
+}
+
+// Per bird's-eye row: how many pixels are non-zero, and the mean column of those.
+void RowMeans(const cv::Mat& mask, std::vector<double>* rows, std::vector<double>* cols,
+              std::vector<double>* weights, int* total) {
+  rows->clear();
+  cols->clear();
+  weights->clear();
+  *total = 0;
+  for (int r = 0; r < mask.rows; ++r) {
+    const std::uint8_t* p = mask.ptr<std::uint8_t>(r);
+    std::int64_t count = 0;
+    std::int64_t col_sum = 0;
+    for (int c = 0; c < mask.cols; c += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, p + c, sizeof word);
+      if (word == 0) continue;
+      for (int k = 0; k < 8; ++k) {
+        if (p[c + k] != 0) {
+          ++count;
+          col_sum += c + k;
+        }
+      }
+    }
+    if (count == 0) continue;
+    rows->push_back(r);
+    cols->push_back(static_cast<double>(col_sum) / static_cast<double>(count));
+    weights->push_back(static_cast<double>(count));
+    *total += static_cast<int>(count);
+  }
+}
+
+}  // namespace
+
+void HsvRange::Validate() const { RequireHsv(*this, "hsv range"); }
+
+LaneThresholds LaneThresholdsByName(const std::string& name) {
+  // reference §5, table "white H,S,V | yellow H,S,V"
+  if (name == "real_car") {
+    return {.white = {{70, 0, 195}, {90, 87, 255}}, .yellow = {{30, 95, 50}, {34, 255, 255}}};
+  }
+  if (name == "simulation") {
+    return {.white = {{0, 0, 215}, {179, 35, 255}}, .yellow = {{10, 70, 95}, {100, 255, 255}}};
+  }
+  throw std::invalid_argument("thresholds must be \"real_car\" or \"simulation\", got \"" + name +
+                              "\"");
+}
+
+void LaneCameraCalibration::Validate() const {
+  for (double k : K) Require(std::isfinite(k), "camera K must be finite");
+  for (double d : D) Require(std::isfinite(d), "camera D must be finite");
+  Require(K[0] > 0.0 && K[4] > 0.0,
+          "camera K: fx and fy must be > 0, got " + Num(K[0]) + ", " + Num(K[4]));
+  Require(X_base_camera.matrix().allFinite(), "camera X_base_camera must be finite");
+  Require(X_base_camera.translation().z() > 0.0,
+          "camera must be above the floor, got z = " + Num(X_base_camera.translation().z()));
+}
+
+void LaneDetectionParams::Validate() const {
+  (void)LaneThresholdsByName(thresholds);
+  RequireQuadrilateral(warp_source_px, "warp_source_px");
+  RequireQuadrilateral(warp_destination_px, "warp_destination_px");
+  Require(yellow_min_px >= 0, "yellow_min_px must be >= 0, got " + Num(yellow_min_px));
+  Require(line_min_px >= 0 && line_min_px <= yellow_min_px,
+          "line_min_px must be in [0, yellow_min_px], got " + Num(line_min_px));
+  Require(std::isfinite(sample_row_step_px) && sample_row_step_px > 0.0,
+          "sample_row_step_px must be > 0, got " + Num(sample_row_step_px));
+  Require(std::isfinite(normal_shift_px) && normal_shift_px >= 0.0,
+          "normal_shift_px must be >= 0, got " + Num(normal_shift_px));
+  Require(!anchor_rows_px.empty(), "anchor_rows_px must not be empty");
+  for (double row : anchor_rows_px) {
+    Require(std::isfinite(row), "anchor_rows_px must be finite, got " + Num(row));
+  }
+  Require(std::isfinite(anchor_col_px), "anchor_col_px must be finite");
+  Require(anchor_repeats >= 1, "anchor_repeats must be >= 1, got " + Num(anchor_repeats));
+}
+
+void LaneMasksReference(const cv::Mat& bgr, const LaneThresholds& thresholds,
+                        const cv::Mat& image_to_birds_eye, BirdsEyeMasks* masks) {
+  cv::Mat hsv;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  const auto scalar = [](const std::array<int, 3>& a) { return cv::Scalar(a[0], a[1], a[2]); };
+  cv::Mat mask;
+  const cv::Size size(kLaneImageWidth, kLaneImageHeight);
+  cv::inRange(hsv, scalar(thresholds.yellow.lower_hsv), scalar(thresholds.yellow.upper_hsv), mask);
+  cv::warpPerspective(mask, masks->yellow, image_to_birds_eye, size);
+  cv::inRange(hsv, scalar(thresholds.white.lower_hsv), scalar(thresholds.white.upper_hsv), mask);
+  cv::warpPerspective(mask, masks->white, image_to_birds_eye, size);
+}
+
+double RowPolynomial::operator()(double row) const {
+  double value = 0.0;
+  for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it) value = value * row + *it;
+  return value;
+}
+
+double RowPolynomial::Slope(double row) const {
+  double value = 0.0;
+  for (std::size_t k = coefficients.size(); k-- > 1;) {
+    value = value * row + static_cast<double>(k) * coefficients[k];
+  }
+  return value;
+}
+
+std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
+                                              std::span<const double> cols,
+                                              std::span<const double> weights, int degree) {
+  Require(degree >= 0 && rows.size() == cols.size() && rows.size() == weights.size(),
+          "FitRowPolynomial: rows, cols and weights must have one size, degree >= 0");
+  const int n = static_cast<int>(rows.size());
+  const int unknowns = degree + 1;
+  double scale = 1.0;
+  std::vector<double> distinct;
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(rows[i]) || !std::isfinite(cols[i]) || !(weights[i] >= 0.0)) {
+      return std::nullopt;
+    }
+    if (weights[i] > 0.0) distinct.push_back(rows[i]);
+    scale = std::max(scale, std::abs(rows[i]));
+  }
+  std::sort(distinct.begin(), distinct.end());
+  if (std::unique(distinct.begin(), distinct.end()) - distinct.begin() < unknowns) {
+    return std::nullopt;
+  }
+  Eigen::MatrixXd A(n, unknowns);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    const double w = std::sqrt(weights[i]);
+    const double t = rows[i] / scale;
+    double power = 1.0;
+    for (int k = 0; k < unknowns; ++k, power *= t) A(i, k) = w * power;
+    b(i) = w * cols[i];
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < unknowns) return std::nullopt;
+  const Eigen::VectorXd c = qr.solve(b);
+  RowPolynomial poly;
+  double power = 1.0;
+  for (int k = 0; k < unknowns; ++k, power *= scale) poly.coefficients.push_back(c(k) / power);
+  if (!std::all_of(poly.coefficients.begin(), poly.coefficients.end(),
+                   [](double v) { return std::isfinite(v); })) {
+    return std::nullopt;
+  }
+  return poly;
+}
+
+Eigen::Vector2d ShiftTowardsLaneCentre(const RowPolynomial& line, double row, LaneLine which,
+                                       double shift_px) {
+  const double slope = line.Slope(row);
+  const double sign = which == LaneLine::kYellow ? -1.0 : 1.0;
+  const Eigen::Vector2d normal = Eigen::Vector2d(slope, -1.0) / std::sqrt(1.0 + slope * slope);
+  return Eigen::Vector2d(row, line(row)) + sign * shift_px * normal;
+}
+
+std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
+                                           std::span<const Eigen::Vector2d> shifted_row_col) {
+  std::vector<double> rows, cols, weights;
+  for (const Eigen::Vector2d& p : shifted_row_col) {
+    rows.push_back(p.x());
+    cols.push_back(p.y());
+    weights.push_back(1.0);
+  }
+  // Each anchor repeated anchor_repeats times weighs exactly like one point of that weight.
+  for (double row : params.anchor_rows_px) {
+    rows.push_back(row);
+    cols.push_back(params.anchor_col_px);
+    weights.push_back(params.anchor_repeats);
+  }
+  return FitRowPolynomial(rows, cols, weights, 3);
+}
+
+std::optional<Eigen::Vector2d> FloorPointFromPixel(const LaneCameraCalibration& camera, double u,
+                                                   double v) {
+  const auto& K = camera.K;
+  const double k1 = camera.D[0];
+  const double k2 = camera.D[1];
+  const double p1 = camera.D[2];
+  const double p2 = camera.D[3];
+  const double k3 = camera.D[4];
+  const double yd = (v - K[5]) / K[4];
+  const Eigen::Vector2d target((u - K[2] - K[1] * yd) / K[0], yd);
+  // plumb_bob, from undistorted to distorted normalized coordinates
+  const auto distort = [&](const Eigen::Vector2d& p) {
+    const double r2 = p.squaredNorm();
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    return Eigen::Vector2d(
+        p.x() * radial + 2.0 * p1 * p.x() * p.y() + p2 * (r2 + 2.0 * p.x() * p.x()),
+        p.y() * radial + p1 * (r2 + 2.0 * p.y() * p.y()) + 2.0 * p2 * p.x() * p.y());
+  };
+  Eigen::Vector2d x = target;
+  bool converged = false;
+  for (int i = 0; i < kUndistortIterations && !converged; ++i) {
+    const Eigen::Vector2d residual = distort(x) - target;
+    if (residual.norm() < kUndistortTolerance) {
+      converged = true;
+      break;
+    }
+    const double r2 = x.squaredNorm();
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double g = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r²)
+    Eigen::Matrix2d J;
+    J(0, 0) = radial + 2.0 * g * x.x() * x.x() + 2.0 * p1 * x.y() + 6.0 * p2 * x.x();
+    J(0, 1) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
+    J(1, 0) = J(0, 1);
+    J(1, 1) = radial + 2.0 * g * x.y() * x.y() + 6.0 * p1 * x.y() + 2.0 * p2 * x.x();
+    if (!(J.determinant() > 0.0)) return std::nullopt;  // beyond a fold of the model
+    x -= J.inverse() * residual;
+    if (!x.allFinite()) return std::nullopt;
+  }
+  if (!converged) return std::nullopt;
+  // The radial model must still grow with the radius there, or it no longer describes the lens.
+  const double r2 = x.squaredNorm();
+  if (!(1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3)) > 0.0)) return std::nullopt;
+
+  const Eigen::Vector3d direction =
+      camera.X_base_camera.linear() * Eigen::Vector3d(x.x(), x.y(), 1);
+  const Eigen::Vector3d origin = camera.X_base_camera.translation();
+  if (!(direction.z() < 0.0)) return std::nullopt;
+  const double t = -origin.z() / direction.z();
+  return Eigen::Vector2d(origin.x() + t * direction.x(), origin.y() + t * direction.y());
+}
+
+namespace detail {
+
+std::array<std::uint8_t, 3> BgrToHsv8(std::uint8_t b, std::uint8_t g, std::uint8_t r) {
+  const int v = std::max({b, g, r});
+  const int diff = v - std::min({b, g, r});
+  const int sdiv = v == 0 ? 0 : static_cast<int>(std::lrint((255 << kHsvShift) / (1.0 * v)));
+  const int hdiv = diff == 0 ? 0 : static_cast<int>(std::lrint((180 << kHsvShift) / (6.0 * diff)));
+  const int s = (diff * sdiv + (1 << (kHsvShift - 1))) >> kHsvShift;
+  int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+  h = (h * hdiv + (1 << (kHsvShift - 1))) >> kHsvShift;
+  if (h < 0) h += 180;
+  return {static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(v)};
+}
+
+}  // namespace detail
+
+LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCalibration& camera)
+    : params_(params), camera_(camera) {
+  params_.Validate();
+  camera_.Validate();
+  thresholds_ = LaneThresholdsByName(params_.thresholds);
+  constexpr int W = kLaneImageWidth;
+  constexpr int H = kLaneImageHeight;
+
+  // As the real node: cv::getPerspectiveTransform on float points, both ways.
+  const auto src = ToCv(params_.warp_source_px);
+  const auto dst = ToCv(params_.warp_destination_px);
+  image_to_birds_eye_ = cv::getPerspectiveTransform(src, dst);
+  birds_eye_to_image_ = cv::getPerspectiveTransform(dst, src);
+
+  for (int i = 1; i < 256; ++i) {
+    sdiv_[i] = static_cast<int>(std::lrint((255 << kHsvShift) / (1.0 * i)));
+    hdiv_[i] = static_cast<int>(std::lrint((180 << kHsvShift) / (6.0 * i)));
+  }
+
+  // The bilinear weights are OpenCV's own: remap (which warpPerspective calls) reads off, for each
+  // of the 1024 fractional positions and each of the 16 ways the 2×2 neighbours can be 0 or 255,
+  // the 8-bit result of its fixed-point sum. Pattern k sits at columns 3k, 3k + 1 of a 2-row image.
+  {
+    cv::Mat probe(2, 3 * 16, CV_8UC1, cv::Scalar(0));
+    cv::Mat map_xy(16, kAlphaCount, CV_16SC2);
+    cv::Mat map_alpha(16, kAlphaCount, CV_16UC1);
+    for (int k = 0; k < 16; ++k) {
+      for (int bit = 0; bit < 4; ++bit) {
+        if ((k >> bit) & 1) probe.at<std::uint8_t>(bit >> 1, 3 * k + (bit & 1)) = 255;
+      }
+      for (int a = 0; a < kAlphaCount; ++a) {
+        map_xy.at<cv::Vec2s>(k, a) = cv::Vec2s(static_cast<short>(3 * k), 0);
+        map_alpha.at<std::uint16_t>(k, a) = static_cast<std::uint16_t>(a);
+      }
+    }
+    cv::Mat out;
+    cv::remap(probe, out, map_xy, map_alpha, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+    warp_lut_.resize(kAlphaCount * 16);
+    for (int k = 0; k < 16; ++k) {
+      for (int a = 0; a < kAlphaCount; ++a) warp_lut_[a * 16 + k] = out.at<std::uint8_t>(k, a);
+    }
+  }
+
+  // Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts
+  // the matrix with cv::invert, LU) evaluated in doubles in its block order, scaled to 1/32 px and
+  // rounded to nearest even (saturate_cast<int>), then split into the integer pixel (saturated to
+  // short) and the 5+5 fractional bits.
+  cv::Mat inverse;
+  cv::invert(image_to_birds_eye_, inverse);
+  const double* m = inverse.ptr<double>();
+  std::vector<int> sx(W * H), sy(W * H), alpha(W * H);
+  int block_h = std::min(kWarpBlockSize / 2, H);
+  const int block_w = std::min(kWarpBlockSize * kWarpBlockSize / block_h, W);
+  block_h = std::min(kWarpBlockSize * kWarpBlockSize / block_w, H);
+  const auto saturate_short = [](int v) { return std::clamp(v, SHRT_MIN, SHRT_MAX); };
+  for (int y = 0; y < H; y += block_h) {
+    for (int x = 0; x < W; x += block_w) {
+      const int bw = std::min(block_w, W - x);
+      const int bh = std::min(block_h, H - y);
+      for (int y1 = 0; y1 < bh; ++y1) {
+        const double X0 = m[0] * x + m[1] * (y + y1) + m[2];
+        const double Y0 = m[3] * x + m[4] * (y + y1) + m[5];
+        const double W0 = m[6] * x + m[7] * (y + y1) + m[8];
+        for (int x1 = 0; x1 < bw; ++x1) {
+          double w = W0 + m[6] * x1;
+          w = w != 0.0 ? kInterTabSize / w : 0.0;
+          const double fx =
+              std::max(double{INT_MIN}, std::min(double{INT_MAX}, (X0 + m[0] * x1) * w));
+          const double fy =
+              std::max(double{INT_MIN}, std::min(double{INT_MAX}, (Y0 + m[3] * x1) * w));
+          const int X = static_cast<int>(std::lrint(fx));
+          const int Y = static_cast<int>(std::lrint(fy));
+          const int i = (y + y1) * W + x + x1;
+          sx[i] = saturate_short(X >> kInterBits);
+          sy[i] = saturate_short(Y >> kInterBits);
+          alpha[i] = (Y & (kInterTabSize - 1)) * kInterTabSize + (X & (kInterTabSize - 1));
+        }
+      }
+    }
+  }
+
+  // Active pixels (some of the 2×2 source square inside the image; the rest stay 0, the border
+  // value), grouped by output tile, with the source cells each tile reads and the source pixels
+  // each row needs.
+  const int padded_w = W + 2;
+  std::vector<int> need_begin(H, W), need_end(H, 0);
+  for (int ty = 0; ty < H; ty += kTileSize) {
+    for (int tx = 0; tx < W; tx += kTileSize) {
+      Tile tile{static_cast<std::uint32_t>(pixel_dst_.size()), 0, 0, 0, 0, 0};
+      int x_lo = W, x_hi = -1, y_lo = H, y_hi = -1;
+      for (int y = ty; y < std::min(ty + kTileSize, H); ++y) {
+        for (int x = tx; x < std::min(tx + kTileSize, W); ++x) {
+          const int i = y * W + x;
+          if (sx[i] >= W || sx[i] + 1 < 0 || sy[i] >= H || sy[i] + 1 < 0) continue;
+          pixel_dst_.push_back(static_cast<std::uint32_t>(i));
+          pixel_src_.push_back(static_cast<std::uint32_t>((sy[i] + 1) * padded_w + sx[i] + 1));
+          pixel_lut_.push_back(static_cast<std::uint16_t>(alpha[i] * 16));
+          const int c0 = std::max(sx[i], 0), c1 = std::min(sx[i] + 1, W - 1);
+          const int r0 = std::max(sy[i], 0), r1 = std::min(sy[i] + 1, H - 1);
+          x_lo = std::min(x_lo, c0);
+          x_hi = std::max(x_hi, c1);
+          y_lo = std::min(y_lo, r0);
+          y_hi = std::max(y_hi, r1);
+          for (int r = r0; r <= r1; ++r) {
+            need_begin[r] = std::min(need_begin[r], c0);
+            need_end[r] = std::max(need_end[r], c1 + 1);
+          }
+        }
+      }
+      tile.end = static_cast<std::uint32_t>(pixel_dst_.size());
+      if (tile.end == tile.begin) continue;
+      tile.cell_x0 = static_cast<std::uint16_t>(x_lo / kCellSize);
+      tile.cell_x1 = static_cast<std::uint16_t>(x_hi / kCellSize);
+      tile.cell_y0 = static_cast<std::uint16_t>(y_lo / kCellSize);
+      tile.cell_y1 = static_cast<std::uint16_t>(y_hi / kCellSize);
+      tiles_.push_back(tile);
+    }
+  }
+  for (int r = 0; r < H; ++r) {
+    if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
+  }
+  classes_.assign(static_cast<std::size_t>(padded_w) * (H + 2), 0);
+  const int cells_x = (W + kCellSize - 1) / kCellSize;
+  const int cells_y = (H + kCellSize - 1) / kCellSize;
+  cell_any_.assign(static_cast<std::size_t>(cells_x) * cells_y, 0);
+  cell_prefix_.assign(static_cast<std::size_t>(cells_x + 1) * (cells_y + 1), 0);
+}
+
+void LaneDetector::Classify(const cv::Mat& bgr) {
+  constexpr int W = kLaneImageWidth;
+  constexpr int padded_w = W + 2;
+  const int cells_x = (W + kCellSize - 1) / kCellSize;
+  std::fill(cell_any_.begin(), cell_any_.end(), 0);
+  const HsvRange& yellow = thresholds_.yellow;
+  const HsvRange& white = thresholds_.white;
+  // No pixel darker than both ranges' V bounds is a line pixel: most of the floor is black.
+  const int v_min = std::min(yellow.lower_hsv[2], white.lower_hsv[2]);
+  for (const SourceSpan& span : spans_) {
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(span.row);
+    std::uint8_t* out = classes_.data() + (span.row + 1) * padded_w + 1;
+    std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
+    for (int c = span.col_begin; c < span.col_end; ++c) {
+      const int b = p[3 * c];
+      const int g = p[3 * c + 1];
+      const int r = p[3 * c + 2];
+      const int v = std::max({b, g, r});
+      if (v < v_min) {
+        out[c] = 0;
+        continue;
+      }
+      // OpenCV's 8-bit BGR2HSV (see detail::BgrToHsv8), with the tables precomputed.
+      const int diff = v - std::min({b, g, r});
+      const int s = (diff * sdiv_[v] + (1 << (kHsvShift - 1))) >> kHsvShift;
+      int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+      h = (h * hdiv_[diff] + (1 << (kHsvShift - 1))) >> kHsvShift;
+      if (h < 0) h += 180;
+      const std::array<std::uint8_t, 3> hsv{
+          static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(v)};
+      const std::uint8_t cls =
+          static_cast<std::uint8_t>(InRange(yellow, hsv) | (InRange(white, hsv) << 1));
+      out[c] = cls;
+      if (cls != 0) cells[c / kCellSize] = 1;
+    }
+  }
+  // Inclusive prefix counts: cell_prefix_[(y + 1) · (cells_x + 1) + x + 1] = Σ over [0, y] × [0,
+  // x].
+  const int cells_y = static_cast<int>(cell_any_.size()) / cells_x;
+  for (int y = 0; y < cells_y; ++y) {
+    int row_sum = 0;
+    for (int x = 0; x < cells_x; ++x) {
+      row_sum += cell_any_[y * cells_x + x];
+      cell_prefix_[(y + 1) * (cells_x + 1) + x + 1] =
+          cell_prefix_[y * (cells_x + 1) + x + 1] + row_sum;
+    }
+  }
+}
+
+bool LaneDetector::AnyLineCell(const Tile& tile) const {
+  const int stride = (kLaneImageWidth + kCellSize - 1) / kCellSize + 1;
+  const auto at = [&](int y, int x) { return cell_prefix_[y * stride + x]; };
+  return at(tile.cell_y1 + 1, tile.cell_x1 + 1) - at(tile.cell_y0, tile.cell_x1 + 1) -
+             at(tile.cell_y1 + 1, tile.cell_x0) + at(tile.cell_y0, tile.cell_x0) >
+         0;
+}
+
+void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
+  RequireImage(bgr);
+  Classify(bgr);
+  masks->yellow.create(kLaneImageHeight, kLaneImageWidth, CV_8UC1);
+  masks->white.create(kLaneImageHeight, kLaneImageWidth, CV_8UC1);
+  masks->yellow.setTo(0);
+  masks->white.setTo(0);
+  std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
+  std::uint8_t* white = masks->white.ptr<std::uint8_t>();
+  const std::uint8_t* classes = classes_.data();
+  const std::uint8_t* lut = warp_lut_.data();
+  constexpr int stride = kLaneImageWidth + 2;
+  for (const Tile& tile : tiles_) {
+    if (!AnyLineCell(tile)) continue;
+    for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
+      const std::uint8_t* p = classes + pixel_src_[i];
+      const int c0 = p[0], c1 = p[1], c2 = p[stride], c3 = p[stride + 1];
+      if ((c0 | c1 | c2 | c3) == 0) continue;
+      const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
+      const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
+      yellow[pixel_dst_[i]] = lut[pixel_lut_[i] + yellow_bits];
+      white[pixel_dst_[i]] = lut[pixel_lut_[i] + white_bits];
+    }
+  }
+}
+
+LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {
+  LaneDetectionTrace local;
+  LaneDetectionTrace& t = trace != nullptr ? *trace : local;
+  t = LaneDetectionTrace{};
+  t.white_px = -1;
+  LanePoints out;
+
+  // masks and warp
+  ComputeMasks(bgr, &masks_);
+
+  // choose the line: yellow if it has enough pixels, else white, else nothing
+  RowMeans(masks_.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
+  t.line = LaneLine::kYellow;
+  if (t.yellow_px < params_.yellow_min_px) {
+    RowMeans(masks_.white, &rows_, &cols_, &weights_, &t.white_px);
+    t.line = LaneLine::kWhite;
+    if (t.white_px < params_.line_min_px) {
+      t.line = LaneLine::kNone;
+      return out;
+    }
+  }
+
+  // col = f(row) over the line's pixels: per row, its pixels' mean column weighted by their count
+  // (the same least-squares problem as one equation per pixel)
+  t.line_fit = FitRowPolynomial(rows_, cols_, weights_, 2);
+  if (!t.line_fit) return out;
+
+  // samples moved to the lane centre, and the trajectory through them and the anchors
+  std::array<Eigen::Vector2d, LanePoints::kCount> shifted;
+  for (int i = 0; i < LanePoints::kCount; ++i) {
+    shifted[i] = ShiftTowardsLaneCentre(*t.line_fit, i * params_.sample_row_step_px, t.line,
+                                        params_.normal_shift_px);
+  }
+  t.trajectory = FitTrajectory(params_, shifted);
+  if (!t.trajectory) return out;
+
+  // back into the raw image, and down onto the floor
+  const double* h = birds_eye_to_image_.ptr<double>();
+  for (int i = 0; i < LanePoints::kCount; ++i) {
+    const double row = i * params_.sample_row_step_px;
+    const double col = (*t.trajectory)(row);
+    const double w = h[6] * col + h[7] * row + h[8];
+    const double u = (h[0] * col + h[1] * row + h[2]) / w;
+    const double v = (h[3] * col + h[4] * row + h[5]) / w;
+    const std::optional<Eigen::Vector2d> p = FloorPointFromPixel(camera_, u, v);
+    if (!p) return LanePoints{};
+    out.points[i] = {static_cast<float>(p->x()), static_cast<float>(p->y())};
+  }
+  out.valid = 1;
+  return out;
+}
+
+}  // namespace autonomsim::stack
