@@ -1,6 +1,8 @@
 #include "stack/obstacle_grid.h"
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <string>
 
 #include "world/validation.h"
@@ -10,35 +12,45 @@ namespace {
 
 constexpr int kWidth = PointCloud640::kWidth;
 
-// The parameters as the real code holds them: floats, except the cell size (a double literal).
+// A frame's counts before saturation: a counter that saturates at every increment ends at
+// min(n, 255), so the frame counts plainly and saturates once (Finish). The last slot takes the
+// points past the box's far edges, which the real code drops.
+using FrameCounts = std::array<std::uint32_t, Grid234::kCells + 1>;
+constexpr int kDropped = Grid234::kCells;
+
+// The parameters as the real code holds them: floats, except the cell size (a double literal,
+// which the cell edges stand for).
 struct GridConstants {
   std::array<float, 12> m;  // row-major [M | t]
   float x_min, x_max, y_min, y_max, z_min, z_max;
-  double cell;
+  detail::CellEdges x_cells, y_cells;
 };
 
 GridConstants MakeGridConstants(const ObstacleGridParams& p) {
   p.Validate();
-  GridConstants g{};
-  for (int i = 0; i < 12; ++i) g.m[i] = static_cast<float>(p.X_base_camera[i]);
-  g.x_min = static_cast<float>(p.x_min_m);
-  g.x_max = static_cast<float>(p.x_max_m);
-  g.y_min = static_cast<float>(p.y_min_m);
-  g.y_max = static_cast<float>(p.y_max_m);
-  g.z_min = static_cast<float>(p.z_min_m);
-  g.z_max = static_cast<float>(p.z_max_m);
-  g.cell = p.cell_size_m;
-  return g;
+  std::array<float, 12> m;
+  for (int i = 0; i < 12; ++i) m[i] = static_cast<float>(p.X_base_camera[i]);
+  return GridConstants{.m = m,
+                       .x_min = static_cast<float>(p.x_min_m),
+                       .x_max = static_cast<float>(p.x_max_m),
+                       .y_min = static_cast<float>(p.y_min_m),
+                       .y_max = static_cast<float>(p.y_max_m),
+                       .z_min = static_cast<float>(p.z_min_m),
+                       .z_max = static_cast<float>(p.z_max_m),
+                       .x_cells = detail::CellEdges(p.cell_size_m, Grid234::kCellsX),
+                       .y_cells = detail::CellEdges(p.cell_size_m, Grid234::kCellsY)};
 }
 
-// Counts one image row of camera-frame points into the grid. Two passes: the transform and box
-// test, which the compiler vectorizes (fixed trip count, no aliasing, no early exits), then the
-// scatter into the counters for the few points inside the box.
-void CountRow(const GridConstants& g, const float* __restrict x, const float* __restrict y,
-              const float* __restrict z, Grid234* grid) {
+// Counts one image row of camera-frame points. Two passes: the transform and the box test, which
+// the compiler vectorizes (fixed trip count, no aliasing, no early exits), then the cells of the
+// points inside the box, if any.
+AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restrict x,
+                                    const float* __restrict y, const float* __restrict z,
+                                    FrameCounts* counts) {
   alignas(64) float dx[kWidth];
   alignas(64) float dy[kWidth];
-  alignas(64) std::int32_t inside[kWidth];
+  alignas(64) std::uint8_t inside[kWidth];
+  std::uint8_t any_inside = 0;
   const std::array<float, 12>& m = g.m;
   for (int i = 0; i < kWidth; ++i) {
     // the real code's order: M0·x + M1·y + M2·z + t·1, left to right
@@ -48,21 +60,75 @@ void CountRow(const GridConstants& g, const float* __restrict x, const float* __
     // & rather than &&: every comparison is made anyway, and the loop stays branch-free.
     inside[i] = (bx >= g.x_min) & (bx <= g.x_max) & (by >= g.y_min) & (by <= g.y_max) &
                 (bz >= g.z_min) & (bz <= g.z_max);
+    any_inside |= inside[i];
     dx[i] = bx - g.x_min;
     dy[i] = by - g.y_min;
   }
-  for (int i = 0; i < kWidth; ++i) {
-    if (!inside[i]) continue;
-    // both >= 0 here; truncation is floor, as the real code's conversion to uint8_t
-    const int gx = static_cast<int>(static_cast<double>(dx[i]) / g.cell);
-    const int gy = static_cast<int>(static_cast<double>(dy[i]) / g.cell);
-    if (gx >= Grid234::kCellsX || gy >= Grid234::kCellsY) continue;  // the far edges
-    std::uint8_t& count = grid->data[Grid234::Index(gx, gy)];
-    if (count < 255) ++count;
+  if (!any_inside) return;
+  // Neighbouring pixels mostly fall into one cell: while they do, count the run; then add it.
+  int cell = kDropped;
+  std::uint32_t run = 0;
+  float x_lo = 1.0f, x_hi = 0.0f, y_lo = 1.0f, y_hi = 0.0f;  // the run's cell: none yet
+  for (int word = 0; word < kWidth; word += 8) {
+    std::uint64_t bits;
+    std::memcpy(&bits, inside + word, sizeof bits);
+    if (bits == 0) continue;
+    for (int i = word; i < word + 8; ++i) {
+      if (!inside[i]) continue;
+      if (dx[i] >= x_lo && dx[i] < x_hi && dy[i] >= y_lo && dy[i] < y_hi) {
+        ++run;
+        continue;
+      }
+      (*counts)[cell] += run;
+      run = 1;
+      // dx, dy >= 0 here: the real code's uint8_t conversion truncates, i.e. floors
+      const int gx = g.x_cells.Index(dx[i]);
+      const int gy = g.y_cells.Index(dy[i]);
+      if (gx < Grid234::kCellsX && gy < Grid234::kCellsY) {
+        cell = Grid234::Index(gx, gy);
+        x_lo = g.x_cells.edge(gx);
+        x_hi = g.x_cells.edge(gx + 1);
+        y_lo = g.y_cells.edge(gy);
+        y_hi = g.y_cells.edge(gy + 1);
+      } else {
+        cell = kDropped;
+        x_lo = 1.0f, x_hi = 0.0f;
+      }
+    }
   }
+  (*counts)[cell] += run;
+}
+
+Grid234 Finish(const FrameCounts& counts) {
+  Grid234 grid;
+  for (int c = 0; c < Grid234::kCells; ++c) {
+    grid.data[c] = static_cast<std::uint8_t>(counts[c] < 255 ? counts[c] : 255);
+  }
+  return grid;
 }
 
 }  // namespace
+
+namespace detail {
+
+CellEdges::CellEdges(double cell_m, int cells)
+    : cells_(cells), per_cell_(static_cast<float>(1.0 / cell_m)) {
+  Require(cell_m > 0.0 && std::isfinite(cell_m) && cells >= 1 && cells <= kMaxCells,
+          "CellEdges: bad cell size " + Num(cell_m) + " or count " + Num(cells));
+  const auto index_at_least = [cell_m](float d, int k) {
+    return static_cast<double>(d) / cell_m >= k;
+  };
+  edge_[0] = 0.0f;
+  for (int k = 1; k <= cells; ++k) {
+    // start near k·cell, step down below the edge, then up onto it
+    float d = static_cast<float>(k * cell_m);
+    while (index_at_least(d, k)) d = std::nextafter(d, 0.0f);
+    while (!index_at_least(d, k)) d = std::nextafter(d, std::numeric_limits<float>::infinity());
+    edge_[k] = d;
+  }
+}
+
+}  // namespace detail
 
 void ObstacleGridParams::Validate() const {
   for (int i = 0; i < 12; ++i) {
@@ -94,7 +160,7 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
   const GridConstants g = MakeGridConstants(params);
   Require(cloud.points.size() == static_cast<std::size_t>(PointCloud640::kPoints),
           "obstacle grid: the cloud holds " + Num(cloud.points.size()) + " points, not 640x480");
-  Grid234 grid;
+  FrameCounts counts{};
   alignas(64) float x[kWidth], y[kWidth], z[kWidth];
   for (int row = 0; row < PointCloud640::kHeight; ++row) {
     const CloudPoint* in = cloud.points.data() + row * kWidth;
@@ -103,9 +169,9 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
       y[col] = in[col].y_m;
       z[col] = in[col].z_m;
     }
-    CountRow(g, x, y, z, &grid);
+    CountRow(g, x, y, z, &counts);
   }
-  return grid;
+  return Finish(counts);
 }
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
@@ -113,13 +179,13 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
   const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
   const GridConstants g = MakeGridConstants(params);
   detail::CheckDepthImage(depth);
-  Grid234 grid;
+  FrameCounts counts{};
   alignas(64) float x[kWidth], y[kWidth], z[kWidth];
   for (int row = 0; row < PointCloud640::kHeight; ++row) {
     detail::CameraPointsOfRow(k, row, depth.mm.data() + row * kWidth, x, y, z);
-    CountRow(g, x, y, z, &grid);
+    CountRow(g, x, y, z, &counts);
   }
-  return grid;
+  return Finish(counts);
 }
 
 void ObstacleLayerParams::Validate() const {

@@ -7,9 +7,10 @@
 // real code, all in float, in its order: (M00·x + M01·y + M02·z) + t0, the box test inclusive on
 // every side, then
 //   gx = trunc(double(x − x_min) / cell),  gy = trunc(double(y − y_min) / cell)
-// (the difference in float, the division in double, as the real `uint8_t gx = x / 0.05`). So a
-// cell is indexed by its lower edge: cell gx holds x ∈ [x_min + gx·cell, x_min + (gx+1)·cell), up
-// to the rounding of those two operations. A point on the box's far edge (x = 1.2, gx = 18) is in
+// (the difference in float, the division in double, as the real `uint8_t gx = x / 0.05`; we get
+// the same integers without the division, see detail::CellEdges). So a cell is indexed by its
+// lower edge: cell gx holds x ∈ [x_min + gx·cell, x_min + (gx+1)·cell), up to the rounding of
+// those two operations. A point on the box's far edge (x = 1.2, gx = 18) is in
 // the box but past the last cell and is dropped, as the real code's index check drops it (y cannot
 // reach gy = 13 with the default box: 0.325f + 0.325f = 0.65f and 0.65f / 0.05 < 13).
 //
@@ -118,4 +119,33 @@ std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
                                            const ObstacleGridParams& grid_params,
                                            const Grid234& grid, const world::Pose2& X_odom_base);
 
+namespace detail {
+
+// The real code's cell index, trunc(double(d) / cell_m) for a float d >= 0 (at most `cells`: past
+// the last cell), without the double division. The quotient is monotone in d, so it is >= k
+// exactly when d >= edge[k], the least float for which it is; the edges are found once by
+// stepping over neighbouring floats, and an index is a multiply, to guess, and a compare or two
+// against the edges, to correct the guess.
+class CellEdges {
+ public:
+  CellEdges(double cell_m, int cells);
+
+  int Index(float d) const {
+    const float guess = d * per_cell_;
+    int k = guess >= static_cast<float>(cells_) ? cells_ : static_cast<int>(guess);
+    while (k < cells_ && d >= edge_[k + 1]) ++k;
+    while (k > 0 && d < edge_[k]) --k;
+    return k;
+  }
+  // Index(d) == k exactly when edge(k) <= d < edge(k + 1), for k < cells.
+  float edge(int k) const { return edge_[k]; }
+
+ private:
+  static constexpr int kMaxCells = 32;
+  int cells_;
+  float per_cell_;                           // 1 / cell_m, a guess only
+  std::array<float, kMaxCells + 1> edge_{};  // [k]: the least d with an index >= k; [0] = 0
+};
+
+}  // namespace detail
 }  // namespace autonomsim::stack

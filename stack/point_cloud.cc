@@ -39,8 +39,10 @@ void CheckDepthImage(const DepthImageView& depth) {
           "point cloud: the depth buffer holds " + Num(depth.mm.size()) + " pixels, not 640x480");
 }
 
-void CameraPointsOfRow(const CloudConstants& k, int row, const std::uint16_t* __restrict mm,
-                       float* __restrict x_m, float* __restrict y_m, float* __restrict z_m) {
+AUTONOMSIM_ROW_KERNEL void CameraPointsOfRow(const CloudConstants& k, int row,
+                                             const std::uint16_t* __restrict mm,
+                                             float* __restrict x_m, float* __restrict y_m,
+                                             float* __restrict z_m) {
   // Written so that the compiler vectorizes it (a fixed trip count, no aliasing); each lane does
   // exactly the real code's float operations, in its order, so the result is the same bits.
   const float row_f = static_cast<float>(row);

@@ -105,6 +105,26 @@ TEST(ObstacleGridTest, EdgesOfTheBoxLandInTheOuterCellsOrAreDropped) {
   EXPECT_EQ(Total(StepObstacleGrid(params, CloudOf({{1.2f, 0.0f, 0.1f}}))), 0);
 }
 
+// The cell index without a division is the real code's trunc(double(d) / 0.05), for every float
+// within 3000 ulps of each edge and on a sweep across the whole box.
+TEST(ObstacleGridTest, CellEdgesIndexAsTheRealCodesDivision) {
+  for (int cells : {Grid234::kCellsX, Grid234::kCellsY}) {
+    const detail::CellEdges edges(0.05, cells);
+    const auto division = [cells](float d) {
+      const int k = static_cast<int>(static_cast<double>(d) / 0.05);
+      return k < cells ? k : cells;
+    };
+    std::vector<float> samples;
+    for (int k = 0; k <= cells + 1; ++k) {
+      float d = static_cast<float>(k * 0.05);
+      for (int i = 0; i < 3000; ++i) d = std::nextafter(d, 0.0f);
+      for (int i = 0; i < 6000; ++i, d = std::nextafter(d, 1.0f)) samples.push_back(d);
+    }
+    for (int i = 0; i <= 200000; ++i) samples.push_back(0.05f * cells * (i / 200000.0f));
+    for (float d : samples) ASSERT_EQ(edges.Index(d), division(d)) << cells << " cells, d " << d;
+  }
+}
+
 TEST(ObstacleGridTest, CountersSaturateAt255) {
   std::vector<std::array<float, 3>> points;
   for (int i = 0; i < 300; ++i) points.push_back({0.475f, -0.05f, 0.1f});  // cell (3, 5)
