@@ -1,1 +1,219 @@
-// Issue 5: to be written.
+#include "stack/obstacle_grid.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "world/validation.h"
+
+namespace autonomsim::stack {
+namespace {
+
+constexpr int kWidth = PointCloud640::kWidth;
+
+// A frame's counts before saturation: a counter that saturates at every increment ends at
+// min(n, 255), so the frame counts plainly and saturates once (Finish). The last slot takes the
+// points past the box's far edges, which the real code drops.
+using FrameCounts = std::array<std::uint32_t, Grid234::kCells + 1>;
+constexpr int kDropped = Grid234::kCells;
+
+// The parameters as the real code holds them: floats, except the cell size (a double literal,
+// which the cell edges stand for).
+struct GridConstants {
+  std::array<float, 12> m;  // row-major [M | t]
+  float x_min, x_max, y_min, y_max, z_min, z_max;
+  detail::CellEdges x_cells, y_cells;
+};
+
+GridConstants MakeGridConstants(const ObstacleGridParams& p) {
+  p.Validate();
+  std::array<float, 12> m;
+  for (int i = 0; i < 12; ++i) m[i] = static_cast<float>(p.X_base_camera[i]);
+  return GridConstants{.m = m,
+                       .x_min = static_cast<float>(p.x_min_m),
+                       .x_max = static_cast<float>(p.x_max_m),
+                       .y_min = static_cast<float>(p.y_min_m),
+                       .y_max = static_cast<float>(p.y_max_m),
+                       .z_min = static_cast<float>(p.z_min_m),
+                       .z_max = static_cast<float>(p.z_max_m),
+                       .x_cells = detail::CellEdges(p.cell_size_m, Grid234::kCellsX),
+                       .y_cells = detail::CellEdges(p.cell_size_m, Grid234::kCellsY)};
+}
+
+// Counts one image row of camera-frame points. Two passes: the transform and the box test, which
+// the compiler vectorizes (fixed trip count, no aliasing, no early exits), then the cells of the
+// points inside the box, if any.
+AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restrict x,
+                                    const float* __restrict y, const float* __restrict z,
+                                    FrameCounts* counts) {
+  alignas(64) float dx[kWidth];
+  alignas(64) float dy[kWidth];
+  alignas(64) std::uint8_t inside[kWidth];
+  std::uint8_t any_inside = 0;
+  const std::array<float, 12>& m = g.m;
+  for (int i = 0; i < kWidth; ++i) {
+    // the real code's order: M0·x + M1·y + M2·z + t·1, left to right
+    const float bx = m[0] * x[i] + m[1] * y[i] + m[2] * z[i] + m[3];
+    const float by = m[4] * x[i] + m[5] * y[i] + m[6] * z[i] + m[7];
+    const float bz = m[8] * x[i] + m[9] * y[i] + m[10] * z[i] + m[11];
+    // & rather than &&: every comparison is made anyway, and the loop stays branch-free.
+    inside[i] = (bx >= g.x_min) & (bx <= g.x_max) & (by >= g.y_min) & (by <= g.y_max) &
+                (bz >= g.z_min) & (bz <= g.z_max);
+    any_inside |= inside[i];
+    dx[i] = bx - g.x_min;
+    dy[i] = by - g.y_min;
+  }
+  if (!any_inside) return;
+  // Neighbouring pixels mostly fall into one cell: while they do, count the run; then add it.
+  int cell = kDropped;
+  std::uint32_t run = 0;
+  float x_lo = 1.0f, x_hi = 0.0f, y_lo = 1.0f, y_hi = 0.0f;  // the run's cell: none yet
+  for (int word = 0; word < kWidth; word += 8) {
+    std::uint64_t bits;
+    std::memcpy(&bits, inside + word, sizeof bits);
+    if (bits == 0) continue;
+    for (int i = word; i < word + 8; ++i) {
+      if (!inside[i]) continue;
+      if (dx[i] >= x_lo && dx[i] < x_hi && dy[i] >= y_lo && dy[i] < y_hi) {
+        ++run;
+        continue;
+      }
+      (*counts)[cell] += run;
+      run = 1;
+      // dx, dy >= 0 here: the real code's uint8_t conversion truncates, i.e. floors
+      const int gx = g.x_cells.Index(dx[i]);
+      const int gy = g.y_cells.Index(dy[i]);
+      if (gx < Grid234::kCellsX && gy < Grid234::kCellsY) {
+        cell = Grid234::Index(gx, gy);
+        x_lo = g.x_cells.edge(gx);
+        x_hi = g.x_cells.edge(gx + 1);
+        y_lo = g.y_cells.edge(gy);
+        y_hi = g.y_cells.edge(gy + 1);
+      } else {
+        cell = kDropped;
+        x_lo = 1.0f, x_hi = 0.0f;
+      }
+    }
+  }
+  (*counts)[cell] += run;
+}
+
+Grid234 Finish(const FrameCounts& counts) {
+  Grid234 grid;
+  for (int c = 0; c < Grid234::kCells; ++c) {
+    grid.data[c] = static_cast<std::uint8_t>(counts[c] < 255 ? counts[c] : 255);
+  }
+  return grid;
+}
+
+}  // namespace
+
+namespace detail {
+
+CellEdges::CellEdges(double cell_m, int cells)
+    : cells_(cells), per_cell_(static_cast<float>(1.0 / cell_m)) {
+  Require(cell_m > 0.0 && std::isfinite(cell_m) && cells >= 1 && cells <= kMaxCells,
+          "CellEdges: bad cell size " + Num(cell_m) + " or count " + Num(cells));
+  const auto index_at_least = [cell_m](float d, int k) {
+    return static_cast<double>(d) / cell_m >= k;
+  };
+  edge_[0] = 0.0f;
+  for (int k = 1; k <= cells; ++k) {
+    // start near k·cell, step down below the edge, then up onto it
+    float d = static_cast<float>(k * cell_m);
+    while (index_at_least(d, k)) d = std::nextafter(d, 0.0f);
+    while (!index_at_least(d, k)) d = std::nextafter(d, std::numeric_limits<float>::infinity());
+    edge_[k] = d;
+  }
+}
+
+}  // namespace detail
+
+void ObstacleGridParams::Validate() const {
+  for (int i = 0; i < 12; ++i) {
+    Require(std::isfinite(X_base_camera[i]),
+            "X_base_camera: entry " + std::to_string(i) + " is " + Num(X_base_camera[i]));
+  }
+  const auto check_range = [](const char* lo_key, double lo, const char* hi_key, double hi) {
+    Require(std::isfinite(lo) && std::isfinite(hi) && lo < hi,
+            std::string(lo_key) + " must be < " + hi_key + ", got " + Num(lo) + " and " + Num(hi));
+  };
+  check_range("x_min_m", x_min_m, "x_max_m", x_max_m);
+  check_range("y_min_m", y_min_m, "y_max_m", y_max_m);
+  check_range("z_min_m", z_min_m, "z_max_m", z_max_m);
+  Require(std::isfinite(cell_size_m) && cell_size_m > 0.0,
+          "cell_size_m must be > 0, got " + Num(cell_size_m));
+  // Grid234 has a fixed shape; a box of another size would need another message.
+  const auto spans = [this](double lo, double hi, int cells) {
+    return std::abs((hi - lo) / cell_size_m - cells) < 1e-6;
+  };
+  Require(spans(x_min_m, x_max_m, Grid234::kCellsX),
+          "x_max_m - x_min_m must be 18 cells of cell_size_m, got " + Num(x_max_m - x_min_m) +
+              " m for cell_size_m " + Num(cell_size_m));
+  Require(spans(y_min_m, y_max_m, Grid234::kCellsY),
+          "y_max_m - y_min_m must be 13 cells of cell_size_m, got " + Num(y_max_m - y_min_m) +
+              " m for cell_size_m " + Num(cell_size_m));
+}
+
+Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& cloud) {
+  const GridConstants g = MakeGridConstants(params);
+  Require(cloud.points.size() == static_cast<std::size_t>(PointCloud640::kPoints),
+          "obstacle grid: the cloud holds " + Num(cloud.points.size()) + " points, not 640x480");
+  FrameCounts counts{};
+  alignas(64) float x[kWidth], y[kWidth], z[kWidth];
+  for (int row = 0; row < PointCloud640::kHeight; ++row) {
+    const CloudPoint* in = cloud.points.data() + row * kWidth;
+    for (int col = 0; col < kWidth; ++col) {
+      x[col] = in[col].x_m;
+      y[col] = in[col].y_m;
+      z[col] = in[col].z_m;
+    }
+    CountRow(g, x, y, z, &counts);
+  }
+  return Finish(counts);
+}
+
+Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
+                        const DepthImageView& depth, const std::array<double, 12>& P) {
+  const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
+  const GridConstants g = MakeGridConstants(params);
+  detail::CheckDepthImage(depth);
+  FrameCounts counts{};
+  alignas(64) float x[kWidth], y[kWidth], z[kWidth];
+  for (int row = 0; row < PointCloud640::kHeight; ++row) {
+    detail::CameraPointsOfRow(k, row, depth.mm.data() + row * kWidth, x, y, z);
+    CountRow(g, x, y, z, &counts);
+  }
+  return Finish(counts);
+}
+
+void ObstacleLayerParams::Validate() const {
+  Require(lethal_above_count >= 0 && lethal_above_count <= 254,
+          "lethal_above_count must be in [0, 254], got " + Num(lethal_above_count));
+}
+
+std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
+                                           const ObstacleGridParams& grid_params,
+                                           const Grid234& grid, const world::Pose2& X_odom_base) {
+  layer.Validate();
+  grid_params.Validate();
+  const double offset_m = layer.mark_at_cell_centre ? 0.5 * grid_params.cell_size_m : 0.0;
+  const double c = std::cos(X_odom_base.yaw_rad);
+  const double s = std::sin(X_odom_base.yaw_rad);
+  std::vector<CostmapMark> marks;
+  marks.reserve(Grid234::kCells);
+  for (int gx = 0; gx < Grid234::kCellsX; ++gx) {
+    for (int gy = 0; gy < Grid234::kCellsY; ++gy) {
+      // the real layer's point: gx * 0.05 + 0.3, gy * 0.05 - 0.325 (base_link)
+      const double x_base = gx * grid_params.cell_size_m + grid_params.x_min_m + offset_m;
+      const double y_base = gy * grid_params.cell_size_m + grid_params.y_min_m + offset_m;
+      const world::Vec2 p_odom(X_odom_base.x_m + c * x_base - s * y_base,
+                               X_odom_base.y_m + s * x_base + c * y_base);
+      marks.push_back(CostmapMark{p_odom, grid.count(gx, gy) > layer.lethal_above_count});
+    }
+  }
+  return marks;
+}
+
+}  // namespace autonomsim::stack

@@ -1,0 +1,151 @@
+// Obstacle detection (reference §4; paper §IV-C, code/reconros_ws/carcontrol/src/rt_obstacle) and
+// its costmap layer (code/ros_ws/src/obstacle_layer).
+//
+// Grid: every cloud point is moved from the camera's forward/left/up frame to base_link by the
+// fixed 3×4 transform, p_base = M · p_cam + t; points inside the obstacle box are counted in an
+// 18 × 13 grid of 0.05 m cells on the ground plane, uint8 counters saturating at 255. As in the
+// real code, all in float, in its order: (M00·x + M01·y + M02·z) + t0, the box test inclusive on
+// every side, then
+//   gx = trunc(double(x − x_min) / cell),  gy = trunc(double(y − y_min) / cell)
+// (the difference in float, the division in double, as the real `uint8_t gx = x / 0.05`; we get
+// the same integers without the division, see detail::CellEdges). So a cell is indexed by its
+// lower edge: cell gx holds x ∈ [x_min + gx·cell, x_min + (gx+1)·cell), up to the rounding of
+// those two operations. A point on the box's far edge (x = 1.2, gx = 18) is in
+// the box but past the last cell and is dropped, as the real code's index check drops it (y cannot
+// reach gy = 13 with the default box: 0.325f + 0.325f = 0.65f and 0.65f / 0.05 < 13).
+//
+// Layer: reference §4 writes each cell at "its centre (gx·0.05 + 0.3, gy·0.05 − 0.325)", but with
+// the lower-edge indexing above that point is the cell's lower corner (least x, least y), half a
+// cell (0.025 m) behind and to the right of its centre. The real layer marks that corner; so do we
+// by default (mark_at_cell_centre = false).
+//
+// Fused path: the hardware runs point cloud and grid in one slot (reference §4) and never writes
+// the cloud. StepDepthToGrid does the same and gives bit for bit the grid of StepPointCloud then
+// StepObstacleGrid (it calls the same row kernels); PointCloud640::kModeledBytes still says what an
+// unfused mapping moves.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "stack/point_cloud.h"
+#include "world/geometry.h"
+
+namespace autonomsim::stack {
+
+// The fixed-size Iceoryx message: 234 counters and 6 bytes of padding (reference §4: the real
+// code's uint8_t grid[13 * 18 + 6], written out as 30 64-bit words).
+struct Grid234 {
+  static constexpr int kCellsX = 18;  // forward
+  static constexpr int kCellsY = 13;  // lateral, from right (y_min) to left
+  static constexpr int kCells = kCellsX * kCellsY;
+  static constexpr std::size_t kModeledBytes = 240;  // reference §4, §8
+
+  static constexpr int Index(int gx, int gy) { return gx * kCellsY + gy; }  // reference §4
+  std::uint8_t count(int gx, int gy) const { return data[Index(gx, gy)]; }
+
+  std::array<std::uint8_t, kModeledBytes> data{};  // [Index(gx, gy)]; bytes 234..239 stay 0
+
+  friend bool operator==(const Grid234&, const Grid234&) = default;
+};
+static_assert(sizeof(Grid234) == Grid234::kModeledBytes);
+
+struct ObstacleGridParams {
+  // reference §2/§4: the obstacle code's camera→base matrix, row-major [M | t] (its 4×4 without
+  // the last row); the real code holds it as floats. M is a rotation about y by ≈0.1501 rad
+  // written to five digits, t = (−0.155, 0, 0.264) m.
+  std::array<double, 12> X_base_camera{0.98875,  0.0, 0.14955, -0.155,  //
+                                       0.0,      1.0, 0.0,     0.0,     //
+                                       -0.14955, 0.0, 0.98875, 0.264};
+  // reference §4: the obstacle box in base_link, metres, bounds inclusive.
+  double x_min_m{0.3};
+  double x_max_m{1.2};
+  double y_min_m{-0.325};
+  double y_max_m{0.325};
+  double z_min_m{0.02};
+  double z_max_m{0.5};
+  double cell_size_m{0.05};  // reference §4
+
+  template <class V>
+  void Describe(V& v) {
+    v("X_base_camera", X_base_camera);
+    v("x_min_m", x_min_m);
+    v("x_max_m", x_max_m);
+    v("y_min_m", y_min_m);
+    v("y_max_m", y_max_m);
+    v("z_min_m", z_min_m);
+    v("z_max_m", z_max_m);
+    v("cell_size_m", cell_size_m);
+  }
+  // Finite values, min < max, cell_size_m > 0, and the box's x and y extents are 18 and 13 cells
+  // (Grid234's fixed shape).
+  void Validate() const;
+};
+
+// The grid of a cloud. Throws std::invalid_argument if the cloud does not hold 640×480 points.
+Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& cloud);
+
+// The fused path: the grid of a depth image, equal bit for bit to StepObstacleGrid of
+// StepPointCloud of the same inputs, without writing the 4.9 MB cloud.
+Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
+                        const DepthImageView& depth, const std::array<double, 12>& P);
+
+struct ObstacleLayerParams {
+  // reference §4: a cell is an obstacle when its count is above 250.
+  int lethal_above_count{250};
+  // reference §4: the real layer marks the cell's lower corner (see the top of this file);
+  // true marks the centre instead.
+  bool mark_at_cell_centre{false};
+
+  template <class V>
+  void Describe(V& v) {
+    v("lethal_above_count", lethal_above_count);
+    v("mark_at_cell_centre", mark_at_cell_centre);
+  }
+  void Validate() const;  // lethal_above_count in [0, 254]: 255 would make no cell lethal
+};
+
+// One cell of the grid as the costmap sees it: LETHAL or FREE at a point of the odom frame.
+struct CostmapMark {
+  world::Vec2 p_odom{world::Vec2::Zero()};
+  bool lethal{false};
+};
+
+// The costmap layer's step (reference §4): all 234 cells, in Index order, each at its point in
+// base_link moved into odom by X_odom_base (the odom→base_link transform when the grid arrived).
+std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
+                                           const ObstacleGridParams& grid_params,
+                                           const Grid234& grid, const world::Pose2& X_odom_base);
+
+namespace detail {
+
+// The real code's cell index, trunc(double(d) / cell_m) for a float d >= 0 (at most `cells`: past
+// the last cell), without the double division. The quotient is monotone in d, so it is >= k
+// exactly when d >= edge[k], the least float for which it is; the edges are found once by
+// stepping over neighbouring floats, and an index is a multiply, to guess, and a compare or two
+// against the edges, to correct the guess.
+class CellEdges {
+ public:
+  CellEdges(double cell_m, int cells);
+
+  int Index(float d) const {
+    const float guess = d * per_cell_;
+    int k = guess >= static_cast<float>(cells_) ? cells_ : static_cast<int>(guess);
+    while (k < cells_ && d >= edge_[k + 1]) ++k;
+    while (k > 0 && d < edge_[k]) --k;
+    return k;
+  }
+  // Index(d) == k exactly when edge(k) <= d < edge(k + 1), for k < cells.
+  float edge(int k) const { return edge_[k]; }
+
+ private:
+  static constexpr int kMaxCells = 32;
+  int cells_;
+  float per_cell_;                           // 1 / cell_m, a guess only
+  std::array<float, kMaxCells + 1> edge_{};  // [k]: the least d with an index >= k; [0] = 0
+};
+
+}  // namespace detail
+}  // namespace autonomsim::stack
