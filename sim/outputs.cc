@@ -152,6 +152,16 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
          {"max_wait_s", c.max_wait_s},
          {"min_obstacle_gap_m",
           c.min_obstacle_gap_m ? nlohmann::json(*c.min_obstacle_gap_m) : nlohmann::json()}});
+    if (c.perception) {
+      const PerceptionMetrics& p = *c.perception;
+      cars.back()["perception"] = {{"lane_frames", p.lane_frames},
+                                   {"lane_valid_frames", p.lane_valid_frames},
+                                   {"lane_error_samples", p.lane_error_samples},
+                                   {"lane_error_max_m", p.lane_error_max_m},
+                                   {"lane_error_rms_m", p.lane_error_rms_m},
+                                   {"grid_frames", p.grid_frames},
+                                   {"grid_obstacle_frames", p.grid_obstacle_frames}};
+    }
   }
   summary["cars"] = cars;
   summary["server"] = {{"requests", record.server.requests},

@@ -42,6 +42,19 @@ struct TrajectorySample {
   double route_progress_m{0.0};
 };
 
+// What a car's perception saw, against ground truth (cars with perception only).
+struct PerceptionMetrics {
+  std::uint64_t lane_frames{0};        // lane detection results
+  std::uint64_t lane_valid_frames{0};  // of them, valid
+  // The detected lane centre 0.5 m ahead against the route's lane centre: its distance from it,
+  // over the valid results that reach 0.5 m.
+  std::uint64_t lane_error_samples{0};
+  double lane_error_max_m{0.0};
+  double lane_error_rms_m{0.0};
+  std::uint64_t grid_frames{0};           // obstacle grids
+  std::uint64_t grid_obstacle_frames{0};  // of them, with a cell the costmap layer marks lethal
+};
+
 struct CarMetrics {
   int id{0};
   std::string route;
@@ -60,6 +73,7 @@ struct CarMetrics {
   // Ground truth: the least free distance between the car's footprint and a present obstacle,
   // over the run (only obstacles within kObstacleGapHorizon_m count; nullopt if none came near).
   std::optional<double> min_obstacle_gap_m;
+  std::optional<PerceptionMetrics> perception;
 };
 
 inline constexpr double kObstacleGapHorizon_m = 2.0;

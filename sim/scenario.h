@@ -11,6 +11,7 @@
 #include "sim/config.h"
 #include "sim/mqtt_link_config.h"
 #include "sim/oracle_driver.h"
+#include "sim/perception_nodes.h"
 #include "sim/platform_profile.h"
 #include "sim/sensors.h"
 #include "stack/intersection_client.h"
@@ -34,15 +35,15 @@ struct CarConfig {
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
   SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/sensors.h)
-  // Run the perception nodes (point cloud, obstacle detection, lane detection) on the car's
-  // board, on its camera frames, with their timing from the platform model.
-  bool perception{false};
+  // The perception nodes (point cloud, obstacle detection, lane detection), run on the car's
+  // board on its camera frames when enabled (sim/perception_nodes.h).
+  PerceptionConfig perception;
   // The car's compute board: profile, per-node mapping (sw/hw), per-topic transport
   // (sim/platform_profile.h). Used when the car has nodes to run (perception).
   PlatformConfig platform;
 
   // Whether the car runs anything on a modeled board.
-  bool has_board() const { return perception; }
+  bool has_board() const { return perception.enabled; }
 
   template <class V>
   void Describe(V& v) {

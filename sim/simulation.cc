@@ -1,6 +1,7 @@
 #include "sim/simulation.h"
 
 #include <cmath>
+#include <deque>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -9,6 +10,7 @@
 #include "sim/mqtt_endpoint.h"
 #include "sim/node_graph.h"
 #include "sim/oracle_driver.h"
+#include "sim/perception_nodes.h"
 #include "sim/priorities.h"
 #include "sim/random.h"
 #include "sim/sensors.h"
@@ -26,6 +28,17 @@ namespace {
 constexpr double kArrivalMargin_m = 0.2;
 // How far a car may move along its route between two physics steps, for the local projection.
 constexpr double kTrackingWindow_m = 0.5;
+// Lane detection is judged where its lane centre is this far ahead of the chassis centre (the
+// lane tests' distance, issue 5).
+constexpr double kLaneJudgeAhead_m = 0.5;
+// ... and only where the route is straight (|κ| below this, checked every kLaneJudgeStep_m) from
+// kLaneJudgeSettled_m behind the car to kLaneJudgeStraight_m ahead.
+constexpr double kLaneJudgeSettled_m = 0.5;
+constexpr double kLaneJudgeStraight_m = 0.9;  // the bird's-eye view ends ≈ 0.9 m ahead (§5)
+constexpr double kLaneJudgeStep_m = 0.05;
+constexpr double kStraightCurvature_per_m = 1e-3;
+// Camera frames remembered per car for judging the perception's results (≈ 2 s at 30 fps).
+constexpr std::size_t kRecentFrames = 64;
 // The oracle looks this far ahead along its route for obstacles.
 constexpr double kObstacleHorizon_m = 2.0;
 
@@ -49,6 +62,8 @@ struct CarAgent {
   bool parked{false};   // done: laps driven or route ended
   std::vector<ObstacleOnRoute> obstacles_on_lane;
   std::optional<Time> wait_started;
+  // the colour camera's recent frames (stamp, pose), to judge lane detection against ground truth
+  std::deque<std::pair<Time, world::Pose2>> color_frames;
   // ground-truth tracking of the chassis centre along the route
   double route_s_m{0.0};
   double progress_m{0.0};
@@ -93,8 +108,10 @@ struct Simulation::Impl {
   void StepClient(CarAgent* agent);
   void Sample();
   void ReceiveAtCar(int car_id, const world::V2IMessage& message);
-  std::unique_ptr<Board> MakeBoard(const CarConfig& config, const PlatformProfile& profile,
+  std::unique_ptr<Board> MakeBoard(CarAgent* agent, const PlatformProfile& profile,
                                    SensorSuite* suite);
+  void JudgeLanes(CarAgent* agent, const stack::LanePoints& lanes, Time stamp);
+  void JudgeGrid(CarAgent* agent, const stack::Grid234& grid);
   void Finish();
 
   const LoadedScenario& loaded;
@@ -113,6 +130,7 @@ struct Simulation::Impl {
   std::vector<std::unique_ptr<SensorSuite>> sensors;
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
+  std::map<int, double> lane_error_sq_sum;  // car id -> sum of squared lane errors
   RunRecord record;
 };
 
@@ -157,7 +175,7 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
     sensors.push_back(std::make_unique<SensorSuite>(
         &kernel, sensor_world.get(), config.id, config.sensors, streams, physics.step(), options));
     boards.push_back(config.has_board()
-                         ? MakeBoard(config, *loaded.profiles[i], sensors.back().get())
+                         ? MakeBoard(&agents[i], *loaded.profiles[i], sensors.back().get())
                          : nullptr);
   }
 
@@ -224,9 +242,9 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
       kZeroTime, physics.step(), [this] { StepPhysics(); }, kPriorityPhysics);
 }
 
-std::unique_ptr<Board> Simulation::Impl::MakeBoard(const CarConfig& config,
-                                                   const PlatformProfile& profile,
+std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const PlatformProfile& profile,
                                                    SensorSuite* suite) {
+  const CarConfig& config = *agent->config;
   const std::string name = "car" + std::to_string(config.id);
   auto board = std::make_unique<Board>(kernel, name, config.platform, profile, &streams);
   NodeGraph& graph = board->graph();
@@ -242,12 +260,82 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(const CarConfig& config,
   const TopicId<CameraFrame> depth_image = camera_topic(depth);
   AddSourceNode(
       graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
-      image, color.first, color.period, [suite](Time) { return suite->CaptureColorFrame(); });
+      image, color.first, color.period, [suite, agent](Time) {
+        CameraFrame frame = suite->CaptureColorFrame();
+        agent->color_frames.emplace_back(frame.stamp, frame.X_map_car);
+        if (agent->color_frames.size() > kRecentFrames) agent->color_frames.pop_front();
+        return frame;
+      });
   AddSourceNode(
       graph, NodeSpec{.name = suite->depth_camera().params().camera.name, .mapping = camera_cost},
       depth_image, depth.first, depth.period, [suite](Time) { return suite->CaptureDepthFrame(); });
+
+  if (config.perception.enabled) {
+    agent->metrics.perception.emplace();
+    PerceptionHooks hooks{
+        .on_grid = [this, agent](const stack::Grid234& grid, Time) { JudgeGrid(agent, grid); },
+        .on_lanes = [this, agent](const stack::LanePoints& lanes,
+                                  Time stamp) { JudgeLanes(agent, lanes, stamp); }};
+    AddPerceptionNodes(graph, config.perception, config.platform.mapping, *suite, image,
+                       depth_image, std::move(hooks));
+  }
   board->Finish(kZeroTime);
   return board;
+}
+
+void Simulation::Impl::JudgeGrid(CarAgent* agent, const stack::Grid234& grid) {
+  PerceptionMetrics& m = *agent->metrics.perception;
+  ++m.grid_frames;
+  const int lethal_above = stack::ObstacleLayerParams{}.lethal_above_count;
+  for (int i = 0; i < stack::Grid234::kCells; ++i) {
+    if (grid.data[static_cast<std::size_t>(i)] > lethal_above) {
+      ++m.grid_obstacle_frames;
+      break;
+    }
+  }
+}
+
+void Simulation::Impl::JudgeLanes(CarAgent* agent, const stack::LanePoints& lanes, Time stamp) {
+  PerceptionMetrics& m = *agent->metrics.perception;
+  ++m.lane_frames;
+  if (lanes.valid == 0) return;
+  ++m.lane_valid_frames;
+  // the car's pose when the frame was taken
+  const auto frame = std::find_if(agent->color_frames.rbegin(), agent->color_frames.rend(),
+                                  [stamp](const auto& f) { return f.first == stamp; });
+  if (frame == agent->color_frames.rend()) return;
+  const world::Pose2& X_map_car = frame->second;
+  // Judged where the real car steers by it (reference §6: outside the intersection areas and stop
+  // boxes, where FollowPath takes over) and where the route is the painted lane's centre: on a
+  // straight from behind the car (so that the car has settled on it) to beyond the judged point.
+  // In corners the route's 0.9 m arcs are not the painted centre (the car cannot turn tighter).
+  if (loaded.track.IntersectionAt(X_map_car.position()) != nullptr ||
+      loaded.track.StopZoneAt(X_map_car.position())) {
+    return;
+  }
+  const world::Polyline& path = agent->route->path;
+  const double s_car = path.Project(X_map_car.position()).s_m;
+  for (double ds = -kLaneJudgeSettled_m; ds <= kLaneJudgeStraight_m; ds += kLaneJudgeStep_m) {
+    if (std::abs(path.CurvatureAt(path.NormalizeS(s_car + ds))) > kStraightCurvature_per_m) return;
+  }
+  // the detected lane centre where it is kLaneJudgeAhead_m ahead (the points run far to near)
+  for (std::size_t i = 0; i + 1 < lanes.points.size(); ++i) {
+    const stack::LanePoint& far = lanes.points[i];
+    const stack::LanePoint& near = lanes.points[i + 1];
+    if (!(far.x_m >= kLaneJudgeAhead_m && near.x_m <= kLaneJudgeAhead_m) || far.x_m == near.x_m) {
+      continue;
+    }
+    const double w = (kLaneJudgeAhead_m - near.x_m) / (far.x_m - near.x_m);
+    const double y_car = near.y_m + w * (far.y_m - near.y_m);
+    const world::Vec2 left(-std::sin(X_map_car.yaw_rad), std::cos(X_map_car.yaw_rad));
+    const world::Vec2 p_map =
+        X_map_car.position() + kLaneJudgeAhead_m * X_map_car.heading() + y_car * left;
+    const double error = std::abs(path.Project(p_map).lateral_m);
+    m.lane_error_max_m = std::max(m.lane_error_max_m, error);
+    lane_error_sq_sum[agent->config->id] += error * error;
+    ++m.lane_error_samples;
+    return;
+  }
 }
 
 void Simulation::Impl::StepClient(CarAgent* agent) {
@@ -443,6 +531,11 @@ void Simulation::Impl::Finish() {
           std::sqrt(agent.lateral_sq_sum / static_cast<double>(agent.lateral_samples));
     }
     agent.metrics.mean_speed_mps = agent.metrics.distance_m / ToSeconds(end);
+    if (agent.metrics.perception && agent.metrics.perception->lane_error_samples > 0) {
+      PerceptionMetrics& m = *agent.metrics.perception;
+      m.lane_error_rms_m = std::sqrt(lane_error_sq_sum[agent.config->id] /
+                                     static_cast<double>(m.lane_error_samples));
+    }
     record.cars.push_back(agent.metrics);
   }
   const world::TrafficLightServer::Counters c = server.counters();

@@ -536,20 +536,22 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
 }
 
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {
+  ComputeMasks(bgr, &masks_);
+  return Fit(masks_, trace);
+}
+
+LanePoints LaneDetector::Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace) {
   LaneDetectionTrace local;
   LaneDetectionTrace& t = trace != nullptr ? *trace : local;
   t = LaneDetectionTrace{};
   t.white_px = -1;
   LanePoints out;
 
-  // masks and warp
-  ComputeMasks(bgr, &masks_);
-
   // choose the line: yellow if it has enough pixels, else white, else nothing
-  RowMeans(masks_.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
+  RowMeans(masks.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
   t.line = LaneLine::kYellow;
   if (t.yellow_px < params_.yellow_min_px) {
-    RowMeans(masks_.white, &rows_, &cols_, &weights_, &t.white_px);
+    RowMeans(masks.white, &rows_, &cols_, &weights_, &t.white_px);
     t.line = LaneLine::kWhite;
     if (t.white_px < params_.line_min_px) {
       t.line = LaneLine::kNone;

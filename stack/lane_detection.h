@@ -221,6 +221,9 @@ class LaneDetector {
 
   // The fast mask+warp stage alone: bit-identical to LaneMasksReference.
   void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
+  // The rest, from the bird's-eye masks: Step is ComputeMasks then Fit. The real hardware runs the
+  // two in separate slots (reference §8: lane planner, polynomial fit).
+  LanePoints Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace = nullptr);
 
  private:
   struct Tile {

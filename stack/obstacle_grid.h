@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "stack/costmap.h"
 #include "stack/point_cloud.h"
 #include "world/geometry.h"
 
@@ -107,14 +108,9 @@ struct ObstacleLayerParams {
   void Validate() const;  // lethal_above_count in [0, 254]: 255 would make no cell lethal
 };
 
-// One cell of the grid as the costmap sees it: LETHAL or FREE at a point of the odom frame.
-struct CostmapMark {
-  world::Vec2 p_odom{world::Vec2::Zero()};
-  bool lethal{false};
-};
-
-// The costmap layer's step (reference §4): all 234 cells, in Index order, each at its point in
-// base_link moved into odom by X_odom_base (the odom→base_link transform when the grid arrived).
+// The costmap layer's step (reference §4): all 234 cells as costmap marks (stack/costmap.h), in
+// Index order, each LETHAL or FREE at its point in base_link moved into odom by X_odom_base (the
+// odom→base_link transform when the grid arrived); `p` of a mark is in the odom frame.
 std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
                                            const ObstacleGridParams& grid_params,
                                            const Grid234& grid, const world::Pose2& X_odom_base);

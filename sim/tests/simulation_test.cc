@@ -127,7 +127,7 @@ namespace {
 
 TEST(SimulationBoardTest, OnlyACarWithNodesToRunGetsABoardAndItsCamerasPublishAtTheirRate) {
   const LoadedScenario scenario =
-      LoadScenario(kDefault, {"cars[1].perception=true", "duration_s=6"});
+      LoadScenario(kDefault, {"cars[1].perception.enabled=true", "duration_s=6"});
   ASSERT_FALSE(scenario.profiles[0].has_value());
   ASSERT_TRUE(scenario.profiles[1].has_value());
   EXPECT_EQ(scenario.profiles[1]->name, "zcu104");
@@ -145,7 +145,7 @@ TEST(SimulationBoardTest, OnlyACarWithNodesToRunGetsABoardAndItsCamerasPublishAt
 
 TEST(SimulationBoardTest, ABoardsProfileThatCannotBeLoadedIsAnErrorAtTheCarsKey) {
   try {
-    LoadScenario(kDefault, {"cars[0].perception=true", "cars[0].platform.profile=nope.yaml"});
+    LoadScenario(kDefault, {"cars[0].perception.enabled=true", "cars[0].platform.profile=nope.yaml"});
     FAIL() << "no error";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("cars[0].platform.profile"));

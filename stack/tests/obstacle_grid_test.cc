@@ -203,7 +203,7 @@ TEST(ObstacleGridLayerTest, MarksAreTheCellsLowerCornersInOdom) {
       StepObstacleLayer(ObstacleLayerParams{}, ObstacleGridParams{}, grid, world::Pose2{});
   for (int gx = 0; gx < 18; ++gx) {
     for (int gy = 0; gy < 13; ++gy) {
-      const world::Vec2& p = base[Grid234::Index(gx, gy)].p_odom;
+      const world::Vec2& p = base[Grid234::Index(gx, gy)].p;
       EXPECT_EQ(p.x(), gx * 0.05 + 0.3);
       EXPECT_EQ(p.y(), gy * 0.05 - 0.325);
       EXPECT_FALSE(base[Grid234::Index(gx, gy)].lethal);
@@ -213,15 +213,15 @@ TEST(ObstacleGridLayerTest, MarksAreTheCellsLowerCornersInOdom) {
   const world::Pose2 X_odom_base{1.0, 2.0, std::numbers::pi / 2};
   const std::vector<CostmapMark> odom =
       StepObstacleLayer(ObstacleLayerParams{}, ObstacleGridParams{}, grid, X_odom_base);
-  EXPECT_NEAR(odom[Grid234::Index(0, 0)].p_odom.x(), 1.325, 1e-12);
-  EXPECT_NEAR(odom[Grid234::Index(0, 0)].p_odom.y(), 2.3, 1e-12);
-  EXPECT_NEAR(odom[Grid234::Index(17, 12)].p_odom.x(), 1.0 - 0.275, 1e-12);
-  EXPECT_NEAR(odom[Grid234::Index(17, 12)].p_odom.y(), 2.0 + 1.15, 1e-12);
+  EXPECT_NEAR(odom[Grid234::Index(0, 0)].p.x(), 1.325, 1e-12);
+  EXPECT_NEAR(odom[Grid234::Index(0, 0)].p.y(), 2.3, 1e-12);
+  EXPECT_NEAR(odom[Grid234::Index(17, 12)].p.x(), 1.0 - 0.275, 1e-12);
+  EXPECT_NEAR(odom[Grid234::Index(17, 12)].p.y(), 2.0 + 1.15, 1e-12);
   // the option: the cells' centres, half a cell further
   const std::vector<CostmapMark> centres = StepObstacleLayer(
       ObstacleLayerParams{.mark_at_cell_centre = true}, ObstacleGridParams{}, grid, X_odom_base);
-  EXPECT_NEAR(centres[Grid234::Index(0, 0)].p_odom.x(), 1.3, 1e-12);
-  EXPECT_NEAR(centres[Grid234::Index(0, 0)].p_odom.y(), 2.325, 1e-12);
+  EXPECT_NEAR(centres[Grid234::Index(0, 0)].p.x(), 1.3, 1e-12);
+  EXPECT_NEAR(centres[Grid234::Index(0, 0)].p.y(), 2.325, 1e-12);
 }
 
 // --- on rendered frames of the lab track ---
