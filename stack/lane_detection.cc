@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "world/plumb_bob.h"
 #include "world/validation.h"
 
 namespace autonomsim::stack {
@@ -30,8 +31,6 @@ constexpr int kHsvShift = 12;
 constexpr int kTileSize = 16;
 constexpr int kCellSize = 8;
 // Newton's method for the inverse of the lens distortion (as the vehicle's camera model does).
-constexpr int kUndistortIterations = 50;
-constexpr double kUndistortTolerance = 1e-13;
 
 using Point = std::array<double, 2>;
 
@@ -260,45 +259,14 @@ std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
 std::optional<Eigen::Vector2d> FloorPointFromPixel(const LaneCameraCalibration& camera, double u,
                                                    double v) {
   const auto& K = camera.K;
-  const double k1 = camera.D[0];
-  const double k2 = camera.D[1];
-  const double p1 = camera.D[2];
-  const double p2 = camera.D[3];
-  const double k3 = camera.D[4];
   const double yd = (v - K[5]) / K[4];
   const Eigen::Vector2d target((u - K[2] - K[1] * yd) / K[0], yd);
-  // plumb_bob, from undistorted to distorted normalized coordinates
-  const auto distort = [&](const Eigen::Vector2d& p) {
-    const double r2 = p.squaredNorm();
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    return Eigen::Vector2d(
-        p.x() * radial + 2.0 * p1 * p.x() * p.y() + p2 * (r2 + 2.0 * p.x() * p.x()),
-        p.y() * radial + p1 * (r2 + 2.0 * p.y() * p.y()) + 2.0 * p2 * p.x() * p.y());
-  };
-  Eigen::Vector2d x = target;
-  bool converged = false;
-  for (int i = 0; i < kUndistortIterations && !converged; ++i) {
-    const Eigen::Vector2d residual = distort(x) - target;
-    if (residual.norm() < kUndistortTolerance) {
-      converged = true;
-      break;
-    }
-    const double r2 = x.squaredNorm();
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double g = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r²)
-    Eigen::Matrix2d J;
-    J(0, 0) = radial + 2.0 * g * x.x() * x.x() + 2.0 * p1 * x.y() + 6.0 * p2 * x.x();
-    J(0, 1) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
-    J(1, 0) = J(0, 1);
-    J(1, 1) = radial + 2.0 * g * x.y() * x.y() + 6.0 * p1 * x.y() + 2.0 * p2 * x.x();
-    if (!(J.determinant() > 0.0)) return std::nullopt;  // beyond a fold of the model
-    x -= J.inverse() * residual;
-    if (!x.allFinite()) return std::nullopt;
-  }
-  if (!converged) return std::nullopt;
+  const std::optional<Eigen::Vector2d> undistorted = world::Undistort(camera.D, target);
   // The radial model must still grow with the radius there, or it no longer describes the lens.
-  const double r2 = x.squaredNorm();
-  if (!(1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3)) > 0.0)) return std::nullopt;
+  if (!undistorted || !world::RadialGrowsAt(camera.D, undistorted->squaredNorm())) {
+    return std::nullopt;
+  }
+  const Eigen::Vector2d& x = *undistorted;
 
   const Eigen::Vector3d direction =
       camera.X_base_camera.linear() * Eigen::Vector3d(x.x(), x.y(), 1);

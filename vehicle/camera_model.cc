@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/plumb_bob.h"
 #include "world/validation.h"
 
 namespace autonomsim::vehicle {
@@ -14,8 +15,6 @@ namespace {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // Newton's method for the inverse of the distortion: iterations, and the residual (normalized
 // image units, ≈1e-10 px) at which it stops.
-constexpr int kUndistortIterations = 50;
-constexpr double kUndistortTolerance = 1e-13;
 // How far out (normalized radius) the radial model is searched for its monotone range, and in how
 // many steps; a lens never sees beyond r = 10 (84°).
 constexpr double kMaxSearchRadius = 10.0;
@@ -190,53 +189,15 @@ Eigen::Isometry3d CameraModel::X_map_camera(const world::Pose2& X_map_car) const
   return Lift(X_map_car) * X_base_camera_;
 }
 
-Eigen::Vector2d CameraModel::Distort(const Eigen::Vector2d& p) const {
-  const double k1 = params_.D[0];
-  const double k2 = params_.D[1];
-  const double p1 = params_.D[2];
-  const double p2 = params_.D[3];
-  const double k3 = params_.D[4];
-  const double x = p.x();
-  const double y = p.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-          y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
-}
-
 std::optional<Eigen::Vector2d> CameraModel::NormalizedRay(double u, double v) const {
   const auto& K = params_.K;
   const double yd = (v - K[5]) / K[4];
   const double xd = (u - K[2] - K[1] * yd) / K[0];
   const Eigen::Vector2d target(xd, yd);
   if (!distort_) return target;
-
-  const double k1 = params_.D[0];
-  const double k2 = params_.D[1];
-  const double p1 = params_.D[2];
-  const double p2 = params_.D[3];
-  const double k3 = params_.D[4];
-  Eigen::Vector2d x = target;  // the distortion is mild near the axis: start from no distortion
-  for (int i = 0; i < kUndistortIterations; ++i) {
-    const Eigen::Vector2d residual = Distort(x) - target;
-    if (residual.norm() < kUndistortTolerance) {
-      if (x.squaredNorm() > max_radius_sq_) return std::nullopt;
-      return x;
-    }
-    const double r2 = x.squaredNorm();
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double g = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r²)
-    Eigen::Matrix2d J;
-    J(0, 0) = radial + 2.0 * g * x.x() * x.x() + 2.0 * p1 * x.y() + 6.0 * p2 * x.x();
-    J(0, 1) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
-    J(1, 0) = 2.0 * g * x.x() * x.y() + 2.0 * p1 * x.x() + 2.0 * p2 * x.y();
-    J(1, 1) = radial + 2.0 * g * x.y() * x.y() + 6.0 * p1 * x.y() + 2.0 * p2 * x.x();
-    const double det = J.determinant();
-    if (!(det > 0.0)) return std::nullopt;  // beyond a fold of the model
-    x -= J.inverse() * residual;
-    if (!x.allFinite()) return std::nullopt;
-  }
-  return std::nullopt;
+  const std::optional<Eigen::Vector2d> x = world::Undistort(params_.D, target);
+  if (!x || x->squaredNorm() > max_radius_sq_) return std::nullopt;
+  return x;
 }
 
 std::optional<Eigen::Vector2d> CameraModel::Project(const Eigen::Vector3d& p_camera) const {
@@ -244,7 +205,7 @@ std::optional<Eigen::Vector2d> CameraModel::Project(const Eigen::Vector3d& p_cam
   Eigen::Vector2d x(p_camera.x() / p_camera.z(), p_camera.y() / p_camera.z());
   if (distort_) {
     if (x.squaredNorm() > max_radius_sq_) return std::nullopt;
-    x = Distort(x);
+    x = world::Distort(params_.D, x);
   }
   const auto& K = params_.K;
   return Eigen::Vector2d(K[0] * x.x() + K[1] * x.y() + K[2], K[4] * x.y() + K[5]);

@@ -133,9 +133,6 @@ class CameraModel {
   std::optional<Eigen::Vector2d> Project(const Eigen::Vector3d& p_camera) const;
 
  private:
-  // plumb_bob on normalized coordinates.
-  Eigen::Vector2d Distort(const Eigen::Vector2d& x) const;
-
   CameraParams params_;
   Eigen::Isometry3d X_base_camera_;
   bool distort_{false};
