@@ -64,6 +64,7 @@ struct CarAgent {
   std::optional<Time> wait_started;
   // the colour camera's recent frames (stamp, pose), to judge lane detection against ground truth
   std::deque<std::pair<Time, world::Pose2>> color_frames;
+  double lane_error_sq_sum{0.0};  // over the judged lane detection results
   // ground-truth tracking of the chassis centre along the route
   double route_s_m{0.0};
   double progress_m{0.0};
@@ -130,7 +131,6 @@ struct Simulation::Impl {
   std::vector<std::unique_ptr<SensorSuite>> sensors;
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
-  std::map<int, double> lane_error_sq_sum;  // car id -> sum of squared lane errors
   RunRecord record;
 };
 
@@ -332,7 +332,7 @@ void Simulation::Impl::JudgeLanes(CarAgent* agent, const stack::LanePoints& lane
         X_map_car.position() + kLaneJudgeAhead_m * X_map_car.heading() + y_car * left;
     const double error = std::abs(path.Project(p_map).lateral_m);
     m.lane_error_max_m = std::max(m.lane_error_max_m, error);
-    lane_error_sq_sum[agent->config->id] += error * error;
+    agent->lane_error_sq_sum += error * error;
     ++m.lane_error_samples;
     return;
   }
@@ -533,8 +533,8 @@ void Simulation::Impl::Finish() {
     agent.metrics.mean_speed_mps = agent.metrics.distance_m / ToSeconds(end);
     if (agent.metrics.perception && agent.metrics.perception->lane_error_samples > 0) {
       PerceptionMetrics& m = *agent.metrics.perception;
-      m.lane_error_rms_m = std::sqrt(lane_error_sq_sum[agent.config->id] /
-                                     static_cast<double>(m.lane_error_samples));
+      m.lane_error_rms_m =
+          std::sqrt(agent.lane_error_sq_sum / static_cast<double>(m.lane_error_samples));
     }
     record.cars.push_back(agent.metrics);
   }
