@@ -141,8 +141,15 @@ void NodeGraph::AddSubscriptionImpl(
                       std::to_string(t.subscriptions.size() + 1) + ", but zero_copy (Iceoryx) " +
                       "allows at most " + std::to_string(limit) + " subscribers per topic");
   }
-  subscriptions_.push_back(Subscription{
-      .node = node, .topic = topic, .loaned = options.loaned, .handler = std::move(handler)});
+  if (options.cost && n.mapping.target == "hw") {
+    throw ConfigError("node '" + n.name + "': a subscription with its own cost needs a software " +
+                      "node, but the node is mapped to hw");
+  }
+  subscriptions_.push_back(Subscription{.node = node,
+                                        .topic = topic,
+                                        .loaned = options.loaned,
+                                        .cost = options.cost,
+                                        .handler = std::move(handler)});
   const int index = static_cast<int>(subscriptions_.size()) - 1;
   t.subscriptions.push_back(index);
   n.subscriptions.push_back(index);
@@ -160,6 +167,10 @@ void NodeGraph::AddTimer(NodeId node, Time first, Duration period,
 
 const TopicSpec& NodeGraph::topic_spec(int topic) const {
   return topics_.at(static_cast<std::size_t>(topic)).spec;
+}
+
+bool NodeGraph::HasNode(const std::string& name) const {
+  return std::any_of(nodes_.begin(), nodes_.end(), [&](const Node& n) { return n.name == name; });
 }
 
 const std::string& NodeGraph::node_name(NodeId node) const {
@@ -245,8 +256,13 @@ void NodeGraph::StartJob(int node) {
   Job& job = *n.job;
   job.start = kernel_.Now();
   std::int64_t in_bytes = 0;
+  const SwCost* callback_cost = nullptr;
   if (subscription >= 0) {
     Subscription& sub = subscriptions_[static_cast<std::size_t>(subscription)];
+    if (sub.cost) {
+      callback_cost = &*sub.cost;
+      job.own_cost = true;
+    }
     job.input = std::move(sub.queue.front().message);
     sub.queue.pop_front();
     in_bytes = job.input->bytes;
@@ -287,7 +303,7 @@ void NodeGraph::StartJob(int node) {
         FromSeconds(hw.compute_s * factor) + platform_.fpga().TransferTime(in_bytes + out_bytes);
     job.compute_core_s = hw.delegate_cpu_s * factor;
   } else {
-    const SwCost& sw = *n.cost.sw;
+    const SwCost& sw = callback_cost ? *callback_cost : *n.cost.sw;
     const double work = sw.work_s +
                         1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
                         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes);
@@ -340,7 +356,7 @@ void NodeGraph::FinishJob(int node) {
   }
   if (metrics_) {
     metrics_->JobDone(n.metrics_index, job.start, now,
-                      job.take_core_s + job.compute_core_s + job.publish_core_s);
+                      job.take_core_s + job.compute_core_s + job.publish_core_s, !job.own_cost);
     metrics_->Span(TraceLane::kExecutor, n.metrics_index, n.name, job.start, now);
   }
   job.input.reset();  // the taken sample (and its chunk) is released here
@@ -410,6 +426,9 @@ void NodeGraph::Enqueue(int subscription, std::shared_ptr<const detail::Envelope
 
 void AddBackgroundLoads(NodeGraph& graph, const PlatformProfile& profile, Time first) {
   for (const BackgroundLoadConfig& load : profile.background) {
+    const bool replaced = std::any_of(load.replaced_by.begin(), load.replaced_by.end(),
+                                      [&](const std::string& node) { return graph.HasNode(node); });
+    if (replaced) continue;
     SwCost sw{.work_s = load.cpu_percent / 100.0 * ToSeconds(load.period),
               .max_parallelism = load.max_parallelism};
     const NodeId node = graph.AddNode(NodeSpec{.name = load.name, .cost = ComponentCost{.sw = sw}});

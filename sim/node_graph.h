@@ -69,6 +69,9 @@ struct NodeSpec {
 
 struct SubscriptionOptions {
   bool loaned{true};  // zero-copy: takes the loaned sample (false: gets a copy, paid per byte)
+  // A callback that costs this instead of the node's own cost, e.g. one that only keeps the
+  // latest message for the node's timer (ROS 2 nodes often do). Software nodes only.
+  std::optional<SwCost> cost;
 };
 
 template <class T>
@@ -168,6 +171,7 @@ class NodeGraph {
 
   const TopicSpec& topic_spec(int topic) const;
   const std::string& node_name(NodeId node) const;
+  bool HasNode(const std::string& name) const;
   bool busy(NodeId node) const;
   // Messages waiting in the node's subscriptions.
   std::size_t queued(NodeId node) const;
@@ -184,6 +188,7 @@ class NodeGraph {
     int node;
     int topic;
     bool loaned;
+    std::optional<SwCost> cost;
     std::function<void(const detail::EnvelopeBase&, Outbox&)> handler;
     std::deque<QueuedMessage> queue;
   };
@@ -214,6 +219,7 @@ class NodeGraph {
     Duration fabric{0};          // hardware only
     double max_parallelism{1.0};
     double publish_core_s{0.0};
+    bool own_cost{false};  // a subscription's own cost, not the node's
   };
   struct ReceiveItem {
     int subscription;

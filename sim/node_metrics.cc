@@ -1,5 +1,7 @@
 #include "sim/node_metrics.h"
 
+#include <iterator>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -81,12 +83,12 @@ void RunMetrics::BusyChanged(Time t, double cores) {
   AddTrace({'C', kPidCpu, 0, TraceName("busy cores"), t.count(), 0, cores});
 }
 
-void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s) {
+void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s, bool timed) {
   if (!Measured(start)) return;
   NodeData& n = nodes_.at(static_cast<std::size_t>(node));
   ++n.jobs;
   n.job_core_s += nominal_core_s;
-  n.turnaround_ms.push_back(ToSeconds(end - start) * 1e3);
+  if (timed) n.turnaround_ms.push_back(ToSeconds(end - start) * 1e3);
 }
 
 void RunMetrics::ReceiveDone(int node, Time t, double core_s) {
@@ -281,18 +283,27 @@ nlohmann::json ReportJson(const MetricsReport& report) {
 }
 
 std::string TraceJson(const std::vector<BoardMetrics>& boards) {
-  nlohmann::json events = nlohmann::json::array();
+  // Written event by event rather than through a JSON document: a run's trace holds up to
+  // trace_max_events per board, and a document of them takes ~1 KB per event.
+  std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
+  bool first = true;
+  auto separate = [&] {
+    if (!first) out += ',';
+    first = false;
+  };
   auto meta = [&](int pid, std::optional<int> tid, const char* what, const std::string& name) {
     nlohmann::json e = {{"name", what}, {"ph", "M"}, {"pid", pid}, {"args", {{"name", name}}}};
     if (tid) e["tid"] = *tid;
-    events.push_back(std::move(e));
+    separate();
+    out += e.dump();
   };
   std::vector<std::string> truncated;
   for (std::size_t b = 0; b < boards.size(); ++b) {
     const RunMetrics& metrics = *boards[b].metrics;
     const std::string& board = boards[b].board;
     const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
-    const auto& names = metrics.trace_names();
+    std::vector<std::string> names;  // JSON-quoted
+    for (const std::string& name : metrics.trace_names()) names.push_back(nlohmann::json(name).dump());
     meta(base + kPidCpu, std::nullopt, "process_name",
          fmt::format("{}: CPU ({} cores; busy cores, 1.0 = one core)", board, metrics.cores()));
     meta(base + kPidExecutors, std::nullopt, "process_name",
@@ -312,22 +323,17 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
     for (int slot : slots) {
       meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
     }
+    auto it = std::back_inserter(out);
     for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
       const double ts_us = static_cast<double>(e.ts_ns) / 1e3;
       const std::string& name = names[static_cast<std::size_t>(e.name)];
+      separate();
       if (e.phase == 'C') {
-        events.push_back({{"name", name},
-                          {"ph", "C"},
-                          {"pid", base + e.pid},
-                          {"ts", ts_us},
-                          {"args", {{"cores", e.value}}}});
+        fmt::format_to(it, "{{\"name\":{},\"ph\":\"C\",\"pid\":{},\"ts\":{},\"args\":{{\"cores\":{}}}}}",
+                       name, base + e.pid, ts_us, e.value);
       } else {
-        events.push_back({{"name", name},
-                          {"ph", "X"},
-                          {"pid", base + e.pid},
-                          {"tid", e.tid},
-                          {"ts", ts_us},
-                          {"dur", static_cast<double>(e.dur_ns) / 1e3}});
+        fmt::format_to(it, "{{\"name\":{},\"ph\":\"X\",\"pid\":{},\"tid\":{},\"ts\":{},\"dur\":{}}}",
+                       name, base + e.pid, e.tid, ts_us, static_cast<double>(e.dur_ns) / 1e3);
       }
     }
     if (metrics.trace_truncated()) {
@@ -335,9 +341,12 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
                                       metrics.options().trace_max_events));
     }
   }
-  nlohmann::json trace = {{"traceEvents", events}, {"displayTimeUnit", "ms"}};
-  if (!truncated.empty()) trace["otherData"] = {{"truncated", truncated}};
-  return trace.dump() + "\n";
+  out += ']';
+  if (!truncated.empty()) {
+    out += ",\"otherData\":" + nlohmann::json({{"truncated", truncated}}).dump();
+  }
+  out += "}\n";
+  return out;
 }
 
 }  // namespace autonomsim::sim

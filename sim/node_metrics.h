@@ -48,7 +48,9 @@ class RunMetrics {
   void BusyChanged(Time t, double cores);  // trace counter
 
   // Node activity. `nominal_core_s` is the CPU a job was given to do (independent of contention).
-  void JobDone(int node, Time start, Time end, double nominal_core_s);
+  // `timed`: false for a callback with its own cost that only keeps its message (its CPU counts,
+  // its turnaround would only blur the node's own jobs').
+  void JobDone(int node, Time start, Time end, double nominal_core_s, bool timed = true);
   void ReceiveDone(int node, Time t, double core_s);
   void Arrival(int node, int topic, Time t);
   void Dropped(int node, int topic, Time t);

@@ -170,12 +170,14 @@ struct ZeroCopyProfile {
 };
 
 // Load on the CPU from parts of the stack that are not modelled node by node: a periodic job of
-// cpu_percent / 100 * period core-seconds.
+// cpu_percent / 100 * period core-seconds. A load stands in for the nodes in `replaced_by`: it is
+// left out of a board that runs any of them (a car driven by the modelled stack).
 struct BackgroundLoadConfig {
   std::string name;
   double cpu_percent{0.0};  // 100 = one core
   Duration period{std::chrono::milliseconds(50)};
   double max_parallelism{1.0};
+  std::vector<std::string> replaced_by;  // node names
 
   template <class V>
   void Describe(V& v) {
@@ -183,6 +185,7 @@ struct BackgroundLoadConfig {
     v("cpu_percent", cpu_percent);
     v("period_s", period);
     v("max_parallelism", max_parallelism);
+    v("replaced_by", replaced_by);
   }
   void Validate() const;
 };
