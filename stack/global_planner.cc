@@ -188,4 +188,32 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   return plan;
 }
 
+GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
+                            const world::Vec2& start, const std::vector<world::Vec2>& goals) {
+  if (goals.empty()) return PlanGlobalPath(params, costmap, start, start);
+  GlobalPlan joined;
+  joined.status = PlanStatus::kOk;
+  world::Vec2 from = start;
+  for (const world::Vec2& goal : goals) {
+    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goal);
+    joined.expansions += leg.expansions;
+    if (!leg.ok()) {
+      joined.status = leg.status;
+      joined.path_m.clear();
+      joined.cost = 0.0;
+      joined.length_m = 0.0;
+      joined.exact_goal = false;
+      return joined;
+    }
+    const std::size_t skip = joined.path_m.empty() ? 0 : 1;  // the cell both legs share
+    joined.path_m.insert(joined.path_m.end(), leg.path_m.begin() + static_cast<long>(skip),
+                         leg.path_m.end());
+    joined.cost += leg.cost;
+    joined.length_m += leg.length_m;
+    joined.exact_goal = leg.exact_goal;
+    from = leg.path_m.back();
+  }
+  return joined;
+}
+
 }  // namespace autonomsim::stack

@@ -75,4 +75,11 @@ struct GlobalPlan {
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
                           const world::Vec2& start, const world::Vec2& goal);
 
+// Nav2's ComputePathThroughPoses: one plan per leg (start → goals[0] → goals[1] → ...), each leg
+// from the previous leg's last cell, joined without repeating the shared cell. The status is the
+// first failing leg's (and the path empty, as for any failed plan); expansions, cost and length
+// add up; exact_goal is the last leg's. No goals: a one-point plan at start.
+GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
+                            const world::Vec2& start, const std::vector<world::Vec2>& goals);
+
 }  // namespace autonomsim::stack

@@ -1,0 +1,167 @@
+#include "stack/behavior.h"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+namespace autonomsim::stack {
+namespace {
+
+using world::Vec2;
+
+world::Polyline Straight(double length_m) {
+  return world::Polyline({Vec2(0.0, 0.0), Vec2(length_m, 0.0)}, false);
+}
+
+world::Polyline Square() {  // a 4 m × 4 m loop, counter-clockwise
+  return world::Polyline({Vec2(0, 0), Vec2(4, 0), Vec2(4, 4), Vec2(0, 4), Vec2(0, 0)}, true);
+}
+
+BehaviorInput At(double seconds, Vec2 p) {
+  return BehaviorInput{.now = FromSeconds(seconds), .p_map = p};
+}
+
+TEST(BehaviorTest, GoalsRunAlongTheRouteAheadNearestFirst) {
+  const BehaviorParams params{.waypoint_spacing_m = 0.5, .waypoint_horizon_m = 2.0};
+  BehaviorState state;
+  const BehaviorOutput out = StepBehavior(params, Straight(10.0), At(0.0, Vec2(1.0, 0.2)), &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_FALSE(out.hold);
+  ASSERT_EQ(out.goals.size(), 4u);
+  for (std::size_t i = 0; i < out.goals.size(); ++i) {
+    EXPECT_NEAR(out.goals[i].x(), 1.5 + 0.5 * static_cast<double>(i), 1e-9);
+    EXPECT_NEAR(out.goals[i].y(), 0.0, 1e-9);
+  }
+}
+
+TEST(BehaviorTest, GoalsWrapAroundALoop) {
+  const BehaviorParams params{.waypoint_spacing_m = 1.0, .waypoint_horizon_m = 2.0};
+  BehaviorState state;
+  // 0.5 m before the loop's end (s = 15.5 of 16): goals at s = 16.5 → (0.5, 0) and 17.5
+  const BehaviorOutput out = StepBehavior(params, Square(), At(0.0, Vec2(0.0, 0.5)), &state);
+  ASSERT_EQ(out.goals.size(), 2u);
+  EXPECT_NEAR(out.goals[0].x(), 0.5, 1e-9);
+  EXPECT_NEAR(out.goals[1].x(), 1.5, 1e-9);
+}
+
+TEST(BehaviorTest, TheEndOfAnOpenRouteIsTheLastGoalThenItIsDone) {
+  const BehaviorParams params{.waypoint_spacing_m = 0.5, .waypoint_horizon_m = 2.0};
+  BehaviorState state;
+  BehaviorOutput out = StepBehavior(params, Straight(3.0), At(0.0, Vec2(1.8, 0.0)), &state);
+  ASSERT_FALSE(out.goals.empty());
+  EXPECT_NEAR(out.goals.back().x(), 3.0, 1e-9);
+  out = StepBehavior(params, Straight(3.0), At(1.0, Vec2(2.7, 0.0)), &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDone);
+  EXPECT_TRUE(out.hold);
+  EXPECT_TRUE(out.goals.empty());
+}
+
+TEST(BehaviorTest, WaitsAtTheIntersectionUntilItIsFree) {
+  BehaviorState state;
+  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
+  input.intersection_free = false;
+  BehaviorOutput out = StepBehavior({}, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kIntersectionWait);
+  EXPECT_TRUE(out.hold);
+  EXPECT_FALSE(out.goals.empty());  // the planner keeps planning while the car waits
+  input.now = FromSeconds(0.333);
+  input.intersection_free = true;
+  out = StepBehavior({}, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_FALSE(out.hold);
+}
+
+TEST(BehaviorTest, ACollisionAheadClearsTheCostmapsWaitsAndRetries) {
+  const BehaviorParams params{.recovery_wait = std::chrono::seconds(5), .max_retries = 2};
+  BehaviorState state;
+  BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
+  input.collision_ahead = true;
+  BehaviorOutput out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
+  EXPECT_TRUE(out.clear_costmaps);
+  EXPECT_TRUE(out.hold);
+  EXPECT_EQ(out.retries, 1);
+  // while waiting: held, the costmaps cleared only once (the held controller reports no collision)
+  input.collision_ahead = false;
+  input.now = FromSeconds(14.9);
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
+  EXPECT_FALSE(out.clear_costmaps);
+  // after the wait: retry
+  input.now = FromSeconds(15.0);
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_FALSE(out.hold);
+  // still blocked: a second recovery, then the navigation fails for good
+  input.collision_ahead = true;
+  input.now = FromSeconds(15.3);
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.retries, 2);
+  input.now = FromSeconds(20.3);
+  input.collision_ahead = false;
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  input.now = FromSeconds(20.6);
+  input.collision_ahead = true;
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kFailed);
+  EXPECT_TRUE(out.hold);
+  EXPECT_TRUE(out.goals.empty());
+  input.collision_ahead = false;
+  input.now = FromSeconds(60.0);
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode, BehaviorMode::kFailed);
+}
+
+TEST(BehaviorTest, ProgressAfterARecoveryResetsTheRetries) {
+  const BehaviorParams params{.recovery_wait = std::chrono::seconds(1), .recovery_reset_m = 0.5};
+  BehaviorState state;
+  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
+  input.plan_failed = true;  // a failed plan recovers like a collision
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 1);
+  input.plan_failed = false;
+  input.now = FromSeconds(1.0);
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode, BehaviorMode::kDrive);
+  input.now = FromSeconds(2.0);
+  input.p_map = Vec2(1.4, 0.0);
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 1);
+  input.now = FromSeconds(3.0);
+  input.p_map = Vec2(1.6, 0.0);
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 0);
+}
+
+TEST(BehaviorTest, TheOperatorEndsTheMission) {
+  BehaviorState state;
+  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
+  input.mission_done = true;
+  const BehaviorOutput out = StepBehavior({}, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDone);
+  EXPECT_TRUE(out.hold);
+}
+
+TEST(BehaviorTest, RejectsBadInputAndParams) {
+  BehaviorState state;
+  EXPECT_THROW(StepBehavior({}, Straight(10.0), At(0.0, Vec2(std::nan(""), 0.0)), &state),
+               std::invalid_argument);
+  EXPECT_THROW((BehaviorParams{.waypoint_spacing_m = 0.0}.Validate()), std::invalid_argument);
+  EXPECT_THROW((BehaviorParams{.waypoint_spacing_m = 1.0, .waypoint_horizon_m = 0.5}.Validate()),
+               std::invalid_argument);
+  EXPECT_THROW((BehaviorParams{.max_retries = -1}.Validate()), std::invalid_argument);
+  EXPECT_NO_THROW(BehaviorParams{}.Validate());
+}
+
+// Reference §6: FollowPath inside an intersection's area and stop zones (strict boxes, as the
+// real cars test them), LaneController elsewhere.
+TEST(BehaviorTest, FollowPathInsideIntersectionsAndStopZonesOnly) {
+  world::IntersectionSpec i;
+  i.area = world::Box{1.3, 2.6, -0.6, 0.6};
+  i.stop_zones = {world::Box{2.0, 2.6, -1.4, -0.6}};
+  const std::vector<world::IntersectionSpec> all{i};
+  EXPECT_TRUE(UseFollowPath(all, Vec2(2.0, 0.0)));
+  EXPECT_TRUE(UseFollowPath(all, Vec2(2.3, -1.0)));
+  EXPECT_FALSE(UseFollowPath(all, Vec2(2.3, -1.5)));
+  EXPECT_FALSE(UseFollowPath(all, Vec2(1.3, 0.0)));  // on the area's edge: outside (strict)
+  EXPECT_FALSE(UseFollowPath({}, Vec2(2.0, 0.0)));
+}
+
+}  // namespace
+}  // namespace autonomsim::stack
