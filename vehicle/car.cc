@@ -62,6 +62,8 @@ void CarParams::Validate() const {
   Require(std::isfinite(body_friction_coefficient) && body_friction_coefficient >= 0.0,
           "body_friction_coefficient must be finite and >= 0, got " +
               std::to_string(body_friction_coefficient));
+  Require(esc_neutral_band >= 0.0 && esc_neutral_band < 1.0,
+          "esc_neutral_band must be in [0, 1), got " + std::to_string(esc_neutral_band));
   Require(body_restitution >= 0.0 && body_restitution <= 1.0,
           "body_restitution must be in [0, 1], got " + std::to_string(body_restitution));
 }
@@ -154,7 +156,9 @@ void Car::ApplyForces(double dt_s) {
   // motor: first-order lag toward u·top_speed, discretized exactly over the step; the rear
   // (driven) tyres pass at most their grip
   const double forward_mps = v.dot(x_axis);
-  const double target_mps = command_.throttle * params_.top_speed_mps;
+  const double drive_u =
+      std::abs(command_.throttle) < params_.esc_neutral_band ? 0.0 : command_.throttle;
+  const double target_mps = drive_u * params_.top_speed_mps;
   const double wanted_dv_mps =
       (target_mps - forward_mps) * (1.0 - std::exp(-dt_s / params_.motor_time_constant_s));
   const double drive_Ns = std::clamp(m * wanted_dv_mps, -axle_grip_Ns, axle_grip_Ns);

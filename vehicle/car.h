@@ -47,6 +47,10 @@ struct CarParams {
   // (μ·g/2 = 3.9 m/s²): a launch under steering does not spin the car. A shorter τ makes the
   // rear wheels spin and lose side grip (friction circle), which is modelled.
   double motor_time_constant_s{0.6};
+  // assumed: a hobby ESC ignores throttle within its neutral band (typically a few % of full
+  // throttle either side of the 1.5 ms neutral pulse): |u| below this drives nothing, so the motor
+  // brakes the car (the lag above toward 0). 0: no band.
+  double esc_neutral_band{0.05};
   // assumed: RC rubber tyres on a smooth lab floor; the grip limit per axle is μ·(m·g/2).
   double tire_friction_coefficient{0.8};
   // assumed: plastic shell on plastic or wood, for Box2D's contact friction (car–car,
@@ -68,6 +72,7 @@ struct CarParams {
     v("steering_rate_rad_per_s", steering_rate_rad_per_s);
     v("top_speed_mps", top_speed_mps);
     v("motor_time_constant_s", motor_time_constant_s);
+    v("esc_neutral_band", esc_neutral_band);
     v("tire_friction_coefficient", tire_friction_coefficient);
     v("body_friction_coefficient", body_friction_coefficient);
     v("body_restitution", body_restitution);

@@ -144,7 +144,21 @@ TEST(CarParamsTest, DescribeListsEveryKeyOnce) {
   params.Describe(visit);
   EXPECT_THAT(keys, ::testing::Contains("top_speed_mps"));
   EXPECT_THAT(keys, ::testing::Contains("motor_time_constant_s"));
-  EXPECT_EQ(keys.size(), 14u);
+  EXPECT_THAT(keys, ::testing::Contains("esc_neutral_band"));
+  EXPECT_EQ(keys.size(), 15u);
+}
+
+// A throttle inside the ESC's neutral band drives nothing; just outside it, the car drives off at
+// u · top speed (2 s = 3.3 motor time constants: ≈ 96 % of 0.12 m/s).
+TEST(CarTest, ThrottleInsideTheEscNeutralBandDrivesNothing) {
+  PhysicsWorld world(PhysicsParams{});
+  Car& car = world.AddCar(1, CarParams{}, {});
+  car.SetCommand({0.049, 0.0});
+  for (int i = 0; i < 1000; ++i) world.Step();  // 2 s
+  EXPECT_EQ(car.forward_speed_mps(), 0.0);
+  car.SetCommand({0.06, 0.0});
+  for (int i = 0; i < 1000; ++i) world.Step();  // 2 s
+  EXPECT_NEAR(car.forward_speed_mps(), 0.96 * 0.12, 0.01);
 }
 
 TEST(CarTest, ConstructorValidatesParams) {
