@@ -162,6 +162,16 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
                                    {"grid_frames", p.grid_frames},
                                    {"grid_obstacle_frames", p.grid_obstacle_frames}};
     }
+    if (c.stack) {
+      const StackMetrics& m = *c.stack;
+      cars.back()["stack"] = {{"control_cycles", m.control_cycles},
+                              {"follow_path_cycles", m.follow_path_cycles},
+                              {"collision_cycles", m.collision_cycles},
+                              {"recoveries", m.recoveries},
+                              {"navigation_failed", m.navigation_failed},
+                              {"max_localization_error_m", m.max_localization_error_m},
+                              {"final_localization_error_m", m.final_localization_error_m}};
+    }
   }
   summary["cars"] = cars;
   summary["server"] = {{"requests", record.server.requests},

@@ -55,6 +55,18 @@ struct PerceptionMetrics {
   std::uint64_t grid_obstacle_frames{0};  // of them, with a cell the costmap layer marks lethal
 };
 
+// What the stack did (driver: stack).
+struct StackMetrics {
+  std::uint64_t control_cycles{0};      // controller server cycles that drove (not held)
+  std::uint64_t follow_path_cycles{0};  // of which FollowPath (inside stop boxes/intersections)
+  std::uint64_t collision_cycles{0};    // of which saw a collision ahead and stopped
+  int recoveries{0};                    // clear costmaps, wait, retry
+  bool navigation_failed{false};        // retries exhausted
+  // The EKF's map-frame position against the true chassis centre, at each estimate.
+  double max_localization_error_m{0.0};
+  double final_localization_error_m{0.0};
+};
+
 struct CarMetrics {
   int id{0};
   std::string route;
@@ -74,6 +86,7 @@ struct CarMetrics {
   // over the run (only obstacles within kObstacleGapHorizon_m count; nullopt if none came near).
   std::optional<double> min_obstacle_gap_m;
   std::optional<PerceptionMetrics> perception;
+  std::optional<StackMetrics> stack;
 };
 
 inline constexpr double kObstacleGapHorizon_m = 2.0;

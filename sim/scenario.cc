@@ -47,8 +47,13 @@ void CarConfig::Validate() const {
   Require(route.has_value() != lanes.has_value(), "give exactly one of route or lanes");
   Require(!(start.has_value() && start_s_m.has_value()), "give at most one of start or start_s_m");
   Require(!laps || *laps >= 1, "laps must be >= 1, got " + std::to_string(laps.value_or(0)));
-  Require(driver == "oracle",
-          "driver must be 'oracle' (the driving stack comes later), got '" + driver + "'");
+  Require(driver == "oracle" || driver == "stack",
+          "driver must be 'oracle' (ground-truth lane following) or 'stack' (the AutonomROS "
+          "stack on the car's board), got '" +
+              driver + "'");
+  Require(driver != "stack" || perception.enabled,
+          "driver 'stack' drives on the perception nodes' lanes and obstacles: set "
+          "perception.enabled: true");
 }
 
 void ObstacleConfig::Validate() const {

@@ -14,6 +14,7 @@
 #include "sim/perception_nodes.h"
 #include "sim/platform_profile.h"
 #include "sim/sensors.h"
+#include "sim/stack_nodes.h"
 #include "stack/intersection_client.h"
 #include "vehicle/car.h"
 #include "vehicle/physics_world.h"
@@ -30,8 +31,11 @@ struct CarConfig {
   std::optional<std::string> start;  // a named start pose of the track (must lie on the route)
   std::optional<double> start_s_m;   // or the distance along the route to start at (default 0)
   std::optional<int> laps;           // on a loop: park after this many laps (default: drive on)
-  std::string driver{"oracle"};      // "oracle": ground-truth lane following (sim/oracle_driver.h)
+  // "oracle": ground-truth lane following (sim/oracle_driver.h); "stack": the AutonomROS stack
+  // on the car's board (sim/stack_nodes.h; needs perception.enabled)
+  std::string driver{"oracle"};
   OracleDriverParams oracle;
+  StackConfig stack;  // driver: stack
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
   SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/sensors.h)
@@ -44,6 +48,7 @@ struct CarConfig {
 
   // Whether the car runs anything on a modeled board.
   bool has_board() const { return perception.enabled; }
+  bool drives_by_stack() const { return driver == "stack"; }
 
   template <class V>
   void Describe(V& v) {
@@ -55,6 +60,7 @@ struct CarConfig {
     v("laps", laps);
     v("driver", driver);
     v("oracle", oracle);
+    v("stack", stack);
     v("intersection_client", intersection_client);
     v("vehicle", vehicle);
     v("sensors", sensors);

@@ -14,11 +14,13 @@
 #include "sim/priorities.h"
 #include "sim/random.h"
 #include "sim/sensors.h"
+#include "sim/stack_nodes.h"
 #include "sim/traffic_light_node.h"
 #include "sim/v2i_link.h"
 #include "stack/intersection_client.h"
 #include "vehicle/physics_world.h"
 #include "world/floor_raster.h"
+#include "world/occupancy_map.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -72,6 +74,9 @@ struct CarAgent {
   double lateral_sq_sum{0.0};
   std::uint64_t lateral_samples{0};
   int area{-1};  // the intersection whose area holds the chassis centre, or -1
+  // driver: stack
+  std::unique_ptr<world::OccupancyMap> static_map;  // the map the car is given (its planner's)
+  stack::BehaviorMode behavior_mode{stack::BehaviorMode::kDrive};
   CarMetrics metrics;
 };
 
@@ -106,7 +111,9 @@ struct Simulation::Impl {
   void MeasureObstacleGaps();
   void StepDriver(CarAgent* agent);
   std::optional<double> ObstacleGap(const CarAgent& agent) const;
-  void StepClient(CarAgent* agent);
+  bool StepClient(CarAgent* agent, const world::Vec2& p_map);
+  void AddStack(CarAgent* agent, SensorSuite* suite, const PerceptionTopics& perception,
+                NodeGraph* graph);
   void Sample();
   void ReceiveAtCar(int car_id, const world::V2IMessage& message);
   std::unique_ptr<Board> MakeBoard(CarAgent* agent, const PlatformProfile& profile,
@@ -227,11 +234,12 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
   // the periodic work: clients, drivers, recording, physics
   for (CarAgent& agent : agents) {
     const std::string car = "car" + std::to_string(agent.config->id);
+    if (agent.config->drives_by_stack()) continue;  // its nodes do this on its board
     const Duration client_period = agent.config->intersection_client.tick_period;
     const Duration driver_period = agent.config->oracle.period;
     kernel.SchedulePeriodic(
         Phase(streams, car + "/client_phase", client_period), client_period,
-        [this, a = &agent] { StepClient(a); }, kPriorityClient);
+        [this, a = &agent] { StepClient(a, a->car->pose().position()); }, kPriorityClient);
     kernel.SchedulePeriodic(
         Phase(streams, car + "/driver_phase", driver_period), driver_period,
         [this, a = &agent] { StepDriver(a); }, kPriorityDriver);
@@ -276,11 +284,71 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
         .on_grid = [this, agent](const stack::Grid234& grid, Time) { JudgeGrid(agent, grid); },
         .on_lanes = [this, agent](const stack::LanePoints& lanes,
                                   Time stamp) { JudgeLanes(agent, lanes, stamp); }};
-    AddPerceptionNodes(graph, config.perception, config.platform.mapping, *suite, image,
-                       depth_image, std::move(hooks));
+    const PerceptionTopics topics =
+        AddPerceptionNodes(graph, config.perception, config.platform.mapping, *suite, image,
+                           depth_image, std::move(hooks));
+    if (config.drives_by_stack()) AddStack(agent, suite, topics, &graph);
   }
   board->Finish(kZeroTime);
   return board;
+}
+
+void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
+                                const PerceptionTopics& perception, NodeGraph* graph) {
+  const CarConfig& config = *agent->config;
+  const int id = config.id;
+  agent->metrics.stack.emplace();
+  agent->static_map = std::make_unique<world::OccupancyMap>(
+      world::BuildStaticMap(loaded.track, config.stack.global_costmap.resolution_m));
+  const StackContext context{.route = &agent->route->path,
+                             .intersections = &loaded.track.spec().intersections,
+                             .static_map = agent->static_map.get(),
+                             .obstacle_grid = &config.perception.obstacle_grid,
+                             .X_map_odom = agent->car->pose(),  // the start pose
+                             .intersection_client_period = config.intersection_client.tick_period,
+                             .true_pose = [agent] { return agent->car->pose(); },
+                             .pose_fix_noise = streams.Stream("car" + std::to_string(id) +
+                                                              "/pose_fix/noise")};
+  StackHooks hooks{
+      .intersection_client = [this, agent](const world::Vec2& p) { return StepClient(agent, p); },
+      .actuate =
+          [agent](const vehicle::ActuatorCommand& command) {
+            agent->command = command;
+            agent->car->SetCommand(command);
+          },
+      .mission_done = [agent] { return agent->parked; },
+      .on_behavior =
+          [this, agent, id](const stack::BehaviorOutput& out) {
+            StackMetrics& m = *agent->metrics.stack;
+            if (out.clear_costmaps) ++m.recoveries;
+            if (out.mode == stack::BehaviorMode::kFailed) m.navigation_failed = true;
+            if (out.mode != agent->behavior_mode) {
+              agent->behavior_mode = out.mode;
+              Emit(Event{.t = kernel.Now(),
+                         .type = "behavior",
+                         .car = id,
+                         .detail = std::string(stack::ToString(out.mode)) +
+                                   (out.mode == stack::BehaviorMode::kRecovery
+                                        ? " (retry " + std::to_string(out.retries) + ")"
+                                        : "")});
+            }
+          },
+      .on_estimate =
+          [agent](const stack::LocalizationEkfOutput& estimate) {
+            StackMetrics& m = *agent->metrics.stack;
+            const double error =
+                (estimate.X_map_base.position() - agent->car->pose().position()).norm();
+            m.max_localization_error_m = std::max(m.max_localization_error_m, error);
+            m.final_localization_error_m = error;
+          },
+      .on_control =
+          [agent](bool follow_path, bool collision) {
+            StackMetrics& m = *agent->metrics.stack;
+            ++m.control_cycles;
+            if (follow_path) ++m.follow_path_cycles;
+            if (collision) ++m.collision_cycles;
+          }};
+  AddStackNodes(*graph, kernel, config.stack, *suite, perception, context, std::move(hooks));
 }
 
 void Simulation::Impl::JudgeGrid(CarAgent* agent, const stack::Grid234& grid) {
@@ -338,11 +406,11 @@ void Simulation::Impl::JudgeLanes(CarAgent* agent, const stack::LanePoints& lane
   }
 }
 
-void Simulation::Impl::StepClient(CarAgent* agent) {
+bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map) {
   const int id = agent->config->id;
   stack::IntersectionClientInput input;
   input.now = kernel.Now();
-  input.p_map = agent->car->pose().position();
+  input.p_map = p_map;
   input.responses = std::move(agent->inbox);
   agent->inbox.clear();
   const stack::IntersectionClientOutput out =
@@ -367,6 +435,7 @@ void Simulation::Impl::StepClient(CarAgent* agent) {
     ++agent->metrics.waits;
     agent->wait_started.reset();
   }
+  return out.may_proceed;
 }
 
 void Simulation::Impl::ReceiveAtCar(int car_id, const world::V2IMessage& message) {

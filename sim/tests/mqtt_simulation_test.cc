@@ -27,7 +27,7 @@ void ExpectSameRun(const std::string& file, const std::vector<std::string>& over
 }
 
 TEST(MqttSimulationTest, TheDefaultScenarioGivesTheSameResultOverMqtt) {
-  ExpectSameRun("scenarios/lab_two_cars.yaml", {});
+  ExpectSameRun("scenarios/lab_two_cars_oracle.yaml", {});
 }
 
 TEST(MqttSimulationTest, AConflictWithLossGivesTheSameResultOverMqtt) {

@@ -12,7 +12,7 @@
 namespace autonomsim::sim {
 namespace {
 
-constexpr const char* kDefault = "scenarios/lab_two_cars.yaml";
+constexpr const char* kDefault = "scenarios/lab_two_cars_oracle.yaml";
 
 std::vector<std::string> WithPerception(std::vector<std::string> overrides, int car_index = 0) {
   overrides.insert(overrides.begin(),

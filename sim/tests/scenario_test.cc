@@ -201,7 +201,15 @@ INSTANTIATE_TEST_SUITE_P(
                    kValid,
                    {"cars[7].laps=1"},
                    {"--set cars[7].laps: index 7 is out of range"}},
-        BrokenCase{"set_syntax", kValid, {"cars[0].laps"}, {"expected key=value"}}),
+        BrokenCase{"set_syntax", kValid, {"cars[0].laps"}, {"expected key=value"}},
+        BrokenCase{"driver_unknown",
+                   kValid,
+                   {"cars[0].driver=autopilot"},
+                   {"--set cars[0].driver", "driver must be 'oracle'", "or 'stack'"}},
+        BrokenCase{"stack_without_perception",
+                   kValid,
+                   {"cars[0].driver=stack"},
+                   {"cars[0]", "set perception.enabled: true"}}),
     [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
 
 TEST(ScenarioTest, AMissingFileIsAnError) {

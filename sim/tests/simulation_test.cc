@@ -14,7 +14,7 @@
 namespace autonomsim::sim {
 namespace {
 
-constexpr const char* kDefault = "scenarios/lab_two_cars.yaml";
+constexpr const char* kDefault = "scenarios/lab_two_cars_oracle.yaml";
 
 TEST(SimulationTest, SameScenarioAndSeedGiveBitIdenticalResults) {
   const LoadedScenario scenario = LoadScenario(kDefault);
@@ -151,6 +151,50 @@ TEST(SimulationBoardTest, ABoardsProfileThatCannotBeLoadedIsAnErrorAtTheCarsKey)
     EXPECT_THAT(e.what(), ::testing::HasSubstr("cars[0].platform.profile"));
     EXPECT_THAT(e.what(), ::testing::HasSubstr("nope.yaml"));
   }
+}
+
+// driver: stack — the stack's nodes run on the car's board, in place of the background loads that
+// stand in for them, at the real rates, and they drive the car.
+TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
+  const RunRecord record =
+      RunScenario(LoadScenario("scenarios/stack_obstacle.yaml", {"duration_s=12"}));
+  ASSERT_EQ(record.boards.size(), 1u);
+  const MetricsReport& board = record.boards[0].report;
+  const std::vector<std::pair<const char*, double>> rates = {
+      {"ekf_filter_node", 20.0}, {"controller_server", 20.0}, {"carcontroller", 30.0},
+      {"bt_navigator", 3.0},     {"local_costmap", 5.0},      {"vehicle_communication", 10.0}};
+  for (const auto& [name, hz] : rates) {
+    const NodeReport* node = board.FindNode(name);
+    ASSERT_NE(node, nullptr) << name;
+    EXPECT_NEAR(static_cast<double>(node->timer_ticks) / 12.0, hz, 0.1 * hz) << name;
+    EXPECT_EQ(node->timer_overruns, 0u) << name;
+  }
+  for (const char* replaced : {"nav2_controller", "nav2_planning", "localization_ekf",
+                               "vehicle_io"}) {
+    EXPECT_EQ(board.FindNode(replaced), nullptr) << replaced;
+  }
+  EXPECT_NE(board.FindNode("camera_drivers"), nullptr);  // not modelled node by node
+  const CarMetrics& car = record.cars[0];
+  ASSERT_TRUE(car.stack.has_value());
+  EXPECT_GT(car.distance_m, 1.5);  // 12 s at up to 0.25 m/s, a stop at the intersection
+  EXPECT_GT(car.stack->control_cycles, 150u);
+  EXPECT_LT(car.stack->max_localization_error_m, 0.1);  // with the pose fix
+  EXPECT_LT(car.max_lateral_error_m, 0.2);  // as the shipped scenarios (lab_two_cars.yaml)
+}
+
+// Without the fix (the real car) the estimate drifts with the IMU's heading; with it, it stays
+// within the fix's noise.
+TEST(SimulationStackTest, WithoutThePoseFixTheEstimateDrifts) {
+  const RunRecord fixed =
+      RunScenario(LoadScenario("scenarios/stack_obstacle.yaml", {"duration_s=40"}));
+  const RunRecord drifting = RunScenario(LoadScenario(
+      "scenarios/stack_obstacle.yaml",
+      {"duration_s=40", "cars[0].stack.localization.use_pose_fix=false"}));
+  ASSERT_TRUE(fixed.cars[0].stack && drifting.cars[0].stack);
+  EXPECT_LT(fixed.cars[0].stack->final_localization_error_m, 0.06);
+  EXPECT_GT(drifting.cars[0].stack->final_localization_error_m,
+            2.0 * fixed.cars[0].stack->final_localization_error_m);
+  EXPECT_EQ(drifting.boards[0].report.FindNode("pose_fix"), nullptr);
 }
 
 }  // namespace

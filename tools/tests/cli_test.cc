@@ -72,7 +72,7 @@ TEST(CliTest, HelpAnswers) {
 
 TEST(CliTest, RunWritesACompleteResultFolder) {
   const fs::path out = Scratch() / "run";
-  const Result r = Cli("run scenarios/lab_two_cars.yaml -q --out " + out.string());
+  const Result r = Cli("run scenarios/lab_two_cars_oracle.yaml -q --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("results: " + out.string()));
   for (const char* file :
@@ -84,7 +84,7 @@ TEST(CliTest, RunWritesACompleteResultFolder) {
                           "real_time_factor", "expectations", "cars"}) {
     EXPECT_TRUE(summary.contains(key)) << key;
   }
-  EXPECT_EQ(summary["scenario"], "lab_two_cars");
+  EXPECT_EQ(summary["scenario"], "lab_two_cars_oracle");
   EXPECT_EQ(summary["sim_seconds"], 120.0);
   for (const nlohmann::json& car : summary["cars"]) {
     for (const char* key : {"laps", "collisions", "max_lateral_error_m"}) {
@@ -99,7 +99,7 @@ TEST(CliTest, RunWritesACompleteResultFolder) {
     EXPECT_EQ(entry.path().filename(), "run");
   }
   // a second run replaces the first, again leaving only the complete folder
-  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --seed 5 --out " + out.string()).exit_code, 0);
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars_oracle.yaml -q --seed 5 --out " + out.string()).exit_code, 0);
   EXPECT_EQ(nlohmann::json::parse(Read(out / "summary.json"))["seed"], 5);
   EXPECT_EQ(std::distance(fs::directory_iterator(out.parent_path()), fs::directory_iterator()), 1);
 }
@@ -107,8 +107,8 @@ TEST(CliTest, RunWritesACompleteResultFolder) {
 // The golden determinism test: separate processes and this process agree bit for bit.
 TEST(CliTest, SeparateProcessesGiveTheSameResultAsThisOne) {
   const fs::path dir = Scratch();
-  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --out " + (dir / "a").string()).exit_code, 0);
-  ASSERT_EQ(Cli("run scenarios/lab_two_cars.yaml -q --out " + (dir / "b").string()).exit_code, 0);
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars_oracle.yaml -q --out " + (dir / "a").string()).exit_code, 0);
+  ASSERT_EQ(Cli("run scenarios/lab_two_cars_oracle.yaml -q --out " + (dir / "b").string()).exit_code, 0);
   const std::string a = Read(dir / "a" / "trajectory.csv") + Read(dir / "a" / "events.jsonl");
   const std::string b = Read(dir / "b" / "trajectory.csv") + Read(dir / "b" / "events.jsonl");
   EXPECT_EQ(a, b);
@@ -116,7 +116,7 @@ TEST(CliTest, SeparateProcessesGiveTheSameResultAsThisOne) {
     return nlohmann::json::parse(Read(dir / run / "summary.json"))["result_sha256"]
         .get<std::string>();
   };
-  const sim::RunRecord here = sim::RunScenario(sim::LoadScenario("scenarios/lab_two_cars.yaml"));
+  const sim::RunRecord here = sim::RunScenario(sim::LoadScenario("scenarios/lab_two_cars_oracle.yaml"));
   EXPECT_EQ(hash("a"), sim::ResultSha256(here));
   EXPECT_EQ(hash("b"), hash("a"));
 }
@@ -168,8 +168,8 @@ TEST(CliTest, UnusableInputExitsTwo) {
   EXPECT_THAT(r.output, HasSubstr("cars must not be empty"));
   EXPECT_EQ(Cli("check " + broken.string()).exit_code, 2);
   EXPECT_EQ(Cli("run scenarios/nope.yaml").exit_code, 2);
-  EXPECT_EQ(Cli("run scenarios/lab_two_cars.yaml --bogus").exit_code, 2);
-  EXPECT_EQ(Cli("run scenarios/lab_two_cars.yaml --set cars[0].speed=1").exit_code, 2);
+  EXPECT_EQ(Cli("run scenarios/lab_two_cars_oracle.yaml --bogus").exit_code, 2);
+  EXPECT_EQ(Cli("run scenarios/lab_two_cars_oracle.yaml --set cars[0].speed=1").exit_code, 2);
   EXPECT_EQ(Cli("frobnicate").exit_code, 2);
 }
 
