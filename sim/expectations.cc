@@ -16,6 +16,11 @@ std::string Name(const ExpectClause& clause) {
   if (a.within_s) parts.push_back(fmt::format("within_s={}", *a.within_s));
   if (a.max_m) parts.push_back(fmt::format("max_m={}", *a.max_m));
   if (a.min_m) parts.push_back(fmt::format("min_m={}", *a.min_m));
+  if (a.node) parts.push_back(fmt::format("node={}", *a.node));
+  if (a.min_hz) parts.push_back(fmt::format("min_hz={}", *a.min_hz));
+  if (a.max_hz) parts.push_back(fmt::format("max_hz={}", *a.max_hz));
+  if (a.min_percent) parts.push_back(fmt::format("min_percent={}", *a.min_percent));
+  if (a.max_percent) parts.push_back(fmt::format("max_percent={}", *a.max_percent));
   return parts.empty() ? clause.kind()
                        : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
 }
@@ -127,6 +132,38 @@ ExpectationResult MinObstacleGap(const ExpectArgs& args, const RunRecord& record
   return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.min_m)};
 }
 
+const BoardReport* BoardOf(const RunRecord& record, int car) {
+  const std::string name = fmt::format("car{}", car);
+  for (const BoardReport& b : record.boards) {
+    if (b.board == name) return &b;
+  }
+  return nullptr;
+}
+
+bool Within(double value, const std::optional<double>& lo, const std::optional<double>& hi) {
+  return (!lo || value >= *lo) && (!hi || value <= *hi);
+}
+
+ExpectationResult NodeRate(const ExpectArgs& args, const RunRecord& record) {
+  const BoardReport* board = BoardOf(record, *args.car);
+  const NodeReport* node = board ? board->report.FindNode(*args.node) : nullptr;
+  if (!node) {
+    return {"", false, fmt::format("car {} runs no node '{}'", *args.car, *args.node)};
+  }
+  return {"", Within(node->rate_hz, args.min_hz, args.max_hz),
+          fmt::format("car {}: {} at {:.1f} Hz, {} dropped", *args.car, *args.node, node->rate_hz,
+                      node->drops)};
+}
+
+ExpectationResult CpuDemand(const ExpectArgs& args, const RunRecord& record) {
+  const BoardReport* board = BoardOf(record, *args.car);
+  if (!board) return {"", false, fmt::format("car {} has no board", *args.car)};
+  const MetricsReport& r = board->report;
+  return {"", Within(r.cpu_demand_percent, args.min_percent, args.max_percent),
+          fmt::format("car {}: CPU demand {:.0f} %, load {:.0f} % of {} cores", *args.car,
+                      r.cpu_demand_percent, r.cpu_percent, r.cores)};
+}
+
 }  // namespace
 
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
@@ -142,6 +179,8 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
     if (kind == "completes") result = Completes(args, record);
     if (kind == "max_lateral_error") result = MaxLateralError(args, record);
     if (kind == "min_obstacle_gap") result = MinObstacleGap(args, record);
+    if (kind == "node_rate") result = NodeRate(args, record);
+    if (kind == "cpu_demand") result = CpuDemand(args, record);
     result.name = Name(clause);
     results.push_back(std::move(result));
   }

@@ -84,12 +84,14 @@ std::string ExpectClause::kind() const {
   if (no_entry_without_grant) return "no_entry_without_grant";
   if (completes) return "completes";
   if (max_lateral_error) return "max_lateral_error";
+  if (node_rate) return "node_rate";
+  if (cpu_demand) return "cpu_demand";
   return "min_obstacle_gap";
 }
 
 const ExpectArgs& ExpectClause::args() const {
   for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
-                           &max_lateral_error, &min_obstacle_gap}) {
+                           &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand}) {
     if (args->has_value()) return **args;
   }
   throw std::logic_error("ExpectClause::args on an empty clause");
@@ -98,7 +100,8 @@ const ExpectArgs& ExpectClause::args() const {
 void ExpectClause::Validate() const {
   const int count = no_collision.has_value() + intersection_mutex.has_value() +
                     no_entry_without_grant.has_value() + completes.has_value() +
-                    max_lateral_error.has_value() + min_obstacle_gap.has_value();
+                    max_lateral_error.has_value() + min_obstacle_gap.has_value() +
+                    node_rate.has_value() + cpu_demand.has_value();
   Require(count == 1,
           "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
           "got " +
@@ -113,6 +116,20 @@ void ExpectClause::Validate() const {
   forbid(k != "completes" && a.within_s.has_value(), "within_s");
   forbid(k != "max_lateral_error" && a.max_m.has_value(), "max_m");
   forbid(k != "min_obstacle_gap" && a.min_m.has_value(), "min_m");
+  forbid(k != "node_rate" && a.node.has_value(), "node");
+  forbid(k != "node_rate" && a.min_hz.has_value(), "min_hz");
+  forbid(k != "node_rate" && a.max_hz.has_value(), "max_hz");
+  forbid(k != "cpu_demand" && a.min_percent.has_value(), "min_percent");
+  forbid(k != "cpu_demand" && a.max_percent.has_value(), "max_percent");
+  if (k == "node_rate") {
+    Require(a.car.has_value() && a.node.has_value(), "node_rate needs car and node");
+    Require(a.min_hz.has_value() || a.max_hz.has_value(), "node_rate needs min_hz or max_hz");
+  }
+  if (k == "cpu_demand") {
+    Require(a.car.has_value(), "cpu_demand needs car");
+    Require(a.min_percent.has_value() || a.max_percent.has_value(),
+            "cpu_demand needs min_percent or max_percent");
+  }
   if (k == "completes") {
     Require(a.laps.has_value() && *a.laps >= 1, "completes needs laps >= 1");
     Require(!a.within_s || *a.within_s > 0.0, "within_s must be > 0");

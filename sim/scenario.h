@@ -138,6 +138,11 @@ struct ExpectArgs {
   std::optional<double> within_s;  // completes: by this time (default: the scenario's duration)
   std::optional<double> max_m;     // max_lateral_error: the bound
   std::optional<double> min_m;     // min_obstacle_gap: the least free distance allowed
+  std::optional<std::string> node;         // node_rate: the node, on the car's board
+  std::optional<double> min_hz;            // node_rate: bounds on its jobs per second
+  std::optional<double> max_hz;
+  std::optional<double> min_percent;       // cpu_demand: bounds on the board's CPU demand
+  std::optional<double> max_percent;       //   (% of one core, summed over its nodes)
 
   template <class V>
   void Describe(V& v) {
@@ -146,6 +151,11 @@ struct ExpectArgs {
     v("within_s", within_s);
     v("max_m", max_m);
     v("min_m", min_m);
+    v("node", node);
+    v("min_hz", min_hz);
+    v("max_hz", max_hz);
+    v("min_percent", min_percent);
+    v("max_percent", max_percent);
   }
   void Validate() const {}
 };
@@ -158,6 +168,8 @@ struct ExpectClause {
   std::optional<ExpectArgs> completes;
   std::optional<ExpectArgs> max_lateral_error;
   std::optional<ExpectArgs> min_obstacle_gap;
+  std::optional<ExpectArgs> node_rate;   // {car, node, min_hz and/or max_hz}
+  std::optional<ExpectArgs> cpu_demand;  // {car, min_percent and/or max_percent}
 
   template <class V>
   void Describe(V& v) {
@@ -167,6 +179,8 @@ struct ExpectClause {
     v("completes", completes);
     v("max_lateral_error", max_lateral_error);
     v("min_obstacle_gap", min_obstacle_gap);
+    v("node_rate", node_rate);
+    v("cpu_demand", cpu_demand);
   }
   void Validate() const;
   std::string kind() const;

@@ -32,6 +32,8 @@ ExpectClause Clause(const std::string& kind, ExpectArgs args = {}) {
   if (kind == "completes") c.completes = args;
   if (kind == "max_lateral_error") c.max_lateral_error = args;
   if (kind == "min_obstacle_gap") c.min_obstacle_gap = args;
+  if (kind == "node_rate") c.node_rate = args;
+  if (kind == "cpu_demand") c.cpu_demand = args;
   c.Validate();
   return c;
 }
@@ -109,6 +111,51 @@ TEST(ExpectationsTest, MaxLateralErrorAndMinObstacleGapCompareWithTheirBounds) {
   r.cars[1].min_obstacle_gap_m = 0.05;
   EXPECT_FALSE(Judge(Clause("min_obstacle_gap", {.min_m = 0.1}), r).passed);
   EXPECT_TRUE(Judge(Clause("min_obstacle_gap", {.min_m = 0.05}), r).passed);
+}
+
+RunRecord WithBoard() {
+  RunRecord r = TwoCars();
+  BoardReport board{.board = "car1"};
+  board.report.cores = 4;
+  board.report.cpu_demand_percent = 480.0;
+  board.report.cpu_percent = 399.0;
+  NodeReport lanes;
+  lanes.name = "lane_detection";
+  lanes.rate_hz = 17.2;
+  lanes.drops = 2556;
+  board.report.nodes.push_back(lanes);
+  r.boards.push_back(board);
+  return r;
+}
+
+TEST(ExpectationsTest, NodeRateJudgesTheNodeOnTheCarsBoard) {
+  const RunRecord r = WithBoard();
+  const ExpectationResult slow =
+      Judge(Clause("node_rate", {.car = 1, .node = "lane_detection", .max_hz = 20.0}), r);
+  EXPECT_TRUE(slow.passed);
+  EXPECT_THAT(slow.detail, HasSubstr("17.2 Hz, 2556 dropped"));
+  EXPECT_FALSE(Judge(Clause("node_rate", {.car = 1, .node = "lane_detection", .min_hz = 29.0}), r)
+                   .passed);
+  const ExpectationResult missing =
+      Judge(Clause("node_rate", {.car = 0, .node = "lane_detection", .min_hz = 1.0}), r);
+  EXPECT_FALSE(missing.passed);
+  EXPECT_THAT(missing.detail, HasSubstr("car 0 runs no node 'lane_detection'"));
+}
+
+TEST(ExpectationsTest, CpuDemandJudgesTheBoardsDemand) {
+  const RunRecord r = WithBoard();
+  EXPECT_TRUE(Judge(Clause("cpu_demand", {.car = 1, .min_percent = 400.0}), r).passed);
+  const ExpectationResult low = Judge(Clause("cpu_demand", {.car = 1, .max_percent = 400.0}), r);
+  EXPECT_FALSE(low.passed);
+  EXPECT_THAT(low.detail, HasSubstr("CPU demand 480 %, load 399 % of 4 cores"));
+  EXPECT_FALSE(Judge(Clause("cpu_demand", {.car = 0, .min_percent = 1.0}), r).passed);
+}
+
+TEST(ExpectationsTest, NodeRateAndCpuDemandNeedTheirKeys) {
+  EXPECT_THROW(Clause("node_rate", {.car = 1, .max_hz = 20.0}), std::invalid_argument);
+  EXPECT_THROW(Clause("node_rate", {.car = 1, .node = "x"}), std::invalid_argument);
+  EXPECT_THROW(Clause("cpu_demand", {.min_percent = 400.0}), std::invalid_argument);
+  EXPECT_THROW(Clause("completes", {.laps = 1, .max_hz = 2.0}), std::invalid_argument);
 }
 
 }  // namespace
