@@ -40,16 +40,12 @@ LaneControllerOutput StepLaneController(const LaneControllerParams& params,
 
   // curvature, speed, and the collision check on the resulting arc
   out.curvature_per_m = PurePursuitCurvature(*out.carrot_base);
-  const double speed =
-      RegulatedSpeed(params.pursuit, out.curvature_per_m, lookahead_m, out.carrot_base->norm());
-  const double yaw_rate = speed * out.curvature_per_m;
-  if (input.is_lethal &&
-      IsCollisionImminent(params.collision, input.X_F_base, speed, yaw_rate, input.is_lethal)) {
-    out.collision_ahead = true;
-    return out;
-  }
-  out.speed_mps = speed;
-  out.yaw_rate_rad_per_s = yaw_rate;
+  const PursuitCommand command =
+      RegulatedPursuitCommand(params.pursuit, params.collision, out.curvature_per_m, lookahead_m,
+                              out.carrot_base->norm(), input.X_F_base, input.is_lethal);
+  out.speed_mps = command.speed_mps;
+  out.yaw_rate_rad_per_s = command.yaw_rate_rad_per_s;
+  out.collision_ahead = command.collision_ahead;
   return out;
 }
 

@@ -219,17 +219,26 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
   out.curvature_per_m = PurePursuitCurvature(p_base_carrot);
 
   // speed and the collision check on the resulting arc
-  const double speed =
-      RegulatedSpeed(params.pursuit, out.curvature_per_m, lookahead_m, p_base_carrot.norm());
-  const double yaw_rate = speed * out.curvature_per_m;
-  if (input.is_lethal &&
-      IsCollisionImminent(params.collision, X, speed, yaw_rate, input.is_lethal)) {
-    out.collision_ahead = true;
-    return out;
-  }
-  out.speed_mps = speed;
-  out.yaw_rate_rad_per_s = yaw_rate;
+  const PursuitCommand command =
+      RegulatedPursuitCommand(params.pursuit, params.collision, out.curvature_per_m, lookahead_m,
+                              p_base_carrot.norm(), X, input.is_lethal);
+  out.speed_mps = command.speed_mps;
+  out.yaw_rate_rad_per_s = command.yaw_rate_rad_per_s;
+  out.collision_ahead = command.collision_ahead;
   return out;
+}
+
+PursuitCommand RegulatedPursuitCommand(const RegulatedPurePursuitParams& pursuit,
+                                       const CollisionCheckParams& collision,
+                                       double curvature_per_m, double lookahead_dist_m,
+                                       double carrot_dist_m, const world::Pose2& X_F_base,
+                                       const LethalQuery& is_lethal) {
+  const double speed = RegulatedSpeed(pursuit, curvature_per_m, lookahead_dist_m, carrot_dist_m);
+  const double yaw_rate = speed * curvature_per_m;
+  if (is_lethal && IsCollisionImminent(collision, X_F_base, speed, yaw_rate, is_lethal)) {
+    return PursuitCommand{.collision_ahead = true};
+  }
+  return PursuitCommand{.speed_mps = speed, .yaw_rate_rad_per_s = yaw_rate};
 }
 
 }  // namespace autonomsim::stack

@@ -118,6 +118,20 @@ double RegulatedSpeed(const RegulatedPurePursuitParams& params, double curvature
 bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2& X_F_base,
                          double speed_mps, double yaw_rate_rad_per_s, const LethalQuery& is_lethal);
 
+// What both controllers command for a carrot: the regulated speed along κ and ω = v·κ, or (0, 0)
+// with collision_ahead when that arc meets a lethal point within the horizon (no check when
+// is_lethal is empty).
+struct PursuitCommand {
+  double speed_mps{0.0};
+  double yaw_rate_rad_per_s{0.0};
+  bool collision_ahead{false};
+};
+PursuitCommand RegulatedPursuitCommand(const RegulatedPurePursuitParams& pursuit,
+                                       const CollisionCheckParams& collision,
+                                       double curvature_per_m, double lookahead_dist_m,
+                                       double carrot_dist_m, const world::Pose2& X_F_base,
+                                       const LethalQuery& is_lethal);
+
 struct PathFollowerParams {
   RegulatedPurePursuitParams pursuit;
   CollisionCheckParams collision;
