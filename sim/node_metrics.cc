@@ -1,11 +1,10 @@
 #include "sim/node_metrics.h"
 
-#include <iterator>
-
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <optional>
 #include <set>
 
@@ -303,7 +302,8 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
     const std::string& board = boards[b].board;
     const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
     std::vector<std::string> names;  // JSON-quoted
-    for (const std::string& name : metrics.trace_names()) names.push_back(nlohmann::json(name).dump());
+    for (const std::string& name : metrics.trace_names())
+      names.push_back(nlohmann::json(name).dump());
     meta(base + kPidCpu, std::nullopt, "process_name",
          fmt::format("{}: CPU ({} cores; busy cores, 1.0 = one core)", board, metrics.cores()));
     meta(base + kPidExecutors, std::nullopt, "process_name",
@@ -329,10 +329,12 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
       const std::string& name = names[static_cast<std::size_t>(e.name)];
       separate();
       if (e.phase == 'C') {
-        fmt::format_to(it, "{{\"name\":{},\"ph\":\"C\",\"pid\":{},\"ts\":{},\"args\":{{\"cores\":{}}}}}",
-                       name, base + e.pid, ts_us, e.value);
+        fmt::format_to(
+            it, "{{\"name\":{},\"ph\":\"C\",\"pid\":{},\"ts\":{},\"args\":{{\"cores\":{}}}}}", name,
+            base + e.pid, ts_us, e.value);
       } else {
-        fmt::format_to(it, "{{\"name\":{},\"ph\":\"X\",\"pid\":{},\"tid\":{},\"ts\":{},\"dur\":{}}}",
+        fmt::format_to(it,
+                       "{{\"name\":{},\"ph\":\"X\",\"pid\":{},\"tid\":{},\"ts\":{},\"dur\":{}}}",
                        name, base + e.pid, e.tid, ts_us, static_cast<double>(e.dur_ns) / 1e3);
       }
     }

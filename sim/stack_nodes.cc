@@ -8,7 +8,8 @@
 namespace autonomsim::sim {
 
 void PoseFixConfig::Validate() const {
-  if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("rate_hz must be in (0, 1000]");
+  if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
+    throw std::invalid_argument("rate_hz must be in (0, 1000]");
   if (!(position_stddev_m >= 0.0)) throw std::invalid_argument("position_stddev_m must be >= 0");
   if (!(yaw_stddev_rad >= 0.0)) throw std::invalid_argument("yaw_stddev_rad must be >= 0");
 }
@@ -91,8 +92,8 @@ class Builder {
   template <class T>
   void Keep(NodeId node, TopicId<T> topic, std::function<void(const T&, Time stamp)> store) {
     graph_.AddSubscription<T>(
-        node, topic, [store = std::move(store)](const T& v, Time stamp, Outbox&) { store(v, stamp); },
-        cache_);
+        node, topic,
+        [store = std::move(store)](const T& v, Time stamp, Outbox&) { store(v, stamp); }, cache_);
   }
   Time Now() const { return kernel_.Now(); }
   NodeGraph& graph() { return graph_; }
@@ -129,22 +130,22 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
   const auto speed_topic = Topic<WheelSpeedMessage>(
       graph, sensors.wheel_speed_stream().topic,
       {sensors.wheel_speed_stream().type.name, sensors.wheel_speed_stream().type.bytes, false});
-  const auto odometry = Topic<stack::LocalizationEkfOutput>(graph, "/odometry/filtered",
-                                                            OdometryType());
-  const auto costmap_topic = Topic<CostmapMessage>(graph, "/local_costmap/costmap_raw",
-                                                   CostmapType(config.local_costmap));
+  const auto odometry =
+      Topic<stack::LocalizationEkfOutput>(graph, "/odometry/filtered", OdometryType());
+  const auto costmap_topic =
+      Topic<CostmapMessage>(graph, "/local_costmap/costmap_raw", CostmapType(config.local_costmap));
   const auto behavior_topic = Topic<stack::BehaviorOutput>(
       graph, "/behavior",
       GoalsType(static_cast<std::size_t>(config.behavior.waypoint_horizon_m /
                                          config.behavior.waypoint_spacing_m)));
   const auto plan_topic = Topic<PathMessage>(graph, "/plan", PathType(0));
-  const auto status_topic = Topic<ControllerStatus>(graph, "/controller/status",
-                                                    BoolType("autonomsim/ControllerStatus"));
-  const auto free_topic = Topic<IntersectionFree>(graph, "/intersection_free",
-                                                  BoolType("std_msgs/Bool"));
+  const auto status_topic =
+      Topic<ControllerStatus>(graph, "/controller/status", BoolType("autonomsim/ControllerStatus"));
+  const auto free_topic =
+      Topic<IntersectionFree>(graph, "/intersection_free", BoolType("std_msgs/Bool"));
   const auto cmd_vel = Topic<Twist>(graph, "/cmd_vel", TwistType());
-  const auto command_topic = Topic<vehicle::ActuatorCommand>(graph, "/carcontrol/command",
-                                                             CarCommandType());
+  const auto command_topic =
+      Topic<vehicle::ActuatorCommand>(graph, "/carcontrol/command", CarCommandType());
 
   // ---- sensor drivers: publish each reading the suite samples (same instants, after it) ----
   auto imu_latest = std::make_shared<vehicle::ImuReading>();
@@ -154,7 +155,8 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
   auto speed_latest = std::make_shared<WheelSpeedMessage>();
   sensors.OnWheelSpeed([speed_latest](const WheelSpeedMessage& m) { *speed_latest = m; });
   AddSourceNode(graph, sw("hall_sensor"), speed_topic, sensors.wheel_speed_stream().first,
-                sensors.wheel_speed_stream().period, [speed_latest](Time) { return *speed_latest; });
+                sensors.wheel_speed_stream().period,
+                [speed_latest](Time) { return *speed_latest; });
 
   // ---- localization: EKF at 20 Hz on everything received since its last step ----
   {
@@ -163,8 +165,8 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
       stack::LocalizationEkfInput pending;
     };
     auto state = std::make_shared<State>();
-    state->ekf = stack::InitialLocalizationEkfState(config.localization, kZeroTime,
-                                                    context.X_map_odom);
+    state->ekf =
+        stack::InitialLocalizationEkfState(config.localization, kZeroTime, context.X_map_odom);
     const NodeId node = graph.AddNode(sw("ekf_filter_node"));
     b.Keep<vehicle::ImuReading>(node, imu_topic, [state](const vehicle::ImuReading& r, Time) {
       state->pending.imu.push_back({r.stamp, r.yaw_rad, r.yaw_rate_rad_per_s});
@@ -190,7 +192,8 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
                           truth.x_m + rng->Normal(0.0, fix.position_stddev_m),
                           truth.y_m + rng->Normal(0.0, fix.position_stddev_m),
                           world::WrapAngle(truth.yaw_rad + rng->Normal(0.0, fix.yaw_stddev_rad))};
-                      const double var_p = std::max(fix.position_stddev_m * fix.position_stddev_m, 1e-6);
+                      const double var_p =
+                          std::max(fix.position_stddev_m * fix.position_stddev_m, 1e-6);
                       const double var_y = std::max(fix.yaw_stddev_rad * fix.yaw_stddev_rad, 1e-6);
                       f.covariance = Eigen::Vector3d(var_p, var_p, var_y).asDiagonal();
                       return f;
@@ -202,8 +205,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     const auto out = graph.AddPublisher(node, odometry);
     const stack::LocalizationEkfParams params = config.localization;
     graph.AddTimer(node, config.localization.period, config.localization.period,
-                   [state, params, out, on_estimate = hooks.on_estimate](Time now,
-                                                                         Outbox& outbox) {
+                   [state, params, out, on_estimate = hooks.on_estimate](Time now, Outbox& outbox) {
                      state->pending.now = now;
                      stack::LocalizationEkfOutput estimate =
                          stack::StepLocalizationEkf(params, state->pending, &state->ekf);
@@ -251,24 +253,25 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     b.Keep<PathMessage>(node, plan_topic,
                         [state](const PathMessage& p, Time) { state->plan_failed = !p.ok; });
     const auto out = graph.AddPublisher(node, behavior_topic);
-    graph.AddTimer(
-        node, config.behavior.tick_period, config.behavior.tick_period,
-        [state, out, params = config.behavior, route = context.route,
-         mission_done = hooks.mission_done,
-         on_behavior = hooks.on_behavior](Time now, Outbox& outbox) {
-          if (!state->odom) return;
-          const stack::BehaviorInput input{.now = now,
-                                           .p_map = state->odom->X_map_base.position(),
-                                           .intersection_free = state->intersection_free,
-                                           .collision_ahead = state->collision_ahead,
-                                           .plan_failed = state->plan_failed,
-                                           .mission_done = mission_done && mission_done()};
-          stack::BehaviorOutput result = stack::StepBehavior(params, *route, input,
-                                                             &state->behavior);
-          if (result.clear_costmaps) state->plan_failed = false;  // planned again after recovery
-          if (on_behavior) on_behavior(result);
-          outbox.Publish(out, std::move(result), state->odom->stamp);
-        });
+    graph.AddTimer(node, config.behavior.tick_period, config.behavior.tick_period,
+                   [state, out, params = config.behavior, route = context.route,
+                    mission_done = hooks.mission_done,
+                    on_behavior = hooks.on_behavior](Time now, Outbox& outbox) {
+                     if (!state->odom) return;
+                     const stack::BehaviorInput input{
+                         .now = now,
+                         .p_map = state->odom->X_map_base.position(),
+                         .intersection_free = state->intersection_free,
+                         .collision_ahead = state->collision_ahead,
+                         .plan_failed = state->plan_failed,
+                         .mission_done = mission_done && mission_done()};
+                     stack::BehaviorOutput result =
+                         stack::StepBehavior(params, *route, input, &state->behavior);
+                     if (result.clear_costmaps)
+                       state->plan_failed = false;  // planned again after recovery
+                     if (on_behavior) on_behavior(result);
+                     outbox.Publish(out, std::move(result), state->odom->stamp);
+                   });
   }
 
   // ---- global planner: through the behaviour's goals, at 1 Hz ----
@@ -285,24 +288,23 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     const NodeId node = graph.AddNode(sw("planner_server"));
     b.Keep<stack::LocalizationEkfOutput>(
         node, odometry, [state](const stack::LocalizationEkfOutput& o, Time) { state->odom = o; });
-    b.Keep<stack::BehaviorOutput>(node, behavior_topic, [state](const stack::BehaviorOutput& o,
-                                                                Time) { state->goals = o.goals; });
+    b.Keep<stack::BehaviorOutput>(
+        node, behavior_topic,
+        [state](const stack::BehaviorOutput& o, Time) { state->goals = o.goals; });
     const auto out = graph.AddPublisher(node, plan_topic);
-    graph.AddTimer(node, config.planner_period, config.planner_period,
-                   [state, out, params = config.planner](Time, Outbox& outbox) {
-                     if (!state->odom || state->goals.empty()) return;
-                     stack::GlobalPlan plan = stack::PlanThroughPoses(
-                         params, state->costmap->costmap(), state->odom->X_map_base.position(),
-                         state->goals);
-                     PathMessage message{
-                         .path = std::make_shared<const std::vector<world::Vec2>>(
-                             std::move(plan.path_m)),
-                         .id = ++state->plans,
-                         .ok = plan.ok()};
-                     const std::size_t poses = message.path->size();
-                     outbox.Publish(out, std::move(message), state->odom->stamp,
-                                    PathType(poses).bytes);
-                   });
+    graph.AddTimer(
+        node, config.planner_period, config.planner_period,
+        [state, out, params = config.planner](Time, Outbox& outbox) {
+          if (!state->odom || state->goals.empty()) return;
+          stack::GlobalPlan plan = stack::PlanThroughPoses(
+              params, state->costmap->costmap(), state->odom->X_map_base.position(), state->goals);
+          PathMessage message{
+              .path = std::make_shared<const std::vector<world::Vec2>>(std::move(plan.path_m)),
+              .id = ++state->plans,
+              .ok = plan.ok()};
+          const std::size_t poses = message.path->size();
+          outbox.Publish(out, std::move(message), state->odom->stamp, PathType(poses).bytes);
+        });
   }
 
   // ---- local costmap: obstacle layer from the grid + inflation, rolling, 5 Hz ----
@@ -327,15 +329,14 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
           state->pending.insert(state->pending.end(), marks.begin(), marks.end());
         });
     b.Keep<stack::BehaviorOutput>(
-        node, behavior_topic, [state, params = config.local_costmap](const stack::BehaviorOutput& o,
-                                                                     Time) {
+        node, behavior_topic,
+        [state, params = config.local_costmap](const stack::BehaviorOutput& o, Time) {
           if (!o.clear_costmaps) return;
           state->costmap = std::make_unique<stack::LocalCostmap>(params);
           state->pending.clear();
         });
     const auto out = graph.AddPublisher(node, costmap_topic);
-    const Duration period =
-        FromSeconds(1.0 / config.local_costmap.update_rate_hz);
+    const Duration period = FromSeconds(1.0 / config.local_costmap.update_rate_hz);
     graph.AddTimer(node, period, period, [state, out](Time, Outbox& outbox) {
       if (!state->odom) return;
       const stack::Costmap2D& grid = state->costmap->Step(
@@ -353,7 +354,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
       std::optional<Stamped<stack::LanePoints>> lanes;
       std::optional<PathMessage> path;
       std::shared_ptr<const stack::Costmap2D> costmap;
-      bool hold{true};  // nothing to do before the behaviour's first goals
+      bool hold{true};      // nothing to do before the behaviour's first goals
       bool stopped{false};  // the zero velocity of the last hold was published
       stack::PathFollowerState follower;
     };
@@ -370,8 +371,9 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     });
     b.Keep<CostmapMessage>(node, costmap_topic,
                            [state](const CostmapMessage& c, Time) { state->costmap = c.costmap; });
-    b.Keep<stack::BehaviorOutput>(node, behavior_topic, [state](const stack::BehaviorOutput& o,
-                                                                Time) { state->hold = o.hold; });
+    b.Keep<stack::BehaviorOutput>(
+        node, behavior_topic,
+        [state](const stack::BehaviorOutput& o, Time) { state->hold = o.hold; });
     const auto out = graph.AddPublisher(node, cmd_vel);
     const auto status_out = graph.AddPublisher(node, status_topic);
     graph.AddTimer(
@@ -403,14 +405,14 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
           Time stamp = odom.stamp;
           if (follow) {
             if (state->path) {
-              const stack::PathFollowerOutput r = stack::StepPathFollower(
-                  follow_params,
-                  {.path = *state->path->path,
-                   .path_id = state->path->id,
-                   .X_F_base = odom.X_map_base,
-                   .speed_mps = odom.speed_mps,
-                   .is_lethal = is_lethal},
-                  &state->follower);
+              const stack::PathFollowerOutput r =
+                  stack::StepPathFollower(follow_params,
+                                          {.path = *state->path->path,
+                                           .path_id = state->path->id,
+                                           .X_F_base = odom.X_map_base,
+                                           .speed_mps = odom.speed_mps,
+                                           .is_lethal = is_lethal},
+                                          &state->follower);
               twist = {r.speed_mps, r.yaw_rate_rad_per_s};
               collision = r.collision_ahead;
             }
@@ -421,12 +423,12 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
               points.reserve(lanes.points.size());
               for (const stack::LanePoint& p : lanes.points) points.emplace_back(p.x_m, p.y_m);
             }
-            const stack::LaneControllerOutput r = stack::StepLaneController(
-                lane_params, {.lane_points_base = points,
-                              .lanes_valid = lanes.valid != 0,
-                              .speed_mps = odom.speed_mps,
-                              .X_F_base = odom.X_map_base,
-                              .is_lethal = is_lethal});
+            const stack::LaneControllerOutput r =
+                stack::StepLaneController(lane_params, {.lane_points_base = points,
+                                                        .lanes_valid = lanes.valid != 0,
+                                                        .speed_mps = odom.speed_mps,
+                                                        .X_F_base = odom.X_map_base,
+                                                        .is_lethal = is_lethal});
             twist = {r.speed_mps, r.yaw_rate_rad_per_s};
             collision = r.collision_ahead;
             stamp = state->lanes->stamp;
@@ -459,7 +461,8 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     graph.AddTimer(node, config.cruise_control.period, config.cruise_control.period,
                    [state, out, params = config.cruise_control](Time now, Outbox& outbox) {
                      const stack::CruiseControlOutput r = stack::StepCruiseControl(
-                         params, {.now = now, .command = state->command, .odometry = state->odometry},
+                         params,
+                         {.now = now, .command = state->command, .odometry = state->odometry},
                          &state->cruise);
                      state->command.reset();
                      state->odometry.reset();

@@ -53,9 +53,9 @@ namespace autonomsim::sim {
 // stack.localization.use_pose_fix: true. A source node `pose_fix` publishes the true chassis pose
 // with Gaussian noise at rate_hz on /pose_fix (geometry_msgs/PoseWithCovarianceStamped).
 struct PoseFixConfig {
-  double rate_hz{5.0};               // assumed: a modest tracking system
-  double position_stddev_m{0.02};    // assumed: per axis
-  double yaw_stddev_rad{0.02};       // assumed
+  double rate_hz{5.0};             // assumed: a modest tracking system
+  double position_stddev_m{0.02};  // assumed: per axis
+  double yaw_stddev_rad{0.02};     // assumed
 
   template <class V>
   void Describe(V& v) {
@@ -103,7 +103,7 @@ struct StackConfig {
 struct StackContext {
   const world::Polyline* route{nullptr};  // the lanes to drive (the behaviour's goals)
   const std::vector<world::IntersectionSpec>* intersections{nullptr};  // the zone boxes
-  const world::OccupancyMap* static_map{nullptr};  // at global_costmap.resolution_m
+  const world::OccupancyMap* static_map{nullptr};           // at global_costmap.resolution_m
   const stack::ObstacleGridParams* obstacle_grid{nullptr};  // the grid's geometry (perception)
   world::Pose2 X_map_odom;  // static map→odom: the start pose (reference §6)
   Duration intersection_client_period{Milliseconds(100)};

@@ -20,11 +20,16 @@ void BehaviorParams::Validate() const {
 
 const char* ToString(BehaviorMode mode) {
   switch (mode) {
-    case BehaviorMode::kDrive: return "drive";
-    case BehaviorMode::kIntersectionWait: return "intersection_wait";
-    case BehaviorMode::kRecovery: return "recovery";
-    case BehaviorMode::kFailed: return "failed";
-    case BehaviorMode::kDone: return "done";
+    case BehaviorMode::kDrive:
+      return "drive";
+    case BehaviorMode::kIntersectionWait:
+      return "intersection_wait";
+    case BehaviorMode::kRecovery:
+      return "recovery";
+    case BehaviorMode::kFailed:
+      return "failed";
+    case BehaviorMode::kDone:
+      return "done";
   }
   return "?";
 }
@@ -58,9 +63,10 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
   }
   // where the estimate is along the route
   const double previous_s = state->route_s_m;
-  state->route_s_m = state->started
-                         ? route.ProjectNear(input.p_map, state->route_s_m, params.tracking_window_m).s_m
-                         : route.Project(input.p_map).s_m;
+  state->route_s_m =
+      state->started
+          ? route.ProjectNear(input.p_map, state->route_s_m, params.tracking_window_m).s_m
+          : route.Project(input.p_map).s_m;
   if (state->started) {
     double ds = state->route_s_m - previous_s;
     if (route.cyclic()) ds = std::remainder(ds, route.length_m());

@@ -73,10 +73,10 @@ struct BehaviorInput {
 
 struct BehaviorOutput {
   BehaviorMode mode{BehaviorMode::kDrive};
-  bool hold{false};                   // the controller must not drive
-  std::vector<world::Vec2> goals;     // map frame, nearest first; empty while holding
-  bool clear_costmaps{false};         // the recovery's first action, once per recovery
-  int retries{0};                     // recoveries since the last success
+  bool hold{false};                // the controller must not drive
+  std::vector<world::Vec2> goals;  // map frame, nearest first; empty while holding
+  bool clear_costmaps{false};      // the recovery's first action, once per recovery
+  int retries{0};                  // recoveries since the last success
 };
 
 struct BehaviorState {

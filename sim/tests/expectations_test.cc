@@ -134,8 +134,8 @@ TEST(ExpectationsTest, NodeRateJudgesTheNodeOnTheCarsBoard) {
       Judge(Clause("node_rate", {.car = 1, .node = "lane_detection", .max_hz = 20.0}), r);
   EXPECT_TRUE(slow.passed);
   EXPECT_THAT(slow.detail, HasSubstr("17.2 Hz, 2556 dropped"));
-  EXPECT_FALSE(Judge(Clause("node_rate", {.car = 1, .node = "lane_detection", .min_hz = 29.0}), r)
-                   .passed);
+  EXPECT_FALSE(
+      Judge(Clause("node_rate", {.car = 1, .node = "lane_detection", .min_hz = 29.0}), r).passed);
   const ExpectationResult missing =
       Judge(Clause("node_rate", {.car = 0, .node = "lane_detection", .min_hz = 1.0}), r);
   EXPECT_FALSE(missing.passed);

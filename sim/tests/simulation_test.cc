@@ -145,7 +145,8 @@ TEST(SimulationBoardTest, OnlyACarWithNodesToRunGetsABoardAndItsCamerasPublishAt
 
 TEST(SimulationBoardTest, ABoardsProfileThatCannotBeLoadedIsAnErrorAtTheCarsKey) {
   try {
-    LoadScenario(kDefault, {"cars[0].perception.enabled=true", "cars[0].platform.profile=nope.yaml"});
+    LoadScenario(kDefault,
+                 {"cars[0].perception.enabled=true", "cars[0].platform.profile=nope.yaml"});
     FAIL() << "no error";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("cars[0].platform.profile"));
@@ -169,8 +170,8 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
     EXPECT_NEAR(static_cast<double>(node->timer_ticks) / 12.0, hz, 0.1 * hz) << name;
     EXPECT_EQ(node->timer_overruns, 0u) << name;
   }
-  for (const char* replaced : {"nav2_controller", "nav2_planning", "localization_ekf",
-                               "vehicle_io"}) {
+  for (const char* replaced :
+       {"nav2_controller", "nav2_planning", "localization_ekf", "vehicle_io"}) {
     EXPECT_EQ(board.FindNode(replaced), nullptr) << replaced;
   }
   EXPECT_NE(board.FindNode("camera_drivers"), nullptr);  // not modelled node by node
@@ -187,9 +188,9 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
 TEST(SimulationStackTest, WithoutThePoseFixTheEstimateDrifts) {
   const RunRecord fixed =
       RunScenario(LoadScenario("scenarios/stack_obstacle.yaml", {"duration_s=40"}));
-  const RunRecord drifting = RunScenario(LoadScenario(
-      "scenarios/stack_obstacle.yaml",
-      {"duration_s=40", "cars[0].stack.localization.use_pose_fix=false"}));
+  const RunRecord drifting =
+      RunScenario(LoadScenario("scenarios/stack_obstacle.yaml",
+                               {"duration_s=40", "cars[0].stack.localization.use_pose_fix=false"}));
   ASSERT_TRUE(fixed.cars[0].stack && drifting.cars[0].stack);
   EXPECT_LT(fixed.cars[0].stack->final_localization_error_m, 0.06);
   EXPECT_GT(drifting.cars[0].stack->final_localization_error_m,

@@ -1,7 +1,5 @@
 #include "stack/global_planner.h"
 
-#include "stack/behavior.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +9,7 @@
 #include <vector>
 
 #include "sim/track_loader.h"
+#include "stack/behavior.h"
 #include "stack/costmap.h"
 #include "world/occupancy_map.h"
 
@@ -338,7 +337,8 @@ TEST_F(GlobalPlannerLabTest, PlanThroughLaneGoalsStaysNearTheRoute) {
     double worst_s = 0.0;
     for (double s0 = 0.0; s0 < route.path.length_m(); s0 += 0.25) {
       std::vector<Vec2> goals;
-      for (double s = s0 + kSpacing; s <= s0 + 2.5 + 1e-9; s += kSpacing) goals.push_back(route.path.PointAt(s));
+      for (double s = s0 + kSpacing; s <= s0 + 2.5 + 1e-9; s += kSpacing)
+        goals.push_back(route.path.PointAt(s));
       const GlobalPlan plan =
           PlanThroughPoses(GlobalPlannerParams{}, *costmap_, route.path.PointAt(s0), goals);
       ASSERT_TRUE(plan.ok()) << name << " s " << s0;
