@@ -325,7 +325,7 @@ void NodeGraph::StartJob(int node) {
         FromSeconds(compute_s) + platform_.fpga().TransferTime(in_bytes + out_bytes);
     job.fabric = n.cost_scale == 1.0 ? fabric
                                      : FromSeconds(ToSeconds(fabric) * n.cost_scale);
-    job.compute_core_s = hw.delegate_cpu_s * factor * n.cost_scale;
+    job.compute_core_s = hw.delegate_cpu_s * factor;
   } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
     const SwCost& sw = *callback_cost;
     job.compute_core_s = (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +

@@ -283,7 +283,7 @@ struct PlatformConfig {
   std::map<std::string, TopicTransportConfig> transport;  // by topic name; others keep defaults
   // What-if knobs (sweeps). cores: the CPU's core count instead of the profile's cpu.cores.
   // cost_scale: by node name, a factor on each job's compute cost (software: its core-seconds of
-  // work; hardware: its fabric time, memory transfers included, and its delegate thread's CPU).
+  // work; hardware: its fabric time, memory transfers included, not its delegate thread's CPU).
   // cost_override: by node name, each job's compute cost drawn from a distribution instead of the
   // profile's (software: core-seconds of work; hardware: fabric compute time, memory transfers
   // still added), from the seeded stream "<board>/platform/<node>/cost_override"; cost_scale
