@@ -32,8 +32,8 @@ void NodeGraph::CheckConfigUsed() const {
       if (HasNode(name)) continue;
       std::string known;
       for (const Node& n : nodes_) known += (known.empty() ? "" : ", ") + n.name;
-      throw ConfigError("platform." + field + "." + name + ": no node of that name (nodes: " +
-                        known + ")");
+      throw ConfigError("platform." + field + "." + name +
+                        ": no node of that name (nodes: " + known + ")");
     }
   };
   auto keys = [](const auto& map) {
@@ -130,7 +130,8 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
                              "' has a cost_override but the graph has no random streams");
     }
     node.cost_override = it->second;
-    node.override_rng.emplace(rng_->Stream(rng_prefix_ + "platform/" + spec.name + "/cost_override"));
+    node.override_rng.emplace(
+        rng_->Stream(rng_prefix_ + "platform/" + spec.name + "/cost_override"));
   }
   const std::string mapping =
       hw ? "hw:slot" + std::to_string(*spec.mapping.slot) : std::string("sw");
@@ -319,18 +320,18 @@ void NodeGraph::StartJob(int node) {
   if (n.mapping.target == "hw") {
     const HwCost& hw = *n.cost.hw;
     const double factor = Jitter(n, hw.jitter);
-    const double compute_s =
-        n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng) : hw.compute_s * factor;
+    const double compute_s = n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng)
+                                             : hw.compute_s * factor;
     const Duration fabric =
         FromSeconds(compute_s) + platform_.fpga().TransferTime(in_bytes + out_bytes);
-    job.fabric = n.cost_scale == 1.0 ? fabric
-                                     : FromSeconds(ToSeconds(fabric) * n.cost_scale);
+    job.fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
     job.compute_core_s = hw.delegate_cpu_s * factor;
   } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
     const SwCost& sw = *callback_cost;
-    job.compute_core_s = (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
-                          1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
-                         Jitter(n, sw.jitter);
+    job.compute_core_s =
+        (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
+         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
+        Jitter(n, sw.jitter);
     job.max_parallelism = sw.max_parallelism;
   } else {
     const SwCost& sw = *n.cost.sw;

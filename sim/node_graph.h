@@ -232,7 +232,7 @@ class NodeGraph {
     ComponentCost cost;
     int metrics_index{-1};
     std::optional<Rng> rng;
-    double cost_scale{1.0};                              // PlatformConfig::cost_scale
+    double cost_scale{1.0};                               // PlatformConfig::cost_scale
     std::optional<CostDistributionConfig> cost_override;  // PlatformConfig::cost_override
     std::optional<Rng> override_rng;
     std::vector<int> subscriptions;

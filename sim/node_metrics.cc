@@ -32,7 +32,8 @@ int PidOf(TraceLane lane) {
 }
 
 nlohmann::json StatsJson(const Stats& s) {
-  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50}, {"p95", s.p95}, {"p99", s.p99}, {"max", s.max}};
+  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50},
+          {"p95", s.p95},     {"p99", s.p99}, {"max", s.max}};
 }
 
 }  // namespace
@@ -168,7 +169,8 @@ Stats ComputeStats(std::vector<double> samples) {
 }
 
 std::vector<double> HistogramEdgesMs() {
-  const int decades = static_cast<int>(std::lround(std::log10(kHistogramMax_ms / kHistogramMin_ms)));
+  const int decades =
+      static_cast<int>(std::lround(std::log10(kHistogramMax_ms / kHistogramMin_ms)));
   std::vector<double> edges;
   for (int i = 0; i <= decades * kHistogramBinsPerDecade; ++i) {
     edges.push_back(kHistogramMin_ms *

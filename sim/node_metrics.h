@@ -188,9 +188,9 @@ struct BoardMetrics {
 std::string NodesCsv(const std::vector<BoardReport>& boards);
 // For summary.json, per board: {cores, window_s, cpu_percent, cpu_demand_percent, load_bin_s,
 // cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
-// min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent, arrivals, timer_ticks, drops, loan_failures,
-// timer_overruns}], topics: [{name, transport, bytes, published, rate_hz, latency_ms: {...},
-// drops, loan_failures}]}.
+// min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
+// arrivals, timer_ticks, drops, loan_failures, timer_overruns}], topics: [{name, transport, bytes,
+// published, rate_hz, latency_ms: {...}, drops, loan_failures}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

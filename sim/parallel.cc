@@ -12,7 +12,8 @@ void ParallelFor(std::size_t n, int jobs, const std::function<void(std::size_t)>
   auto worker = [&] {
     for (std::size_t i = next++; i < n; i = next++) body(i);
   };
-  const std::size_t threads_wanted = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, jobs)), n);
+  const std::size_t threads_wanted =
+      std::min<std::size_t>(static_cast<std::size_t>(std::max(1, jobs)), n);
   std::vector<std::thread> threads;
   for (std::size_t t = 1; t < threads_wanted; ++t) threads.emplace_back(worker);
   worker();

@@ -176,8 +176,8 @@ void CostDistributionConfig::Validate() const {
     forbid(min_s, "min_s");
     forbid(max_s, "max_s");
   } else {
-    Require(false, "distribution must be fixed, uniform, normal or lognormal, got '" +
-                       distribution + "'");
+    Require(false,
+            "distribution must be fixed, uniform, normal or lognormal, got '" + distribution + "'");
   }
 }
 

@@ -291,10 +291,10 @@ struct PlatformConfig {
   std::optional<int> cores;
   std::map<std::string, double> cost_scale;
   std::map<std::string, CostDistributionConfig> cost_override;
-  bool background_loads{true};                            // add the profile's background loads
-  Duration load_bin{std::chrono::seconds(1)};             // CPU load over time: one value per bin
-  bool trace{true};                                       // record trace.json
-  int trace_max_events{200000};                           // then stop recording (noted in it)
+  bool background_loads{true};                 // add the profile's background loads
+  Duration load_bin{std::chrono::seconds(1)};  // CPU load over time: one value per bin
+  bool trace{true};                            // record trace.json
+  int trace_max_events{200000};                // then stop recording (noted in it)
 
   template <class V>
   void Describe(V& v) {

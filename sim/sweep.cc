@@ -199,8 +199,8 @@ VaryAxis ParseVary(const std::string& spec) {
     const double stop = ParseNumber(range[1], spec);
     const double count_d = ParseNumber(range[2], spec);
     if (count_d < 1 || count_d != std::floor(count_d) || count_d > 100000) {
-      throw ConfigError("--vary " + spec + ": count must be a whole number >= 1, got '" +
-                        range[2] + "'");
+      throw ConfigError("--vary " + spec + ": count must be a whole number >= 1, got '" + range[2] +
+                        "'");
     }
     const int count = static_cast<int>(count_d);
     for (int i = 0; i < count; ++i) {
@@ -359,8 +359,8 @@ std::vector<SweepPoint> ExpandGrid(const SweepSpec& spec) {
   std::vector<SweepPoint> points;
   points.reserve(total);
   for (std::size_t index = 0; index < total; ++index) {
-    SweepPoint p{.index = index, .value_index = std::vector<std::size_t>(spec.axes.size()),
-                 .repeat = 0};
+    SweepPoint p{
+        .index = index, .value_index = std::vector<std::size_t>(spec.axes.size()), .repeat = 0};
     std::size_t rest = index;
     p.repeat = static_cast<int>(rest % static_cast<std::size_t>(std::max(1, spec.repeat)));
     rest /= static_cast<std::size_t>(std::max(1, spec.repeat));
@@ -452,8 +452,9 @@ std::vector<std::pair<std::string, std::string>> RunMetricsRow(const nlohmann::j
     // the mean time per lap: the last lap's completion time over the laps completed
     const auto lap_times = car.value("lap_times_s", std::vector<double>{});
     add(c + "mean_lap_time_s",
-        lap_times.empty() ? nlohmann::json()
-                          : nlohmann::json(lap_times.back() / static_cast<double>(lap_times.size())));
+        lap_times.empty()
+            ? nlohmann::json()
+            : nlohmann::json(lap_times.back() / static_cast<double>(lap_times.size())));
     add(c + "distance_m", get(car, "distance_m"));
     add(c + "waits", get(car, "waits"));
     add(c + "total_wait_s", get(car, "total_wait_s"));
@@ -473,9 +474,9 @@ std::vector<std::pair<std::string, std::string>> RunMetricsRow(const nlohmann::j
       const std::string b = board + ".";
       add(b + "cpu_percent", get(report, "cpu_percent"));
       add(b + "cpu_demand_percent", get(report, "cpu_demand_percent"));
-      for (const auto& [name, column] : {std::pair<std::string, std::string>{"/carcontrol/command",
-                                                                             "e2e"},
-                                         {"/lane_detector/central_line/point_cloud", "lanes"}}) {
+      for (const auto& [name, column] :
+           {std::pair<std::string, std::string>{"/carcontrol/command", "e2e"},
+            {"/lane_detector/central_line/point_cloud", "lanes"}}) {
         for (const nlohmann::json& topic : report.at("topics")) {
           if (topic.at("name") != name) continue;
           add(b + column + "_latency_p50_ms", topic.at("latency_ms").at("p50"));
@@ -564,8 +565,8 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
     } catch (const ConfigError& e) {
       std::string values;
       for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-        values += (a ? " " : "") + spec.axes[a].key + "=" +
-                  spec.axes[a].values[p.value_index[a]].label;
+        values +=
+            (a ? " " : "") + spec.axes[a].key + "=" + spec.axes[a].values[p.value_index[a]].label;
       }
       errors[i] = fmt::format("point {} ({}): {}", p.index, values, e.what());
     }

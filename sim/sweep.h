@@ -60,7 +60,8 @@ struct SweepSpec {
 // {key, values} (values a list of YAML values, or a mapping label: value) or {key, range:
 // [start, stop, count]}, or a string "key=..." as on the command line. ConfigError on bad input.
 SweepSpec LoadStudy(const std::filesystem::path& file);
-// Whether `file` is a study file (a YAML mapping with a top-level `vary` key) rather than a scenario.
+// Whether `file` is a study file (a YAML mapping with a top-level `vary` key) rather than a
+// scenario.
 bool IsStudyFile(const std::filesystem::path& file);
 
 // One run of the grid: its place in grid order (the axes in the order given, the last varying

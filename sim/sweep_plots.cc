@@ -54,8 +54,8 @@ std::string Shorten(const std::string& text, std::size_t max_chars) {
   return text.substr(0, max_chars - 2) + "..";
 }
 
-void PutText(cv::Mat& image, const std::string& text, cv::Point at, double scale,
-             int thickness = 1, cv::Scalar colour = cv::Scalar(30, 30, 30)) {
+void PutText(cv::Mat& image, const std::string& text, cv::Point at, double scale, int thickness = 1,
+             cv::Scalar colour = cv::Scalar(30, 30, 30)) {
   cv::putText(image, text, at, kFont, scale, colour, thickness, cv::LINE_AA);
 }
 
@@ -94,16 +94,19 @@ void Save(const cv::Mat& image, const fs::path& file) {
 std::string RunLabel(const PointRecord& p) {
   std::string label;
   for (const std::string& l : p.labels) label += (label.empty() ? "" : " ") + l;
-  if (p.repeat > 0 || label.empty()) label += (label.empty() ? "" : " ") + fmt::format("r{}", p.repeat);
+  if (p.repeat > 0 || label.empty())
+    label += (label.empty() ? "" : " ") + fmt::format("r{}", p.repeat);
   return label;
 }
 
 // The key metrics plotted against each varied key: the column name without its car/board prefix.
 const std::vector<std::string> kKeyMetrics = {
-    "max_lateral_error_m", "rms_lateral_error_m",  "lane_error_max_m",      "laps",
-    "mean_lap_time_s",     "total_wait_s",         "collisions",            "cpu_percent",
-    "cpu_demand_percent",  "e2e_latency_p50_ms",   "e2e_latency_p99_ms",    "lanes_latency_p50_ms",
-    "lanes_latency_p99_ms", "min_obstacle_gap_m"};
+    "laps_total",          "collisions_total",     "max_lateral_error_m",
+    "rms_lateral_error_m", "lane_error_max_m",     "laps",
+    "mean_lap_time_s",     "total_wait_s",         "collisions",
+    "cpu_percent",         "cpu_demand_percent",   "e2e_latency_p50_ms",
+    "e2e_latency_p99_ms",  "lanes_latency_p50_ms", "lanes_latency_p99_ms",
+    "min_obstacle_gap_m"};
 
 }  // namespace
 
@@ -180,10 +183,13 @@ cv::Mat DrawPlot(const PlotSpec& spec) {
     for (std::size_t i = 0; i < spec.categories.size(); ++i) {
       const int x = px(static_cast<double>(i));
       cv::line(image, {x, kTop}, {x, kTop + plot_h}, grid, 1);
+      // labels alternate between two rows when there are many, so each may be twice as wide
+      const bool stagger = spec.categories.size() > 6;
       const std::size_t max_chars = std::max<std::size_t>(
-          4, static_cast<std::size_t>(plot_w / std::max<std::size_t>(1, spec.categories.size()) / 8));
+          4, static_cast<std::size_t>(plot_w * (stagger ? 2 : 1) /
+                                      std::max<std::size_t>(1, spec.categories.size()) / 8));
       const std::string text = Shorten(spec.categories[i], max_chars);
-      const int row = spec.categories.size() > 6 ? static_cast<int>(i % 2) : 0;  // stagger
+      const int row = stagger ? static_cast<int>(i % 2) : 0;
       PutText(image, text, {x - TextWidth(text, 0.42) / 2, kTop + plot_h + 20 + 16 * row}, 0.42);
     }
   } else {
@@ -334,7 +340,8 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
       PlotSpec& load = loads[board];
       load.title = fmt::format("CPU load over time, {}", board);
       load.x_label = "simulated time [s]";
-      load.y_label = fmt::format("CPU load [%, 100 = one core, {} cores]", report.value("cores", 0));
+      load.y_label =
+          fmt::format("CPU load [%, 100 = one core, {} cores]", report.value("cores", 0));
       PlotSeries series{.label = label, .x = {}, .y = {}, .dots = false, .line = true};
       const double bin_s = report.value("load_bin_s", 1.0);
       const auto bins = report.value("cpu_load_percent", std::vector<double>{});
@@ -369,9 +376,9 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
         first = first > 0 ? first - 1 : 0;
         last = std::min(counts.size(), last + 1);
         histogram.x = std::vector<double>(histogram.x.begin() + static_cast<std::ptrdiff_t>(first),
-                                     histogram.x.begin() + static_cast<std::ptrdiff_t>(last));
+                                          histogram.x.begin() + static_cast<std::ptrdiff_t>(last));
         histogram.y = std::vector<double>(histogram.y.begin() + static_cast<std::ptrdiff_t>(first),
-                                     histogram.y.begin() + static_cast<std::ptrdiff_t>(last));
+                                          histogram.y.begin() + static_cast<std::ptrdiff_t>(last));
         h.series.push_back(std::move(histogram));
       }
     }

@@ -97,9 +97,9 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   std::size_t grid = 1;
   for (const sim::VaryAxis& axis : spec.axes) grid *= axis.values.size();
   if (!o.quiet) {
-    fmt::print(stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s), shard {}/{}, {} job(s))\n",
-               spec.scenario.string(), grid, spec.repeat, options.shard.k, options.shard.n,
-               options.jobs);
+    fmt::print(
+        stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s), shard {}/{}, {} job(s))\n",
+        spec.scenario.string(), grid, spec.repeat, options.shard.k, options.shard.n, options.jobs);
   }
   sim::SweepSummary summary;
   try {
@@ -156,15 +156,17 @@ Command AddSweepCommand(CLI::App& parent) {
       ->type_name("KEY=VALUES");
   AddSetOption(sweep, &o->overrides);
   CLI::Option* repeat =
-      sweep->add_option("--repeat", o->repeat, "Seeds per grid point: seed, seed+1, ... (default 1)")
+      sweep
+          ->add_option("--repeat", o->repeat, "Seeds per grid point: seed, seed+1, ... (default 1)")
           ->check(CLI::PositiveNumber);
   sweep->add_option("--out", o->out, "Sweep folder (shared by its shards and resumed runs)")
       ->type_name("DIR");
   sweep->add_option("--jobs,-j", o->jobs, "Runs in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
-  sweep->add_option("--shard", o->shard,
-                    "Run only the grid points whose index % n == k-1 (for job arrays); join the "
-                    "shards' folders with `sweep merge`")
+  sweep
+      ->add_option("--shard", o->shard,
+                   "Run only the grid points whose index % n == k-1 (for job arrays); join the "
+                   "shards' folders with `sweep merge`")
       ->type_name("k/n");
   sweep->add_flag("--no-plots", o->no_plots, "Write results.csv only");
   sweep->add_flag("--quiet,-q", o->quiet, "No progress output");

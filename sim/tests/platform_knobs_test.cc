@@ -167,8 +167,9 @@ TEST(PlatformKnobs, BadValuesAreConfigErrorsNamingTheKey) {
   auto read = [&](const std::string& yaml) {
     return ReadConfig<PlatformConfig>(YAML::Load(yaml), source, "platform");
   };
-  EXPECT_NO_THROW(read("{cores: 2, cost_scale: {lane_planner: 2.0}, cost_override: {poly_fit: "
-                       "{distribution: normal, mean_s: 0.01, stddev_s: 0.002}}}"));
+  EXPECT_NO_THROW(
+      read("{cores: 2, cost_scale: {lane_planner: 2.0}, cost_override: {poly_fit: "
+           "{distribution: normal, mean_s: 0.01, stddev_s: 0.002}}}"));
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"{cores: 0}", "cores must be >= 1"},
       {"{cost_scale: {a: 0}}", "cost_scale.a must be finite and > 0"},
@@ -188,10 +189,10 @@ TEST(PlatformKnobs, BadValuesAreConfigErrorsNamingTheKey) {
 }
 
 TEST(PlatformKnobs, AScenarioReachesThemByOverride) {
-  const LoadedScenario loaded =
-      LoadScenario("scenarios/lab_two_cars.yaml",
-                   {"cars[0].platform.cost_scale.lane_planner=2.0", "cars[0].platform.cores=2",
-                    "cars[1].platform.cost_override.poly_fit={distribution: fixed, value_s: 0.01}"});
+  const LoadedScenario loaded = LoadScenario(
+      "scenarios/lab_two_cars.yaml",
+      {"cars[0].platform.cost_scale.lane_planner=2.0", "cars[0].platform.cores=2",
+       "cars[1].platform.cost_override.poly_fit={distribution: fixed, value_s: 0.01}"});
   EXPECT_EQ(loaded.scenario.cars[0].platform.cost_scale.at("lane_planner"), 2.0);
   EXPECT_EQ(loaded.scenario.cars[0].platform.cores, 2);
   EXPECT_EQ(*loaded.scenario.cars[1].platform.cost_override.at("poly_fit").value_s, 0.01);

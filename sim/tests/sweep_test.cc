@@ -60,8 +60,8 @@ TEST(Sweep, VaryTakesAListOrARange) {
   EXPECT_THAT(Labels(maps), ElementsAre("{lane_detection: {target: sw}}", "{}"));
   EXPECT_THAT(Labels(ParseVary("k=[1, 2],[3]")), ElementsAre("[1, 2]", "[3]"));
 
-  for (const std::string bad : {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2",
-                                "x=a:1:3"}) {
+  for (const std::string bad :
+       {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2", "x=a:1:3"}) {
     try {
       ParseVary(bad);
       FAIL() << "expected a ConfigError for " << bad;
@@ -143,9 +143,8 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
       {.index = 2, .run_id = "cc", .labels = {"2", "a,b"}, .repeat = 0, .seed = 42},
       {.index = 0, .run_id = "aa", .labels = {"0", "plain"}, .repeat = 0, .seed = 42},
       {.index = 1, .run_id = "bb", .labels = {"1", "say \"hi\""}, .repeat = 1, .seed = 43}};
-  const std::vector<nlohmann::json> summaries = {FakeSummary(0.3, 2, true),
-                                                 FakeSummary(0.1, 3, false),
-                                                 FakeSummary(0.2, 0, false)};
+  const std::vector<nlohmann::json> summaries = {
+      FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false), FakeSummary(0.2, 0, false)};
   const ResultsTable table = BuildResultsTable({"v2i.latency_s", "label"}, points, summaries);
   ASSERT_EQ(table.rows.size(), 3u);
   EXPECT_THAT(std::vector<std::string>(table.columns.begin(), table.columns.begin() + 6),
@@ -157,7 +156,7 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
   EXPECT_EQ(table.rows[1][col("seed")], "43");
   EXPECT_EQ(table.rows[0][col("car0.max_lateral_error_m")], "0.1");
   EXPECT_EQ(table.rows[2][col("car0.rms_lateral_error_m")], "0.15");
-  EXPECT_EQ(table.rows[0][col("car0.mean_lap_time_s")], "30");  // 90 s for 3 laps
+  EXPECT_EQ(table.rows[0][col("car0.mean_lap_time_s")], "30");   // 90 s for 3 laps
   EXPECT_EQ(table.rows[1][col("car0.mean_lap_time_s")], "");     // no lap
   EXPECT_EQ(table.rows[0][col("car0.min_obstacle_gap_m")], "");  // none came near
   // board columns exist for the run that has a board, and are empty for the others
@@ -237,7 +236,7 @@ TEST(SweepPlots, APlotHasDataAxesAndTextOnAWhiteBackground) {
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
       const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
-      if (p[0] > 150 && p[2] < 80) ++coloured;       // the first palette colour (blue)
+      if (p[0] > 150 && p[2] < 80) ++coloured;          // the first palette colour (blue)
       if (p[0] < 90 && p[1] < 90 && p[2] < 90) ++dark;  // text and the frame
     }
   }
@@ -258,8 +257,8 @@ SweepSpec TinySweep() {
 TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   TempDir dir;
   const SweepSpec spec = TinySweep();
-  SweepOptions one{.out_dir = dir.path / "one", .jobs = 1, .shard = {}, .plots = true,
-                   .progress = {}};
+  SweepOptions one{
+      .out_dir = dir.path / "one", .jobs = 1, .shard = {}, .plots = true, .progress = {}};
   const SweepSummary first = RunSweep(spec, one);
   EXPECT_EQ(first.grid_points, 4u);
   EXPECT_EQ(first.ran, 4u);
@@ -308,8 +307,9 @@ TEST(SweepRun, UnusableInputStopsTheSweepBeforeAnyRunNamingTheKey) {
   SweepSpec spec = TinySweep();
   spec.axes.push_back(ParseVary("v2i.latnecy_s=0,1"));
   try {
-    RunSweep(spec, SweepOptions{.out_dir = dir.path, .jobs = 2, .shard = {}, .plots = false,
-                                .progress = {}});
+    RunSweep(
+        spec,
+        SweepOptions{.out_dir = dir.path, .jobs = 2, .shard = {}, .plots = false, .progress = {}});
     FAIL() << "expected a ConfigError";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("latnecy_s"));
@@ -319,10 +319,14 @@ TEST(SweepRun, UnusableInputStopsTheSweepBeforeAnyRunNamingTheKey) {
   // a different sweep's folder cannot be merged in
   SweepSpec a = TinySweep(), b = TinySweep();
   b.axes.pop_back();
-  RunSweep(a, SweepOptions{.out_dir = dir.path / "a", .jobs = 2, .shard = {1, 4}, .plots = false,
-                           .progress = {}});
-  RunSweep(b, SweepOptions{.out_dir = dir.path / "b", .jobs = 2, .shard = {1, 4}, .plots = false,
-                           .progress = {}});
+  RunSweep(
+      a,
+      SweepOptions{
+          .out_dir = dir.path / "a", .jobs = 2, .shard = {1, 4}, .plots = false, .progress = {}});
+  RunSweep(
+      b,
+      SweepOptions{
+          .out_dir = dir.path / "b", .jobs = 2, .shard = {1, 4}, .plots = false, .progress = {}});
   EXPECT_THROW(MergeSweeps({dir.path / "a", dir.path / "b"}, dir.path / "m", false), ConfigError);
 }
 

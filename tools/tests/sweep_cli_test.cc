@@ -104,10 +104,9 @@ TEST(SweepCliTest, ShardsRunByGnuParallelMergeToTheSameTable) {
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);  // header + 4 runs
 
   // The README's recipe: one process per shard, here two at a time, each with one job.
-  const Result shards =
-      Shell("parallel --will-cite --halt now,fail=1 -j 2 \"" + Bin() + " " + kSweep +
-            " --jobs 1 --no-plots --shard {}/4 --out " + (dir / "shard{}").string() +
-            "\" ::: 1 2 3 4");
+  const Result shards = Shell("parallel --will-cite --halt now,fail=1 -j 2 \"" + Bin() + " " +
+                              kSweep + " --jobs 1 --no-plots --shard {}/4 --out " +
+                              (dir / "shard{}").string() + "\" ::: 1 2 3 4");
   ASSERT_EQ(shards.exit_code, 0) << shards.output;
   const Result merge = Cli("sweep merge --no-plots " + (dir / "shard1").string() + " " +
                            (dir / "shard2").string() + " " + (dir / "shard3").string() + " " +
