@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Duration(double seconds) {
+std::string FormatSeconds(double seconds) {
   const long s = std::lround(std::max(0.0, seconds));
   if (s >= 3600) return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);
   if (s >= 60) return fmt::format("{}m{:02}s", s / 60, s % 60);
@@ -39,13 +39,13 @@ class SweepProgressPrinter {
       constexpr int kWidth = 30;
       const int filled = static_cast<int>(kWidth * p.done / p.total);
       fmt::print(stderr, "\r  [{}{}] {}/{} runs, {} elapsed, ETA {}   ", std::string(filled, '#'),
-                 std::string(kWidth - filled, '.'), p.done, p.total, Duration(p.wall_s),
-                 Duration(eta_s));
+                 std::string(kWidth - filled, '.'), p.done, p.total, FormatSeconds(p.wall_s),
+                 FormatSeconds(eta_s));
       if (p.done == p.total) fmt::print(stderr, "\n");
       std::fflush(stderr);
     } else {
       fmt::print(stderr, "  {}/{} runs done, {} elapsed, ETA {}\n", p.done, p.total,
-                 Duration(p.wall_s), Duration(eta_s));
+                 FormatSeconds(p.wall_s), FormatSeconds(eta_s));
     }
   }
 
