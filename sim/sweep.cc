@@ -609,6 +609,9 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   std::mutex mutex;
   std::size_t done = 0;
   const auto start = std::chrono::steady_clock::now();
+  if (options.progress && !todo.empty()) {
+    options.progress(SweepProgress{.done = 0, .total = todo.size(), .wall_s = 0.0});
+  }
   ParallelFor(todo.size(), options.jobs, [&](std::size_t t) {
     const std::size_t i = todo[t];
     std::string failure;

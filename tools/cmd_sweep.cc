@@ -35,17 +35,17 @@ class SweepProgressPrinter {
     const double eta_s =
         p.done > 0 ? p.wall_s / static_cast<double>(p.done) * static_cast<double>(p.total - p.done)
                    : 0.0;
+    const std::string eta = p.done > 0 ? FormatSeconds(eta_s) : std::string("--");
     if (tty_) {
       constexpr int kWidth = 30;
       const int filled = static_cast<int>(kWidth * p.done / p.total);
       fmt::print(stderr, "\r  [{}{}] {}/{} runs, {} elapsed, ETA {}   ", std::string(filled, '#'),
-                 std::string(kWidth - filled, '.'), p.done, p.total, FormatSeconds(p.wall_s),
-                 FormatSeconds(eta_s));
+                 std::string(kWidth - filled, '.'), p.done, p.total, FormatSeconds(p.wall_s), eta);
       if (p.done == p.total) fmt::print(stderr, "\n");
       std::fflush(stderr);
     } else {
       fmt::print(stderr, "  {}/{} runs done, {} elapsed, ETA {}\n", p.done, p.total,
-                 FormatSeconds(p.wall_s), FormatSeconds(eta_s));
+                 FormatSeconds(p.wall_s), eta);
     }
   }
 
