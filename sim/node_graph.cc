@@ -22,19 +22,28 @@ NodeGraph::NodeGraph(Platform& platform, RunMetrics* metrics, const RngStreams* 
 void NodeGraph::ApplyConfig(const PlatformConfig& config) {
   mapping_config_ = config.mapping;
   transport_config_ = config.transport;
+  cost_scale_config_ = config.cost_scale;
+  cost_override_config_ = config.cost_override;
 }
 
 void NodeGraph::CheckConfigUsed() const {
-  for (const auto& [name, unused] : mapping_config_) {
-    const bool found = std::any_of(nodes_.begin(), nodes_.end(),
-                                   [&name](const Node& n) { return n.name == name; });
-    if (!found) {
+  auto check_nodes = [this](const std::vector<std::string>& names, const std::string& field) {
+    for (const std::string& name : names) {
+      if (HasNode(name)) continue;
       std::string known;
       for (const Node& n : nodes_) known += (known.empty() ? "" : ", ") + n.name;
-      throw ConfigError("platform.mapping." + name + ": no node of that name (nodes: " + known +
-                        ")");
+      throw ConfigError("platform." + field + "." + name +
+                        ": no node of that name (nodes: " + known + ")");
     }
-  }
+  };
+  auto keys = [](const auto& map) {
+    std::vector<std::string> out;
+    for (const auto& [key, unused] : map) out.push_back(key);
+    return out;
+  };
+  check_nodes(keys(mapping_config_), "mapping");
+  check_nodes(keys(cost_scale_config_), "cost_scale");
+  check_nodes(keys(cost_override_config_), "cost_override");
   for (const auto& [name, unused] : transport_config_) {
     const bool found = std::any_of(topics_.begin(), topics_.end(),
                                    [&name](const Topic& t) { return t.spec.name == name; });
@@ -111,6 +120,18 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
                              "random streams");
     }
     node.rng.emplace(rng_->Stream(rng_prefix_ + "platform/" + spec.name));
+  }
+  if (const auto it = cost_scale_config_.find(spec.name); it != cost_scale_config_.end()) {
+    node.cost_scale = it->second;
+  }
+  if (const auto it = cost_override_config_.find(spec.name); it != cost_override_config_.end()) {
+    if (rng_ == nullptr) {
+      throw std::logic_error("node '" + spec.name +
+                             "' has a cost_override but the graph has no random streams");
+    }
+    node.cost_override = it->second;
+    node.override_rng.emplace(
+        rng_->Stream(rng_prefix_ + "platform/" + spec.name + "/cost_override"));
   }
   const std::string mapping =
       hw ? "hw:slot" + std::to_string(*spec.mapping.slot) : std::string("sw");
@@ -299,15 +320,30 @@ void NodeGraph::StartJob(int node) {
   if (n.mapping.target == "hw") {
     const HwCost& hw = *n.cost.hw;
     const double factor = Jitter(n, hw.jitter);
-    job.fabric =
-        FromSeconds(hw.compute_s * factor) + platform_.fpga().TransferTime(in_bytes + out_bytes);
+    const double compute_s = n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng)
+                                             : hw.compute_s * factor;
+    const Duration fabric =
+        FromSeconds(compute_s) + platform_.fpga().TransferTime(in_bytes + out_bytes);
+    job.fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
     job.compute_core_s = hw.delegate_cpu_s * factor;
+  } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
+    const SwCost& sw = *callback_cost;
+    job.compute_core_s =
+        (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
+         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
+        Jitter(n, sw.jitter);
+    job.max_parallelism = sw.max_parallelism;
   } else {
-    const SwCost& sw = callback_cost ? *callback_cost : *n.cost.sw;
-    const double work = sw.work_s +
-                        1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
-                        1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes);
-    job.compute_core_s = work * Jitter(n, sw.jitter);
+    const SwCost& sw = *n.cost.sw;
+    double work = 0.0;
+    if (n.cost_override) {
+      work = DrawCostSeconds(*n.cost_override, *n.override_rng);
+    } else {
+      work = (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
+              1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
+             Jitter(n, sw.jitter);
+    }
+    job.compute_core_s = work * n.cost_scale;
     job.max_parallelism = sw.max_parallelism;
   }
 
@@ -457,7 +493,7 @@ Board::Board(Kernel& kernel, std::string name, const PlatformConfig& config,
     : name_(std::move(name)),
       config_(config),
       metrics_(BoardMetricsOptions(config, measure_from)),
-      platform_(kernel, std::move(profile), &metrics_),
+      platform_(kernel, WithConfigOverrides(std::move(profile), config), &metrics_),
       graph_(platform_, &metrics_, rng, name_ + "/") {
   graph_.ApplyConfig(config_);
 }

@@ -232,6 +232,9 @@ class NodeGraph {
     ComponentCost cost;
     int metrics_index{-1};
     std::optional<Rng> rng;
+    double cost_scale{1.0};                               // PlatformConfig::cost_scale
+    std::optional<CostDistributionConfig> cost_override;  // PlatformConfig::cost_override
+    std::optional<Rng> override_rng;
     std::vector<int> subscriptions;
     std::vector<int> timers;
     std::optional<Job> job;  // the running job
@@ -266,6 +269,8 @@ class NodeGraph {
   std::string rng_prefix_;
   std::map<std::string, NodeMappingConfig> mapping_config_;
   std::map<std::string, TopicTransportConfig> transport_config_;
+  std::map<std::string, double> cost_scale_config_;
+  std::map<std::string, CostDistributionConfig> cost_override_config_;
   std::vector<Node> nodes_;
   std::vector<Topic> topics_;
   std::vector<Publisher> publishers_;

@@ -31,7 +31,8 @@ int PidOf(TraceLane lane) {
 }
 
 nlohmann::json StatsJson(const Stats& s) {
-  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50}, {"p95", s.p95}, {"max", s.max}};
+  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50},
+          {"p95", s.p95},     {"p99", s.p99}, {"max", s.max}};
 }
 
 }  // namespace
@@ -162,7 +163,32 @@ Stats ComputeStats(std::vector<double> samples) {
   s.max = samples.back();
   s.p50 = rank(0.50);
   s.p95 = rank(0.95);
+  s.p99 = rank(0.99);
   return s;
+}
+
+std::vector<double> HistogramEdgesMs() {
+  const int decades =
+      static_cast<int>(std::lround(std::log10(kHistogramMax_ms / kHistogramMin_ms)));
+  std::vector<double> edges;
+  for (int i = 0; i <= decades * kHistogramBinsPerDecade; ++i) {
+    edges.push_back(kHistogramMin_ms *
+                    std::pow(10.0, static_cast<double>(i) / kHistogramBinsPerDecade));
+  }
+  return edges;
+}
+
+std::vector<std::uint64_t> HistogramMs(const std::vector<double>& samples_ms) {
+  const std::vector<double> edges = HistogramEdgesMs();
+  std::vector<std::uint64_t> counts(edges.size() - 1, 0);
+  for (double x : samples_ms) {
+    // the last edge not above x, clamped to the outer bins
+    const auto it = std::upper_bound(edges.begin(), edges.end(), x);
+    const std::ptrdiff_t bin = std::clamp<std::ptrdiff_t>(
+        (it - edges.begin()) - 1, 0, static_cast<std::ptrdiff_t>(counts.size()) - 1);
+    ++counts[static_cast<std::size_t>(bin)];
+  }
+  return counts;
 }
 
 const NodeReport* MetricsReport::FindNode(const std::string& name) const {
@@ -204,6 +230,7 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     r.input_hz = static_cast<double>(n.arrivals + n.timer_ticks) / window;
     r.rate_hz = static_cast<double>(n.jobs) / window;
     r.turnaround_ms = ComputeStats(n.turnaround_ms);
+    r.turnaround_histogram = HistogramMs(n.turnaround_ms);
     r.cpu_percent = 100.0 * n.cpu_core_s / window;
     const double per_job = n.jobs > 0 ? n.job_core_s / static_cast<double>(n.jobs) : 0.0;
     const double triggers = static_cast<double>(n.arrivals + n.timer_ticks);
@@ -252,6 +279,8 @@ nlohmann::json ReportJson(const MetricsReport& report) {
                      {"input_hz", n.input_hz},
                      {"rate_hz", n.rate_hz},
                      {"turnaround_ms", StatsJson(n.turnaround_ms)},
+                     {"turnaround_histogram_ms",
+                      {{"edges", HistogramEdgesMs()}, {"counts", n.turnaround_histogram}}},
                      {"cpu_percent", n.cpu_percent},
                      {"demand_percent", n.demand_percent},
                      {"arrivals", n.arrivals},

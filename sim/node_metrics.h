@@ -116,12 +116,21 @@ class RunMetrics {
   double last_busy_{-1.0};
 };
 
-// min / p50 / p95 / max of a sample (nearest-rank percentiles); all zero when empty.
+// min / p50 / p95 / p99 / max of a sample (nearest-rank percentiles); all zero when empty.
 struct Stats {
   std::size_t count{0};
-  double min{0.0}, p50{0.0}, p95{0.0}, max{0.0};
+  double min{0.0}, p50{0.0}, p95{0.0}, p99{0.0}, max{0.0};
 };
 Stats ComputeStats(std::vector<double> samples);
+
+// A histogram of milliseconds on log-spaced bins, kHistogramBinsPerDecade per decade from
+// kHistogramMin_ms to kHistogramMax_ms: bin i holds [edge i, edge i+1); the first bin also holds
+// what is below the range, the last what is above it (so the counts sum to the sample's size).
+inline constexpr int kHistogramBinsPerDecade = 5;
+inline constexpr double kHistogramMin_ms = 0.1;
+inline constexpr double kHistogramMax_ms = 10000.0;
+std::vector<double> HistogramEdgesMs();  // bins + 1 edges
+std::vector<std::uint64_t> HistogramMs(const std::vector<double>& samples_ms);
 
 struct NodeReport {
   std::string name;
@@ -130,6 +139,7 @@ struct NodeReport {
   double input_hz{0.0};  // messages arrived and timer ticks per second
   double rate_hz{0.0};   // jobs completed per second
   Stats turnaround_ms;   // take to publish of one job, including waiting for a CPU share
+  std::vector<std::uint64_t> turnaround_histogram;  // on HistogramEdgesMs()
   double cpu_percent{0.0};
   // CPU the node would need to serve every message and timer tick at its cost per job, plus its
   // DDS receive thread: above cpu_percent when it drops or falls behind.
@@ -178,9 +188,9 @@ struct BoardMetrics {
 std::string NodesCsv(const std::vector<BoardReport>& boards);
 // For summary.json, per board: {cores, window_s, cpu_percent, cpu_demand_percent, load_bin_s,
 // cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
-// min, p50, p95, max}, cpu_percent, demand_percent, arrivals, timer_ticks, drops, loan_failures,
-// timer_overruns}], topics: [{name, transport, bytes, published, rate_hz, latency_ms: {...},
-// drops, loan_failures}]}.
+// min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
+// arrivals, timer_ticks, drops, loan_failures, timer_overruns}], topics: [{name, transport, bytes,
+// published, rate_hz, latency_ms: {...}, drops, loan_failures}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

@@ -16,6 +16,7 @@
 #include "sim/node_metrics.h"
 #include "sim/platform_profile.h"
 #include "sim/priorities.h"
+#include "sim/random.h"
 
 namespace autonomsim::sim {
 
@@ -40,6 +41,12 @@ struct TransportCost {
 TransportCost DdsCost(const PlatformProfile& profile, std::int64_t bytes);
 // `loaned_take`: the subscriber uses the loan API; otherwise it gets a copy of the sample.
 TransportCost ZeroCopyCost(const PlatformProfile& profile, std::int64_t bytes, bool loaned_take);
+
+// One draw of a cost_override distribution (seconds, >= 0; a normal draw below 0 counts as 0).
+double DrawCostSeconds(const CostDistributionConfig& distribution, Rng& rng);
+
+// The profile a board runs on: `profile` with the config's what-if overrides (cores).
+PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config);
 
 // ---- CPU: N cores, processor sharing ----
 

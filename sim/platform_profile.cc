@@ -146,8 +146,48 @@ void TopicTransportConfig::Validate() const {
   if (depth) Require(*depth >= 1, "depth must be >= 1, got " + std::to_string(*depth));
 }
 
+void CostDistributionConfig::Validate() const {
+  auto need = [this](const std::optional<double>& value, const char* key) {
+    Require(value.has_value(), "distribution '" + distribution + "' needs " + key);
+    Require(std::isfinite(*value) && *value >= 0.0,
+            std::string(key) + " must be finite and >= 0, got " + Num(*value));
+  };
+  auto forbid = [this](const std::optional<double>& value, const char* key) {
+    Require(!value.has_value(), "distribution '" + distribution + "' takes no " + key);
+  };
+  if (distribution == "fixed") {
+    need(value_s, "value_s");
+    forbid(min_s, "min_s");
+    forbid(max_s, "max_s");
+    forbid(mean_s, "mean_s");
+    forbid(stddev_s, "stddev_s");
+  } else if (distribution == "uniform") {
+    need(min_s, "min_s");
+    need(max_s, "max_s");
+    Require(*min_s <= *max_s, "min_s must be <= max_s, got " + Num(*min_s) + " > " + Num(*max_s));
+    forbid(value_s, "value_s");
+    forbid(mean_s, "mean_s");
+    forbid(stddev_s, "stddev_s");
+  } else if (distribution == "normal" || distribution == "lognormal") {
+    need(mean_s, "mean_s");
+    need(stddev_s, "stddev_s");
+    Require(distribution == "normal" || *mean_s > 0.0, "lognormal needs mean_s > 0");
+    forbid(value_s, "value_s");
+    forbid(min_s, "min_s");
+    forbid(max_s, "max_s");
+  } else {
+    Require(false,
+            "distribution must be fixed, uniform, normal or lognormal, got '" + distribution + "'");
+  }
+}
+
 void PlatformConfig::Validate() const {
   Require(!profile.empty(), "profile must name a platform profile file");
+  Require(!cores || *cores >= 1, "cores must be >= 1, got " + std::to_string(cores.value_or(0)));
+  for (const auto& [node, scale] : cost_scale) {
+    Require(std::isfinite(scale) && scale > 0.0,
+            "cost_scale." + node + " must be finite and > 0, got " + Num(scale));
+  }
   Require(load_bin.count() > 0, "load_bin_s must be > 0, got " + Num(ToSeconds(load_bin)));
   Require(trace_max_events >= 0,
           "trace_max_events must be >= 0, got " + std::to_string(trace_max_events));

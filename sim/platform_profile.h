@@ -253,20 +253,57 @@ struct TopicTransportConfig {
   void Validate() const;
 };
 
+// A distribution that replaces a node's per-job compute cost (PlatformConfig::cost_override):
+// "fixed" (value_s), "uniform" (min_s, max_s), "normal" (mean_s, stddev_s; a draw below 0 counts
+// as 0) or "lognormal" (mean_s and stddev_s of the cost itself, not of its logarithm). Seconds are
+// core-seconds of work for a software node and fabric seconds for a hardware node.
+struct CostDistributionConfig {
+  std::string distribution{"fixed"};
+  std::optional<double> value_s;
+  std::optional<double> min_s;
+  std::optional<double> max_s;
+  std::optional<double> mean_s;
+  std::optional<double> stddev_s;
+
+  template <class V>
+  void Describe(V& v) {
+    v("distribution", distribution);
+    v("value_s", value_s);
+    v("min_s", min_s);
+    v("max_s", max_s);
+    v("mean_s", mean_s);
+    v("stddev_s", stddev_s);
+  }
+  void Validate() const;
+};
+
 struct PlatformConfig {
   std::string profile{"platforms/zcu104.yaml"};           // relative to the scenario's folder
   std::map<std::string, NodeMappingConfig> mapping;       // by node name; others keep defaults
   std::map<std::string, TopicTransportConfig> transport;  // by topic name; others keep defaults
-  bool background_loads{true};                            // add the profile's background loads
-  Duration load_bin{std::chrono::seconds(1)};             // CPU load over time: one value per bin
-  bool trace{true};                                       // record trace.json
-  int trace_max_events{200000};                           // then stop recording (noted in it)
+  // What-if knobs (sweeps). cores: the CPU's core count instead of the profile's cpu.cores.
+  // cost_scale: by node name, a factor on each job's compute cost (software: its core-seconds of
+  // work; hardware: its fabric time, memory transfers included, not its delegate thread's CPU).
+  // cost_override: by node name, each job's compute cost drawn from a distribution instead of the
+  // profile's (software: core-seconds of work; hardware: fabric compute time, memory transfers
+  // still added), from the seeded stream "<board>/platform/<node>/cost_override"; cost_scale
+  // applies on top. Neither touches a subscription's own cost or the transports.
+  std::optional<int> cores;
+  std::map<std::string, double> cost_scale;
+  std::map<std::string, CostDistributionConfig> cost_override;
+  bool background_loads{true};                 // add the profile's background loads
+  Duration load_bin{std::chrono::seconds(1)};  // CPU load over time: one value per bin
+  bool trace{true};                            // record trace.json
+  int trace_max_events{200000};                // then stop recording (noted in it)
 
   template <class V>
   void Describe(V& v) {
     v("profile", profile);
     v("mapping", mapping);
     v("transport", transport);
+    v("cores", cores);
+    v("cost_scale", cost_scale);
+    v("cost_override", cost_override);
     v("background_loads", background_loads);
     v("load_bin_s", load_bin);
     v("trace", trace);

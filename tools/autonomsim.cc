@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("autonomsim ") + AUTONOMSIM_VERSION);
   app.require_subcommand(1);
   const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app),
-                                         AddTable1Command(app), AddRenderCommand(app)};
+                                         AddTable1Command(app), AddRenderCommand(app),
+                                         AddSweepCommand(app)};
 
   try {
     app.parse(argc, argv);

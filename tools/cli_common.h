@@ -29,6 +29,7 @@ Command AddRunCommand(CLI::App& parent);
 Command AddCheckCommand(CLI::App& parent);
 Command AddTable1Command(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
+Command AddSweepCommand(CLI::App& parent);
 
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);

@@ -2,11 +2,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
 #include <fstream>
 #include <thread>
 
 #include "sim/config.h"
+#include "sim/parallel.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {
@@ -119,26 +119,17 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
   // Each scenario is an independent run: spread them over `jobs` threads; the verdicts do not
   // depend on the order or the thread a run lands on.
   std::vector<Outcome> outcomes(files.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t i = next++; i < files.size(); i = next++) {
-      std::optional<fs::path> dir;
-      if (out) dir = fs::path(*out) / files[i].stem();
-      try {
-        outcomes[i] = RunFile(files[i], overrides, dir);
-      } catch (const std::exception& e) {
-        outcomes[i].file = files[i].string();
-        outcomes[i].scenario_name = files[i].stem().string();
-        outcomes[i].input_error = std::string("run failed: ") + e.what();
-      }
+  sim::ParallelFor(files.size(), jobs, [&](std::size_t i) {
+    std::optional<fs::path> dir;
+    if (out) dir = fs::path(*out) / files[i].stem();
+    try {
+      outcomes[i] = RunFile(files[i], overrides, dir);
+    } catch (const std::exception& e) {
+      outcomes[i].file = files[i].string();
+      outcomes[i].scenario_name = files[i].stem().string();
+      outcomes[i].input_error = std::string("run failed: ") + e.what();
     }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < std::min<int>(jobs, static_cast<int>(files.size())); ++t) {
-    threads.emplace_back(worker);
-  }
-  worker();
-  for (std::thread& t : threads) t.join();
+  });
 
   int failed = 0, unusable = 0;
   for (const Outcome& o : outcomes) {

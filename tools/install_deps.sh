@@ -10,6 +10,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libssl-dev libcli11-dev libfmt-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openssl  # the TLS test makes its certificates with it
+  parallel  # GNU parallel: the sweep test runs shards with it, as the README's recipe does
 )
 
 missing=()

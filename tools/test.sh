@@ -19,7 +19,7 @@ if [ "${AUTONOMSIM_SANITIZE:-0}" = "1" ]; then
   asan_skip+='|CheckPassesTheShippedScenarios|SameScenarioAndSeedGiveBitIdenticalResults'
   asan_skip+='|RunsOnTwoThreadsAtOnceMatchASequentialRun|TheSeedChangesTheRun'
   asan_skip+='|TheSnapshotIsTheFullRunsWorldAtThatInstant|GivesTheSameResultOverMqtt'
-  asan_skip+='|AnExternalBrokerAndTlserverServeARun'
+  asan_skip+='|AnExternalBrokerAndTlserverServeARun|ShardsRunByGnuParallelMergeToTheSameTable'
   cmake --preset asan >/dev/null
   cmake --build --preset asan -j "$jobs"
   ctest --preset asan -j "$jobs" -E "$asan_skip"

@@ -1,0 +1,189 @@
+// `autonomsim sweep SCENARIO|STUDY --vary KEY=VALUES ... --out DIR` and
+// `autonomsim sweep merge DIR...`: latency what-if studies (sim/sweep.h does the work).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "sim/config.h"
+#include "sim/mqtt_client.h"
+#include "sim/sweep.h"
+#include "tools/cli_common.h"
+
+namespace autonomsim::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string FormatSeconds(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  if (s >= 3600) return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);
+  if (s >= 60) return fmt::format("{}m{:02}s", s / 60, s % 60);
+  return fmt::format("{}s", s);
+}
+
+// A bar rewritten in place on a terminal; a line per run otherwise (logs, CI).
+class SweepProgressPrinter {
+ public:
+  explicit SweepProgressPrinter(bool quiet) : quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1) {}
+
+  void Update(const sim::SweepProgress& p) {
+    if (quiet_ || p.total == 0) return;
+    const double eta_s =
+        p.done > 0 ? p.wall_s / static_cast<double>(p.done) * static_cast<double>(p.total - p.done)
+                   : 0.0;
+    const std::string eta = p.done > 0 ? FormatSeconds(eta_s) : std::string("--");
+    if (tty_) {
+      constexpr int kWidth = 30;
+      const int filled = static_cast<int>(kWidth * p.done / p.total);
+      fmt::print(stderr, "\r  [{}{}] {}/{} runs, {} elapsed, ETA {}   ", std::string(filled, '#'),
+                 std::string(kWidth - filled, '.'), p.done, p.total, FormatSeconds(p.wall_s), eta);
+      if (p.done == p.total) fmt::print(stderr, "\n");
+      std::fflush(stderr);
+    } else {
+      fmt::print(stderr, "  {}/{} runs done, {} elapsed, ETA {}\n", p.done, p.total,
+                 FormatSeconds(p.wall_s), eta);
+    }
+  }
+
+ private:
+  bool quiet_;
+  bool tty_;
+};
+
+struct SweepOptions {
+  std::string scenario;
+  std::vector<std::string> vary;
+  std::vector<std::string> overrides;
+  int repeat{1};
+  std::string out;
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::string shard{"1/1"};
+  bool no_plots{false};
+  bool quiet{false};
+  std::vector<std::string> merge_dirs;
+  std::string merge_out;
+};
+
+int SweepCommand(const SweepOptions& o, bool repeat_given) {
+  sim::SweepSpec spec;
+  sim::SweepOptions options;
+  try {
+    if (o.scenario.empty()) throw sim::ConfigError("sweep: give a SCENARIO or study file");
+    if (o.out.empty()) throw sim::ConfigError("sweep: --out DIR is required");
+    if (sim::IsStudyFile(o.scenario)) {
+      spec = sim::LoadStudy(o.scenario);
+    } else {
+      spec.scenario = o.scenario;
+    }
+    spec.overrides.insert(spec.overrides.end(), o.overrides.begin(), o.overrides.end());
+    for (const std::string& v : o.vary) spec.axes.push_back(sim::ParseVary(v));
+    if (repeat_given) spec.repeat = o.repeat;
+    if (spec.repeat < 1) throw sim::ConfigError("--repeat must be >= 1");
+    options.out_dir = o.out;
+    options.jobs = o.jobs;
+    options.shard = sim::ParseShard(o.shard);
+    options.plots = !o.no_plots;
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
+  SweepProgressPrinter printer(o.quiet);
+  options.progress = [&printer](const sim::SweepProgress& p) { printer.Update(p); };
+
+  std::size_t grid = 1;
+  for (const sim::VaryAxis& axis : spec.axes) grid *= axis.values.size();
+  if (!o.quiet) {
+    fmt::print(
+        stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s), shard {}/{}, {} job(s))\n",
+        spec.scenario.string(), grid, spec.repeat, options.shard.k, options.shard.n, options.jobs);
+  }
+  sim::SweepSummary summary;
+  try {
+    summary = sim::RunSweep(spec, options);
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
+  fmt::print("{} run(s) in this shard: {} ran, {} already complete, {} failed\n", summary.selected,
+             summary.ran, summary.already_done, summary.failures.size());
+  for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
+  fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
+  if (!summary.failures.empty()) {
+    return summary.input_error ? kExitUnusableInput : kExitExpectationFailed;
+  }
+  return kExitOk;
+}
+
+int MergeCommand(const SweepOptions& o) {
+  std::vector<fs::path> dirs(o.merge_dirs.begin(), o.merge_dirs.end());
+  const fs::path out = o.merge_out.empty() ? dirs.front() : fs::path(o.merge_out);
+  std::size_t missing = 0;
+  try {
+    missing = sim::MergeSweeps(dirs, out, !o.no_plots);
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
+  if (missing > 0) {
+    fmt::print(stderr, "warning: {} grid point(s) have no complete run in these folders\n",
+               missing);
+  }
+  fmt::print("results: {}\n", (out / "results.csv").string());
+  return kExitOk;
+}
+
+}  // namespace
+
+Command AddSweepCommand(CLI::App& parent) {
+  auto o = std::make_shared<SweepOptions>();
+  CLI::App* sweep = parent.add_subcommand(
+      "sweep",
+      "Run a grid of scenario variants (a latency what-if study) in parallel: one run folder per "
+      "variant under DIR/runs/<id>, DIR/results.csv (one row per run, grid order) and DIR/plots. "
+      "Resumes: runs already complete in DIR are not redone.");
+  sweep->add_option("SCENARIO", o->scenario,
+                    "Scenario file, or a study file (scenarios/studies/*.yaml: scenario, set, "
+                    "vary, repeat) whose grid the --vary options extend");
+  sweep
+      ->add_option("--vary", o->vary,
+                   "KEY=a,b,c or KEY=start:stop:count; KEY is any --set path, e.g. "
+                   "v2i.latency_s=0:2:5 or cars[0].platform.cost_scale.lane_planner=1,2,4 "
+                   "(repeatable; the grid is the product, the last --vary varying fastest)")
+      ->type_name("KEY=VALUES");
+  AddSetOption(sweep, &o->overrides);
+  CLI::Option* repeat =
+      sweep
+          ->add_option("--repeat", o->repeat, "Seeds per grid point: seed, seed+1, ... (default 1)")
+          ->check(CLI::PositiveNumber);
+  sweep->add_option("--out", o->out, "Sweep folder (shared by its shards and resumed runs)")
+      ->type_name("DIR");
+  sweep->add_option("--jobs,-j", o->jobs, "Runs in parallel (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  sweep
+      ->add_option("--shard", o->shard,
+                   "Run only the grid points whose index % n == k-1 (for job arrays); join the "
+                   "shards' folders with `sweep merge`")
+      ->type_name("k/n");
+  sweep->add_flag("--no-plots", o->no_plots, "Write results.csv only");
+  sweep->add_flag("--quiet,-q", o->quiet, "No progress output");
+
+  CLI::App* merge = sweep->add_subcommand(
+      "merge",
+      "Join sweep folders (the shards of one sweep) into one results.csv and plots; on one "
+      "folder, rebuild its table");
+  merge->add_option("DIR", o->merge_dirs, "Sweep folders")->required();
+  merge->add_option("--out", o->merge_out, "Where to write (default: the first DIR)")
+      ->type_name("DIR");
+  merge->add_flag("--no-plots", o->no_plots, "Write results.csv only");
+
+  return {sweep, [o, merge, repeat] {
+            if (*merge) return MergeCommand(*o);
+            return SweepCommand(*o, repeat->count() > 0);
+          }};
+}
+
+}  // namespace autonomsim::cli

@@ -1,0 +1,120 @@
+// `autonomsim sweep` as a user and a job scheduler see it: help, errors for bad input, and the
+// README's GNU parallel recipe (shards in separate processes, then `sweep merge`) giving the same
+// results.csv as one process.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace autonomsim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct Result {
+  int exit_code{-1};
+  std::string output;  // stdout and stderr together
+};
+
+std::string Bin() {
+  const char* bin_dir = std::getenv("AUTONOMSIM_BIN_DIR");
+  return std::string(bin_dir ? bin_dir : "build/bin") + "/autonomsim";
+}
+
+Result Shell(const std::string& command) {
+  Result result;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+Result Cli(const std::string& args) { return Shell(Bin() + " " + args); }
+
+std::string Read(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+fs::path Scratch() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(::testing::TempDir()) / "autonomsim_sweep_cli" / info->name();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Four runs of the oracle scenario, 5 s each: a second or two in all.
+const std::string kSweep =
+    "sweep scenarios/lab_two_cars_oracle.yaml --set duration_s=5 "
+    "--vary 'cars[0].oracle.speed_mps=0.3,0.5' --vary 'v2i.latency_s=0,1' --quiet";
+
+TEST(SweepCliTest, HelpAnswers) {
+  const Result sweep = Cli("sweep --help");
+  EXPECT_EQ(sweep.exit_code, 0);
+  EXPECT_THAT(sweep.output, HasSubstr("--vary"));
+  EXPECT_THAT(sweep.output, HasSubstr("--shard"));
+  const Result merge = Cli("sweep merge --help");
+  EXPECT_EQ(merge.exit_code, 0);
+  EXPECT_THAT(merge.output, HasSubstr("DIR"));
+}
+
+TEST(SweepCliTest, BadInputExitsTwoNamingWhatIsWrong) {
+  const fs::path dir = Scratch();
+  const std::string out = " --out " + (dir / "out").string();
+  Result r = Cli(kSweep + " --vary 'v2i.latency_s=0:1'" + out);  // neither list nor range
+  EXPECT_EQ(r.exit_code, 2);
+  r = Cli(kSweep + " --vary 'v2i.latency_s=0:2:x'" + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("v2i.latency_s=0:2:x"));
+  r = Cli(kSweep + " --vary 'v2i.latnecy_s=0,1'" + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("latnecy_s"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "runs"));
+  r = Cli(kSweep + " --shard 3/2" + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--shard 3/2"));
+  r = Cli(kSweep);  // no --out
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--out"));
+  r = Cli("sweep merge " + (dir / "nothing").string());
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(SweepCliTest, ShardsRunByGnuParallelMergeToTheSameTable) {
+  if (Shell("command -v parallel").exit_code != 0) {
+    GTEST_SKIP() << "GNU parallel is not installed (tools/install_deps.sh installs it)";
+  }
+  const fs::path dir = Scratch();
+  const Result one = Cli(kSweep + " --jobs 2 --no-plots --out " + (dir / "one").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const std::string table = Read(dir / "one" / "results.csv");
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);  // header + 4 runs
+
+  // The README's recipe: one process per shard, here two at a time, each with one job.
+  const Result shards = Shell("parallel --will-cite --halt now,fail=1 -j 2 \"" + Bin() + " " +
+                              kSweep + " --jobs 1 --no-plots --shard {}/4 --out " +
+                              (dir / "shard{}").string() + "\" ::: 1 2 3 4");
+  ASSERT_EQ(shards.exit_code, 0) << shards.output;
+  const Result merge = Cli("sweep merge --no-plots " + (dir / "shard1").string() + " " +
+                           (dir / "shard2").string() + " " + (dir / "shard3").string() + " " +
+                           (dir / "shard4").string() + " --out " + (dir / "merged").string());
+  ASSERT_EQ(merge.exit_code, 0) << merge.output;
+  EXPECT_THAT(merge.output, ::testing::Not(HasSubstr("warning")));
+  EXPECT_EQ(Read(dir / "merged" / "results.csv"), table);
+}
+
+}  // namespace
+}  // namespace autonomsim
