@@ -446,6 +446,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
       std::optional<stack::VelocityCommand> command;
       std::optional<stack::OdometrySpeed> odometry;
       Time command_stamp{kZeroTime};
+      bool stopped_sent{false};  // the watchdog's zero output went out
     };
     auto state = std::make_shared<State>();
     const NodeId node = graph.AddNode(sw("carcontroller"));
@@ -466,6 +467,12 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
                          &state->cruise);
                      state->command.reset();
                      state->odometry.reset();
+                     // While the watchdog holds the car the output stays zero: it goes out once
+                     // (the PWM generator holds it), so that the end-to-end latency on
+                     // /carcontrol/command is measured on commands derived from fresh input.
+                     const bool stopped = r.stopped != stack::CruiseStop::kNone;
+                     if (stopped && state->stopped_sent) return;
+                     state->stopped_sent = stopped;
                      outbox.Publish(out, vehicle::ActuatorCommand{r.throttle, r.curvature_per_m},
                                     state->command_stamp);
                    });
