@@ -14,6 +14,7 @@
 
 #include "sim/outputs.h"
 #include "sim/simulation.h"
+#include "tools/tests/cli_testing.h"
 
 namespace autonomsim {
 namespace {
@@ -21,39 +22,12 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct Result {
-  int exit_code{-1};
-  std::string output;  // stdout and stderr together
-};
+using testing::Cli;
+using testing::Read;
+using testing::Result;
+using testing::Shell;
 
-Result Cli(const std::string& args) {
-  const char* bin_dir = std::getenv("AUTONOMSIM_BIN_DIR");
-  const std::string bin = std::string(bin_dir ? bin_dir : "build/bin") + "/autonomsim";
-  Result result;
-  FILE* pipe = ::popen((bin + " " + args + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string Read(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// A fresh folder per test (ctest runs tests in parallel).
-fs::path Scratch() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "autonomsim_cli" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path Scratch() { return testing::Scratch("autonomsim_cli"); }
 
 TEST(CliTest, HelpAnswers) {
   const Result top = Cli("--help");

@@ -12,49 +12,21 @@
 #include <fstream>
 #include <sstream>
 
+#include "tools/tests/cli_testing.h"
+
 namespace autonomsim {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct Result {
-  int exit_code{-1};
-  std::string output;  // stdout and stderr together
-};
+using testing::Bin;
+using testing::Cli;
+using testing::Read;
+using testing::Result;
+using testing::Shell;
 
-std::string Bin() {
-  const char* bin_dir = std::getenv("AUTONOMSIM_BIN_DIR");
-  return std::string(bin_dir ? bin_dir : "build/bin") + "/autonomsim";
-}
-
-Result Shell(const std::string& command) {
-  Result result;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-Result Cli(const std::string& args) { return Shell(Bin() + " " + args); }
-
-std::string Read(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-fs::path Scratch() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "autonomsim_sweep_cli" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path Scratch() { return testing::Scratch("autonomsim_sweep_cli"); }
 
 // Four runs of the oracle scenario, 5 s each: a second or two in all.
 const std::string kSweep =
