@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libbox2d-dev libeigen3-dev libopencv-dev
   mosquitto mosquitto-clients libmosquitto-dev
   libyaml-cpp-dev nlohmann-json3-dev libssl-dev libcli11-dev libfmt-dev libspdlog-dev

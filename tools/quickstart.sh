@@ -4,6 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install_deps.sh
+tools/reset_stale_build.sh build
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$(nproc)"
 build/bin/autonomsim run scenarios/lab_two_cars.yaml "$@"

@@ -6,8 +6,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 tools/install_deps.sh
+tools/reset_stale_build.sh build build-asan
+# AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, see CMakeLists.txt.
+configure_args=(-DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}")
 
-cmake --preset release >/dev/null
+cmake --preset release "${configure_args[@]}" >/dev/null
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
 
@@ -20,7 +23,7 @@ if [ "${AUTONOMSIM_SANITIZE:-0}" = "1" ]; then
   asan_skip+='|RunsOnTwoThreadsAtOnceMatchASequentialRun|TheSeedChangesTheRun'
   asan_skip+='|TheSnapshotIsTheFullRunsWorldAtThatInstant|GivesTheSameResultOverMqtt'
   asan_skip+='|AnExternalBrokerAndTlserverServeARun|ShardsRunByGnuParallelMergeToTheSameTable'
-  cmake --preset asan >/dev/null
+  cmake --preset asan "${configure_args[@]}" >/dev/null
   cmake --build --preset asan -j "$jobs"
   ctest --preset asan -j "$jobs" -E "$asan_skip"
 fi
