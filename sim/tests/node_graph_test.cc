@@ -458,7 +458,8 @@ TEST(NodeGraph, ACachingSubscriptionCostsItsOwnCost) {
       SubscriptionOptions{.cost = SwCost{.work_s = 0.001}});
   rig.kernel.RunUntil(milliseconds(70));
   EXPECT_THAT(taken_at, ElementsAre(milliseconds(0), milliseconds(30), milliseconds(60)));
-  const NodeReport* n = BuildReport(rig.metrics, milliseconds(70)).FindNode("slow");
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(70));
+  const NodeReport* n = report.FindNode("slow");
   ASSERT_NE(n, nullptr);
   EXPECT_EQ(n->drops, 0u);
   EXPECT_EQ(n->jobs, 3u);
