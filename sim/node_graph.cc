@@ -6,6 +6,15 @@
 #include "sim/config.h"
 
 namespace autonomsim::sim {
+namespace {
+
+// One software job's core-seconds by its cost entry, before jitter and what-if knobs.
+double SwWorkSeconds(const SwCost& sw, std::int64_t in_bytes, std::int64_t out_bytes) {
+  return sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
+         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes);
+}
+
+}  // namespace
 
 const char* TransportName(Transport transport) {
   return transport == Transport::kDds ? "dds" : "zero_copy";
@@ -111,7 +120,7 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
   }
   if (hw) platform_.fpga().Claim(*spec.mapping.slot, spec.name);
 
-  Node node{.name = spec.name, .mapping = spec.mapping, .cost = cost};
+  Node node{.name = spec.name, .mapping = spec.mapping, .hw = hw, .cost = cost};
   const double jitter = hw ? cost.hw->jitter : cost.sw->jitter;
   if (jitter > 0.0) {
     if (rng_ == nullptr) {
@@ -162,7 +171,7 @@ void NodeGraph::AddSubscriptionImpl(
                       std::to_string(t.subscriptions.size() + 1) + ", but zero_copy (Iceoryx) " +
                       "allows at most " + std::to_string(limit) + " subscribers per topic");
   }
-  if (options.cost && n.mapping.target == "hw") {
+  if (options.cost && n.hw) {
     throw ConfigError("node '" + n.name + "': a subscription with its own cost needs a software " +
                       "node, but the node is mapped to hw");
   }
@@ -317,7 +326,7 @@ void NodeGraph::StartJob(int node) {
     job.publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
   }
 
-  if (n.mapping.target == "hw") {
+  if (n.hw) {
     const HwCost& hw = *n.cost.hw;
     const double factor = Jitter(n, hw.jitter);
     const double compute_s = n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng)
@@ -327,22 +336,14 @@ void NodeGraph::StartJob(int node) {
     job.fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
     job.compute_core_s = hw.delegate_cpu_s * factor;
   } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
-    const SwCost& sw = *callback_cost;
     job.compute_core_s =
-        (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
-         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
-        Jitter(n, sw.jitter);
-    job.max_parallelism = sw.max_parallelism;
+        SwWorkSeconds(*callback_cost, in_bytes, out_bytes) * Jitter(n, callback_cost->jitter);
+    job.max_parallelism = callback_cost->max_parallelism;
   } else {
     const SwCost& sw = *n.cost.sw;
-    double work = 0.0;
-    if (n.cost_override) {
-      work = DrawCostSeconds(*n.cost_override, *n.override_rng);
-    } else {
-      work = (sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
-              1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes)) *
-             Jitter(n, sw.jitter);
-    }
+    const double work = n.cost_override
+                            ? DrawCostSeconds(*n.cost_override, *n.override_rng)
+                            : SwWorkSeconds(sw, in_bytes, out_bytes) * Jitter(n, sw.jitter);
     job.compute_core_s = work * n.cost_scale;
     job.max_parallelism = sw.max_parallelism;
   }
@@ -357,7 +358,7 @@ void NodeGraph::StartJob(int node) {
 void NodeGraph::RunCompute(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
   const Job& job = *n.job;
-  if (n.mapping.target == "hw") {
+  if (n.hw) {
     platform_.RunHwJob(*n.mapping.slot, Owner(node), job.fabric, job.compute_core_s,
                        [this, node] { RunPublish(node); });
   } else if (job.compute_core_s > 0.0) {

@@ -229,6 +229,7 @@ class NodeGraph {
   struct Node {
     std::string name;
     NodeMappingConfig mapping;
+    bool hw{false};  // mapping.target == "hw", decided once
     ComponentCost cost;
     int metrics_index{-1};
     std::optional<Rng> rng;

@@ -131,8 +131,8 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                                         const std::map<std::string, NodeMappingConfig>& mapping,
                                         const SensorSuite& sensors, TopicId<CameraFrame> image,
                                         std::function<void(const stack::LanePoints&, Time)> hook) {
-  const auto lanes = graph.AddTopic<stack::LanePoints>(
-      {.name = "/lane_detector/central_line/point_cloud", .type = msg::LanePoints()});
+  const auto lanes =
+      graph.AddTopic<stack::LanePoints>({.name = kLanePointsTopic, .type = msg::LanePoints()});
   LaneParams params{.detector = std::make_shared<stack::LaneDetector>(
                         config.lane_detection, LaneCalibration(sensors.color_camera().model())),
                     .hook = std::move(hook)};

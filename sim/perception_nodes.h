@@ -42,6 +42,9 @@ struct PerceptionConfig {
   void Validate() const {}  // the parts validate themselves
 };
 
+// The lane detection's output topic (reference §5), read by the controller and by sweeps' tables.
+inline constexpr const char* kLanePointsTopic = "/lane_detector/central_line/point_cloud";
+
 // The topics the rest of the stack reads.
 struct PerceptionTopics {
   TopicId<stack::Grid234> obstacles;  // /local_costmap/obstacles

@@ -75,7 +75,6 @@ struct CarAgent {
   std::uint64_t lateral_samples{0};
   int area{-1};  // the intersection whose area holds the chassis centre, or -1
   // driver: stack
-  std::unique_ptr<world::OccupancyMap> static_map;  // the map the car is given (its planner's)
   stack::BehaviorMode behavior_mode{stack::BehaviorMode::kDrive};
   CarMetrics metrics;
 };
@@ -136,6 +135,8 @@ struct Simulation::Impl {
   world::FloorRaster floor;
   std::unique_ptr<SensorEnvironment> sensor_world;
   std::vector<std::unique_ptr<SensorSuite>> sensors;
+  // driver: stack — the planners' static maps, by resolution (m); before the boards that use them
+  std::map<double, std::unique_ptr<world::OccupancyMap>> static_maps;
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
   RunRecord record;
@@ -298,17 +299,22 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
   const CarConfig& config = *agent->config;
   const int id = config.id;
   agent->metrics.stack.emplace();
-  agent->static_map = std::make_unique<world::OccupancyMap>(
-      world::BuildStaticMap(loaded.track, config.stack.global_costmap.resolution_m));
-  const StackContext context{.route = &agent->route->path,
-                             .intersections = &loaded.track.spec().intersections,
-                             .static_map = agent->static_map.get(),
-                             .obstacle_grid = &config.perception.obstacle_grid,
-                             .X_map_odom = agent->car->pose(),  // the start pose
-                             .intersection_client_period = config.intersection_client.tick_period,
-                             .true_pose = [agent] { return agent->car->pose(); },
-                             .pose_fix_noise = streams.Stream("car" + std::to_string(id) +
-                                                              "/pose_fix/noise")};
+  // the map the car is given (its planner's), built once per resolution for all cars
+  std::unique_ptr<world::OccupancyMap>& static_map =
+      static_maps[config.stack.global_costmap.resolution_m];
+  if (!static_map) {
+    static_map = std::make_unique<world::OccupancyMap>(
+        world::BuildStaticMap(loaded.track, config.stack.global_costmap.resolution_m));
+  }
+  const StackContext context{
+      .route = &agent->route->path,
+      .intersections = &loaded.track.spec().intersections,
+      .static_map = static_map.get(),
+      .obstacle_grid = &config.perception.obstacle_grid,
+      .X_map_odom = agent->car->pose(),  // the start pose
+      .intersection_client_period = config.intersection_client.tick_period,
+      .true_pose = [agent] { return agent->car->pose(); },
+      .pose_fix_noise = streams.Stream("car" + std::to_string(id) + "/pose_fix/noise")};
   StackHooks hooks{
       .intersection_client = [this, agent](const world::Vec2& p) { return StepClient(agent, p); },
       .actuate =

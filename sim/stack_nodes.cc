@@ -63,6 +63,11 @@ MessageType CostmapType(const stack::LocalCostmapParams& p) {  // nav2_msgs/Cost
 MessageType TwistType() { return {"geometry_msgs/Twist", 52, true}; }
 MessageType BoolType(const char* name) { return {name, 8, true}; }
 MessageType CarCommandType() { return {"autonomsim/CarCommand", 20, true}; }
+// assumed: sized as the Hall sensor's TwistWithCovarianceStamped (344 B, sim/sensors.h): the same
+// header and 6×6 covariance (a pose carries one double more, 8 B, which the model ignores)
+MessageType PoseFixType() { return {"geometry_msgs/PoseWithCovarianceStamped", 344, false}; }
+// The fix's covariance never reaches zero (the EKF inverts it): at least (1 mm)² and (1 mrad)².
+constexpr double kMinFixVariance = 1e-6;
 
 Transport DefaultTransport(const MessageType& type) {
   return type.fixed_size ? Transport::kZeroCopy : Transport::kDds;
@@ -73,19 +78,12 @@ TopicId<T> Topic(NodeGraph& graph, const std::string& name, const MessageType& t
   return graph.AddTopic<T>({.name = name, .type = type, .transport = DefaultTransport(type)});
 }
 
-world::Vec2 OdomPoint(const world::Pose2& X_map_odom, const world::Vec2& p_map) {
-  const world::Vec2 d = p_map - X_map_odom.position();
-  const double c = std::cos(X_map_odom.yaw_rad);
-  const double s = std::sin(X_map_odom.yaw_rad);
-  return {c * d.x() + s * d.y(), -s * d.x() + c * d.y()};
-}
-
-// A subscription that keeps the latest message (or appends it) at the subscription_cache cost.
+// Subscriptions that only keep their message for the node's timer, at the subscription_cache
+// cost: Keep stores it as `store` says; KeepLatest into `owner->*slot`.
 class Builder {
  public:
-  Builder(NodeGraph& graph, const Kernel& kernel)
+  explicit Builder(NodeGraph& graph)
       : graph_(graph),
-        kernel_(kernel),
         cache_{.loaned = true,
                .cost = graph.platform().profile().Component("subscription_cache").sw} {}
 
@@ -95,12 +93,15 @@ class Builder {
         node, topic,
         [store = std::move(store)](const T& v, Time stamp, Outbox&) { store(v, stamp); }, cache_);
   }
-  Time Now() const { return kernel_.Now(); }
-  NodeGraph& graph() { return graph_; }
+  template <class T, class Owner>
+  void KeepLatest(NodeId node, TopicId<T> topic, std::shared_ptr<Owner> owner,
+                  std::optional<T> Owner::*slot) {
+    Keep<T>(node, topic,
+            [owner = std::move(owner), slot](const T& v, Time) { (*owner).*slot = v; });
+  }
 
  private:
   NodeGraph& graph_;
-  const Kernel& kernel_;
   SubscriptionOptions cache_;
 };
 
@@ -118,7 +119,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
   if (!context.route || !context.intersections || !context.static_map || !context.obstacle_grid) {
     throw std::invalid_argument("AddStackNodes: incomplete context");
   }
-  Builder b(graph, kernel);
+  Builder b(graph);
   const auto sw = [](const char* name) {
     return NodeSpec{.name = name, .mapping = NodeMappingConfig{.target = "sw"}};
   };
@@ -145,7 +146,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
       Topic<IntersectionFree>(graph, "/intersection_free", BoolType("std_msgs/Bool"));
   const auto cmd_vel = Topic<Twist>(graph, "/cmd_vel", TwistType());
   const auto command_topic =
-      Topic<vehicle::ActuatorCommand>(graph, "/carcontrol/command", CarCommandType());
+      Topic<vehicle::ActuatorCommand>(graph, kCarCommandTopic, CarCommandType());
 
   // ---- sensor drivers: publish each reading the suite samples (same instants, after it) ----
   auto imu_latest = std::make_shared<vehicle::ImuReading>();
@@ -179,8 +180,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
         throw std::invalid_argument("AddStackNodes: the pose fix needs true_pose and its noise");
       }
       const PoseFixConfig& fix = config.pose_fix;
-      const auto fix_topic = Topic<stack::PoseFix>(
-          graph, "/pose_fix", {"geometry_msgs/PoseWithCovarianceStamped", 344, false});
+      const auto fix_topic = Topic<stack::PoseFix>(graph, "/pose_fix", PoseFixType());
       const Duration period = FromSeconds(1.0 / fix.rate_hz);
       AddSourceNode(graph, sw("pose_fix"), fix_topic, period, period,
                     [fix, true_pose = context.true_pose,
@@ -193,8 +193,9 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
                           truth.y_m + rng->Normal(0.0, fix.position_stddev_m),
                           world::WrapAngle(truth.yaw_rad + rng->Normal(0.0, fix.yaw_stddev_rad))};
                       const double var_p =
-                          std::max(fix.position_stddev_m * fix.position_stddev_m, 1e-6);
-                      const double var_y = std::max(fix.yaw_stddev_rad * fix.yaw_stddev_rad, 1e-6);
+                          std::max(fix.position_stddev_m * fix.position_stddev_m, kMinFixVariance);
+                      const double var_y =
+                          std::max(fix.yaw_stddev_rad * fix.yaw_stddev_rad, kMinFixVariance);
                       f.covariance = Eigen::Vector3d(var_p, var_p, var_y).asDiagonal();
                       return f;
                     });
@@ -218,16 +219,18 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
 
   // ---- intersection client: every 100 ms on the estimated position ----
   {
-    auto odom = std::make_shared<std::optional<stack::LocalizationEkfOutput>>();
+    struct State {
+      std::optional<stack::LocalizationEkfOutput> odom;
+    };
+    auto state = std::make_shared<State>();
     const NodeId node = graph.AddNode(sw("vehicle_communication"));
-    b.Keep<stack::LocalizationEkfOutput>(
-        node, odometry, [odom](const stack::LocalizationEkfOutput& o, Time) { *odom = o; });
+    b.KeepLatest(node, odometry, state, &State::odom);
     const auto out = graph.AddPublisher(node, free_topic);
     graph.AddTimer(node, context.intersection_client_period, context.intersection_client_period,
-                   [odom, out, client = hooks.intersection_client](Time, Outbox& outbox) {
-                     if (!odom->has_value()) return;
-                     const IntersectionFree free{client((*odom)->X_map_base.position())};
-                     outbox.Publish(out, free, (*odom)->stamp);
+                   [state, out, client = hooks.intersection_client](Time, Outbox& outbox) {
+                     if (!state->odom) return;
+                     const IntersectionFree free{client(state->odom->X_map_base.position())};
+                     outbox.Publish(out, free, state->odom->stamp);
                    });
   }
 
@@ -242,8 +245,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     };
     auto state = std::make_shared<State>();
     const NodeId node = graph.AddNode(sw("bt_navigator"));
-    b.Keep<stack::LocalizationEkfOutput>(
-        node, odometry, [state](const stack::LocalizationEkfOutput& o, Time) { state->odom = o; });
+    b.KeepLatest(node, odometry, state, &State::odom);
     b.Keep<IntersectionFree>(node, free_topic, [state](const IntersectionFree& f, Time) {
       state->intersection_free = f.free;
     });
@@ -286,8 +288,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     state->costmap.emplace(config.global_costmap, *context.static_map);
     state->costmap->Update();
     const NodeId node = graph.AddNode(sw("planner_server"));
-    b.Keep<stack::LocalizationEkfOutput>(
-        node, odometry, [state](const stack::LocalizationEkfOutput& o, Time) { state->odom = o; });
+    b.KeepLatest(node, odometry, state, &State::odom);
     b.Keep<stack::BehaviorOutput>(
         node, behavior_topic,
         [state](const stack::BehaviorOutput& o, Time) { state->goals = o.goals; });
@@ -317,8 +318,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     auto state = std::make_shared<State>();
     state->costmap = std::make_unique<stack::LocalCostmap>(config.local_costmap);
     const NodeId node = graph.AddNode(sw("local_costmap"));
-    b.Keep<stack::LocalizationEkfOutput>(
-        node, odometry, [state](const stack::LocalizationEkfOutput& o, Time) { state->odom = o; });
+    b.KeepLatest(node, odometry, state, &State::odom);
     b.Keep<stack::Grid234>(
         node, perception.obstacles,
         [state, layer = config.obstacle_layer, grid_params = *context.obstacle_grid](
@@ -360,8 +360,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     };
     auto state = std::make_shared<State>();
     const NodeId node = graph.AddNode(sw("controller_server"));
-    b.Keep<stack::LocalizationEkfOutput>(
-        node, odometry, [state](const stack::LocalizationEkfOutput& o, Time) { state->odom = o; });
+    b.KeepLatest(node, odometry, state, &State::odom);
     b.Keep<stack::LanePoints>(node, perception.lanes,
                               [state](const stack::LanePoints& l, Time stamp) {
                                 state->lanes = Stamped<stack::LanePoints>{l, stamp};
@@ -394,8 +393,8 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
           stack::LethalQuery is_lethal;
           if (state->costmap) {
             is_lethal = [costmap = state->costmap, X_map_odom](const world::Vec2& p_map) {
-              const std::optional<std::uint8_t> cost =
-                  costmap->CostAt(OdomPoint(X_map_odom, p_map));
+              const std::optional<std::uint8_t> cost = costmap->CostAt(
+                  stack::OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
               return cost && *cost == stack::kLethalObstacle;
             };
           }

@@ -66,6 +66,9 @@ struct PoseFixConfig {
   void Validate() const;
 };
 
+// The actuator command topic: where the end-to-end latency from the sensor stamp is measured.
+inline constexpr const char* kCarCommandTopic = "/carcontrol/command";
+
 // A car's `stack:` entry: every component's parameters (defaults: the real car's, see each).
 struct StackConfig {
   stack::LocalizationEkfParams localization;

@@ -36,12 +36,7 @@ std::string Trim(const std::string& s) {
 }
 
 double ParseNumber(const std::string& text, const std::string& spec) {
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(value)) return value;
-  } catch (const std::exception&) {
-  }
+  if (const std::optional<double> value = ParseFiniteNumber(text)) return *value;
   throw ConfigError("--vary " + spec + ": '" + text + "' is not a number");
 }
 
@@ -157,6 +152,16 @@ std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRec
 }  // namespace
 
 // ---- Parsing ----
+
+std::optional<double> ParseFiniteNumber(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(value)) return value;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
 
 std::vector<std::string> SplitTopLevel(const std::string& text, char separator) {
   std::vector<std::string> parts;
@@ -475,8 +480,8 @@ std::vector<std::pair<std::string, std::string>> RunMetricsRow(const nlohmann::j
       add(b + "cpu_percent", get(report, "cpu_percent"));
       add(b + "cpu_demand_percent", get(report, "cpu_demand_percent"));
       for (const auto& [name, column] :
-           {std::pair<std::string, std::string>{"/carcontrol/command", "e2e"},
-            {"/lane_detector/central_line/point_cloud", "lanes"}}) {
+           {std::pair<std::string, std::string>{kCarCommandTopic, "e2e"},
+            {kLanePointsTopic, "lanes"}}) {
         for (const nlohmann::json& topic : report.at("topics")) {
           if (topic.at("name") != name) continue;
           add(b + column + "_latency_p50_ms", topic.at("latency_ms").at("p50"));

@@ -41,6 +41,9 @@ struct VaryAxis {
 // as {target: sw} or [1, 2] stay whole); parts are trimmed of surrounding spaces.
 std::vector<std::string> SplitTopLevel(const std::string& text, char separator);
 
+// The whole text as a finite number, or nullopt (empty, trailing characters, inf, nan).
+std::optional<double> ParseFiniteNumber(const std::string& text);
+
 // "key=a,b,c" (each value YAML) or "key=start:stop:count" (count >= 2 evenly spaced numbers from
 // start to stop inclusive, or count = 1: start). ConfigError naming the spec when malformed.
 VaryAxis ParseVary(const std::string& spec);

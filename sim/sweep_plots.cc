@@ -65,16 +65,9 @@ int TextWidth(const std::string& text, double scale, int thickness = 1) {
 }
 
 bool ParseDouble(const std::string& text, double* out) {
-  if (text.empty()) return false;
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used != text.size() || !std::isfinite(value)) return false;
-    *out = value;
-    return true;
-  } catch (const std::exception&) {
-    return false;
-  }
+  const std::optional<double> value = ParseFiniteNumber(text);
+  if (value) *out = *value;
+  return value.has_value();
 }
 
 std::string FileSafe(const std::string& text) {

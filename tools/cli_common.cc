@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <thread>
 
 #include "sim/mqtt_client.h"
 #include "sim/outputs.h"
@@ -21,6 +22,8 @@ void AddSetOption(CLI::App* command, std::vector<std::string>* overrides) {
                    "--set v2i.loss=0.1 (repeatable)")
       ->type_name("KEY=VALUE");
 }
+
+int DefaultJobs() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 double WallSecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

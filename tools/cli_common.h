@@ -36,6 +36,9 @@ void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);
 
 double WallSecondsSince(std::chrono::steady_clock::time_point start);
 
+// --jobs' default for the commands that run scenarios in parallel: every core (at least one).
+int DefaultJobs();
+
 // Progress on stderr: a line rewritten in place on a terminal, a line per 10% otherwise.
 class Progress {
  public:

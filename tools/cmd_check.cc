@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <thread>
 
 #include "sim/config.h"
 #include "sim/parallel.h"
@@ -163,7 +162,7 @@ Command AddCheckCommand(CLI::App& parent) {
     std::optional<std::string> junit;
     std::optional<std::string> out;
     std::vector<std::string> overrides;
-    int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    int jobs = DefaultJobs();
   };
   auto o = std::make_shared<Options>();
   CLI::App* check = parent.add_subcommand(

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <thread>
 
 #include "sim/config.h"
 #include "sim/mqtt_client.h"
@@ -60,7 +59,7 @@ struct SweepOptions {
   std::vector<std::string> overrides;
   int repeat{1};
   std::string out;
-  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  int jobs = DefaultJobs();
   std::string shard{"1/1"};
   bool no_plots{false};
   bool quiet{false};
@@ -82,7 +81,6 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     spec.overrides.insert(spec.overrides.end(), o.overrides.begin(), o.overrides.end());
     for (const std::string& v : o.vary) spec.axes.push_back(sim::ParseVary(v));
     if (repeat_given) spec.repeat = o.repeat;
-    if (spec.repeat < 1) throw sim::ConfigError("--repeat must be >= 1");
     options.out_dir = o.out;
     options.jobs = o.jobs;
     options.shard = sim::ParseShard(o.shard);
