@@ -61,9 +61,12 @@ void IntersectionClientParams::Validate() const {
   RequirePositive(tick_period, "tick_period_s");
   RequirePositive(retry_period, "retry_period_s");
   RequirePositive(keepalive_period, "keepalive_period_s");
-  if (!(release_margin_m >= 0.0 && release_margin_m <= 2.0)) {
-    throw std::invalid_argument("release_margin_m must be in [0, 2] m, got " +
-                                std::to_string(release_margin_m));
+  for (const auto& [value, key] : {std::pair{release_margin_m, "release_margin_m"},
+                                   std::pair{exit_margin_m, "exit_margin_m"}}) {
+    if (!(value >= 0.0 && value <= 2.0)) {
+      throw std::invalid_argument(std::string(key) + " must be in [0, 2] m, got " +
+                                  std::to_string(value));
+    }
   }
 }
 
@@ -117,8 +120,9 @@ IntersectionClientOutput StepIntersectionClient(
   if (s.phase != Phase::kIdle) {
     const world::IntersectionSpec* spec = Find(intersections, s.intersection);
     if (spec != nullptr && ContainsClosed(spec->area, input.p_map)) s.crossed = true;
-    // Until the car has been in the area, gaps between its boxes do not count as leaving.
-    const double margin = s.crossed ? 0.0 : params.release_margin_m;
+    // Until the car has been in the area, gaps between its boxes do not count as leaving; after,
+    // the estimate's noise on the area's edge does not either.
+    const double margin = s.crossed ? params.exit_margin_m : params.release_margin_m;
     const bool inside = spec != nullptr && (InStopZoneClosed(*spec, input.p_map, margin) ||
                                             ContainsClosed(spec->area, input.p_map, margin));
     if (!inside) {
