@@ -268,7 +268,7 @@ std::string YamlText(const YAML::Node& node) {
 bool IsStudyFile(const fs::path& file) {
   try {
     const YAML::Node root = YAML::LoadFile(file.string());
-    return root.IsMap() && root["vary"];
+    return root.IsMap() && root["scenario"];  // a scenario file has no `scenario:` key
   } catch (const YAML::Exception&) {
     return false;
   }
@@ -281,7 +281,7 @@ SweepSpec LoadStudy(const fs::path& file) {
     const YAML::Mark mark = node.Mark();
     return ConfigError(fmt::format("{}:{}:{}: {}", where, mark.line + 1, mark.column + 1, message));
   };
-  if (!root.IsMap()) throw fail(root, "a study file is a mapping with scenario: and vary:");
+  if (!root.IsMap()) throw fail(root, "a study file is a mapping with scenario: (and vary:)");
   for (const auto& item : root) {
     const std::string key = item.first.as<std::string>();
     if (key != "scenario" && key != "description" && key != "set" && key != "repeat" &&
@@ -307,7 +307,8 @@ SweepSpec LoadStudy(const fs::path& file) {
     }
     if (spec.repeat < 1) throw fail(repeat, "repeat: a whole number >= 1");
   }
-  const YAML::Node vary = root["vary"];
+  // No vary: one grid point, `repeat` seeds of it.
+  const YAML::Node vary = root["vary"] ? root["vary"] : YAML::Node(YAML::NodeType::Sequence);
   if (!vary.IsSequence()) throw fail(vary, "vary: a list of {key, values} or {key, range}");
   for (const YAML::Node& entry : vary) {
     if (entry.IsScalar()) {

@@ -59,11 +59,12 @@ struct SweepSpec {
 };
 
 // A study file (scenarios/studies/*.yaml): `scenario` (relative to the study file's folder),
-// optional `description`, `set` (list of key=value), `repeat`, and `vary`: a list of
+// optional `description`, `set` (list of key=value), `repeat`, and `vary` (none: one point,
+// `repeat` seeds of it): a list of
 // {key, values} (values a list of YAML values, or a mapping label: value) or {key, range:
 // [start, stop, count]}, or a string "key=..." as on the command line. ConfigError on bad input.
 SweepSpec LoadStudy(const std::filesystem::path& file);
-// Whether `file` is a study file (a YAML mapping with a top-level `vary` key) rather than a
+// Whether `file` is a study file (a YAML mapping with a top-level `scenario` key) rather than a
 // scenario.
 bool IsStudyFile(const std::filesystem::path& file);
 

@@ -199,6 +199,14 @@ vary:
   EXPECT_THAT(Labels(spec.axes[2]), ElementsAre("0", "0.1"));
   EXPECT_EQ(SweepSpec::FromJson(spec.ToJson()).ToJson(), spec.ToJson());
 
+  // without vary: one point, `repeat` seeds of it
+  std::ofstream(dir.path / "seeds.yaml") << "scenario: x.yaml\nrepeat: 5\n";
+  EXPECT_TRUE(IsStudyFile(dir.path / "seeds.yaml"));
+  const SweepSpec seeds = LoadStudy(dir.path / "seeds.yaml");
+  EXPECT_TRUE(seeds.axes.empty());
+  EXPECT_EQ(seeds.repeat, 5);
+  EXPECT_EQ(ExpandGrid(seeds).size(), 5u);
+
   std::ofstream(dir.path / "bad.yaml") << "scenario: x.yaml\nvary: []\nrepat: 2\n";
   try {
     LoadStudy(dir.path / "bad.yaml");
