@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim/config.h"
+#include "sim/tests/free_transport_profile.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -21,17 +22,9 @@ using std::chrono::milliseconds;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
-// A platform whose transports cost nothing and take no time, so that job times are the nodes'
-// own work and can be computed by hand.
+// Free transports (job times are the nodes' own work): "source", "slow" (95 ms) and "sink".
 PlatformProfile FreeTransportProfile(int cores = 1) {
-  PlatformProfile p;
-  p.name = "test";
-  p.cpu.cores = cores;
-  p.cpu.memcpy_bytes_per_s = 1e9;
-  p.fpga.slots = 2;
-  p.fpga.memif_bytes_per_s = 1e9;
-  p.zero_copy.mempools = {{.chunk_bytes = 1024, .chunks = 64}};
-  p.components["source"] = ComponentCost{.sw = SwCost{}};
+  PlatformProfile p = testing::FreeTransportProfile(cores);
   p.components["slow"] = ComponentCost{.sw = SwCost{.work_s = 0.095}};
   p.components["sink"] = ComponentCost{.sw = SwCost{}};
   return p;

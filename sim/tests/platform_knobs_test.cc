@@ -12,6 +12,7 @@
 #include "sim/node_graph.h"
 #include "sim/platform.h"
 #include "sim/scenario.h"
+#include "sim/tests/free_transport_profile.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -22,14 +23,7 @@ using ::testing::HasSubstr;
 // A profile whose transports are free and instantaneous, so a job's turnaround is its own work:
 // "work" costs 30 ms in software, or 5 ms in the fabric plus its memory transfers.
 PlatformProfile TestProfile(int cores = 2) {
-  PlatformProfile p;
-  p.name = "test";
-  p.cpu.cores = cores;
-  p.cpu.memcpy_bytes_per_s = 1e9;
-  p.fpga.slots = 2;
-  p.fpga.memif_bytes_per_s = 1e9;
-  p.zero_copy.mempools = {{.chunk_bytes = 1024, .chunks = 64}};
-  p.components["source"] = ComponentCost{.sw = SwCost{}};
+  PlatformProfile p = testing::FreeTransportProfile(cores);
   p.components["work"] =
       ComponentCost{.sw = SwCost{.work_s = 0.030}, .hw = HwCost{.compute_s = 0.005}};
   return p;
