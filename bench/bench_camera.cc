@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/track_loader.h"
+#include "sim/core/track_loader.h"
 #include "vehicle/camera_model.h"
 #include "vehicle/ray_caster.h"
 #include "world/floor_raster.h"

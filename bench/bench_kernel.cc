@@ -6,8 +6,8 @@
 
 #include <cstdint>
 
-#include "sim/kernel.h"
-#include "sim/random.h"
+#include "sim/core/kernel.h"
+#include "sim/core/random.h"
 
 namespace autonomsim::sim {
 namespace {

@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <string>
 
-#include "sim/sweep.h"
+#include "sim/study/sweep.h"
 
 namespace autonomsim::sim {
 namespace {

@@ -10,7 +10,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "sim/track_loader.h"
+#include "sim/core/track_loader.h"
 #include "stack/costmap.h"
 #include "stack/global_planner.h"
 #include "world/occupancy_map.h"

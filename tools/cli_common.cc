@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <thread>
 
-#include "sim/mqtt_client.h"
-#include "sim/outputs.h"
-#include "sim/simulation.h"
+#include "sim/loop/simulation.h"
+#include "sim/mqtt/mqtt_client.h"
+#include "sim/results/outputs.h"
 
 namespace autonomsim::cli {
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/expectations.h"
-#include "sim/scenario.h"
+#include "sim/results/expectations.h"
+#include "sim/scenario/scenario.h"
 
 namespace autonomsim::cli {
 

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <fstream>
 
-#include "sim/config.h"
-#include "sim/parallel.h"
+#include "sim/core/config.h"
+#include "sim/core/parallel.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "sim/config.h"
-#include "sim/render.h"
+#include "sim/core/config.h"
+#include "sim/results/render.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {

@@ -1,8 +1,8 @@
 // `autonomsim run SCENARIO`: one scenario, one result folder.
 #include <fmt/format.h>
 
-#include "sim/config.h"
-#include "sim/mqtt_client.h"
+#include "sim/core/config.h"
+#include "sim/mqtt/mqtt_client.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {

@@ -1,5 +1,5 @@
 // `autonomsim sweep SCENARIO|STUDY --vary KEY=VALUES ... --out DIR` and
-// `autonomsim sweep merge DIR...`: latency what-if studies (sim/sweep.h does the work).
+// `autonomsim sweep merge DIR...`: latency what-if studies (sim/study/sweep.h does the work).
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -7,9 +7,9 @@
 #include <chrono>
 #include <cstdio>
 
-#include "sim/config.h"
-#include "sim/mqtt_client.h"
-#include "sim/sweep.h"
+#include "sim/core/config.h"
+#include "sim/mqtt/mqtt_client.h"
+#include "sim/study/sweep.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sim/config.h"
-#include "sim/table1.h"
+#include "sim/core/config.h"
+#include "sim/platform/table1.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {

@@ -1,7 +1,7 @@
 // `tlserver`: the traffic-light server of the AutonomROS lab as a program. It speaks the lab's
 // /vtl/ topics and payloads (reference §7) through an MQTT broker, so it can stand in for the
 // lab's vtl.py; with --sim-clock it serves a simulation in lock-step instead
-// (sim/mqtt_lockstep.h). The message handling is tools/tlserver_service.h; this file is the
+// (sim/mqtt/mqtt_lockstep.h). The message handling is tools/tlserver_service.h; this file is the
 // process around it: options, connection, timer, signals, logs.
 //
 // Exit codes: 0 after SIGINT/SIGTERM, 2 for unusable options or credentials the broker refused,
@@ -16,7 +16,7 @@
 #include <fstream>
 #include <thread>
 
-#include "sim/mqtt_client.h"
+#include "sim/mqtt/mqtt_client.h"
 #include "tools/tlserver_service.h"
 
 namespace autonomsim::tlserver {

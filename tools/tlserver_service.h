@@ -1,7 +1,7 @@
 // What `tlserver` does with each MQTT message, without the MQTT: messages and the time go in, the
 // messages to publish come out, in order. The server logic itself is world::TrafficLightServer.
 //
-// Topics (reference §7 and sim/mqtt_lockstep.h):
+// Topics (reference §7 and sim/mqtt/mqtt_lockstep.h):
 //   /vtl/request, /vtl/free           the lab's cars, unchanged
 //   /vtl/request/<user>, /vtl/free/<user>
 //                                     cars behind the ACL of tools/mosquitto/acl: the user must be
@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/mqtt_client.h"
-#include "sim/mqtt_lockstep.h"
+#include "sim/mqtt/mqtt_client.h"
+#include "sim/mqtt/mqtt_lockstep.h"
 #include "world/time.h"
 #include "world/traffic_light_server.h"
 

@@ -1,7 +1,7 @@
 // The car's IMU (BNO055, reference §2) as the localization reads it (reference §6: the EKF takes
 // the IMU's yaw, yaw rate and planar accelerations): a pure step from the car's true motion to one
 // reading, with a per-run bias and white noise. The noise enters as standard normal draws, so the
-// caller owns the random streams (sim/sensors.h draws them from seeded named streams).
+// caller owns the random streams (sim/car/sensors.h draws them from seeded named streams).
 #pragma once
 
 #include <chrono>

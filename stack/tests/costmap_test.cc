@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "sim/track_loader.h"
+#include "sim/core/track_loader.h"
 #include "world/occupancy_map.h"
 
 namespace autonomsim::stack {

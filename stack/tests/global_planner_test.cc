@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "sim/track_loader.h"
+#include "sim/core/track_loader.h"
 #include "stack/behavior.h"
 #include "stack/costmap.h"
 #include "world/occupancy_map.h"

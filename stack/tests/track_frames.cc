@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "sim/track_loader.h"
+#include "sim/core/track_loader.h"
 #include "vehicle/camera_model.h"
 #include "world/floor_raster.h"
 
@@ -10,8 +10,7 @@ namespace autonomsim::stack::testing {
 
 TrackFrames::TrackFrames(const std::string& track_file)
     : track_(std::make_unique<world::Track>(sim::LoadTrack(track_file))) {
-  const auto floor =
-      std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(*track_));
+  const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(*track_));
   const vehicle::Bgr surround = vehicle::SceneAppearance{}.surround();
   color_ = std::make_unique<vehicle::CameraRenderer>(
       std::make_shared<const vehicle::CameraRays>(

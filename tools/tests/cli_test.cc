@@ -7,8 +7,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "sim/outputs.h"
-#include "sim/simulation.h"
+#include "sim/loop/simulation.h"
+#include "sim/results/outputs.h"
 #include "tools/tests/cli_testing.h"
 
 namespace autonomsim {

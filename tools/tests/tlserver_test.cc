@@ -6,7 +6,7 @@
 #include <csignal>
 #include <nlohmann/json.hpp>
 
-#include "sim/tests/mqtt_fixture.h"
+#include "sim/mqtt/tests/mqtt_fixture.h"
 #include "tools/tlserver_service.h"
 
 namespace autonomsim::tlserver {

@@ -1,0 +1,184 @@
+#include "sim/car/perception_nodes.h"
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <utility>
+
+#include "sim/core/config.h"
+#include "stack/point_cloud.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// The real build's slots (reference §8): 0 point cloud + obstacle grid, 1 lane planner (HSV,
+// threshold, warp), 2 polynomial fit.
+const NodeMappingConfig kSlot0{.target = "hw", .slot = 0};
+const NodeMappingConfig kSlot1{.target = "hw", .slot = 1};
+const NodeMappingConfig kSlot2{.target = "hw", .slot = 2};
+const NodeMappingConfig kSoftware{.target = "sw"};
+
+// The node's target as the board will map it: its configured mapping, else its default.
+bool InHardware(const std::map<std::string, NodeMappingConfig>& mapping, const std::string& node,
+                const NodeMappingConfig& fallback) {
+  const auto it = mapping.find(node);
+  return (it != mapping.end() ? it->second.target : fallback.target) == "hw";
+}
+
+// Messages between perception nodes that the rest of the stack does not read. Like the real
+// sensor_msgs they carry the stamp of the frame they derive from.
+struct CloudMessage {  // /points, PointCloud640
+  std::shared_ptr<const stack::PointCloud640> cloud;
+  Time stamp{};
+};
+struct BirdViewMessage {  // /camera/bird_view, Image640mono
+  stack::BirdsEyeMasks masks;
+  Time stamp{};
+};
+
+// What a node keeps between frames: scratch buffers only (a result depends on its frame alone).
+struct DepthScratch {
+  vehicle::DepthImage depth;
+};
+struct ColorScratch {
+  vehicle::ColorImage color;
+};
+
+stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch) {
+  frame.Render(nullptr, &scratch->depth);
+  return stack::DepthImageView{scratch->depth.width, scratch->depth.height, scratch->depth.mm};
+}
+
+cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch) {
+  frame.Render(&scratch->color, nullptr);
+  return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
+}
+
+stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {
+  const vehicle::CameraInfo info = camera.Info();
+  stack::LaneCameraCalibration calibration;
+  calibration.K = info.K;
+  calibration.D = info.D;
+  calibration.X_base_camera = camera.X_base_camera();
+  return calibration;
+}
+
+// The input-independent part of a perception step: the component's params and the camera data.
+struct GridParams {
+  stack::PointCloudParams cloud;
+  stack::ObstacleGridParams grid;
+  std::array<double, 12> P{};
+  std::function<void(const stack::Grid234&, Time)> hook;
+};
+
+stack::Grid234 Report(const GridParams& params, stack::Grid234 grid, Time stamp) {
+  if (params.hook) params.hook(grid, stamp);
+  return grid;
+}
+
+TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfig& config,
+                                         const std::map<std::string, NodeMappingConfig>& mapping,
+                                         const SensorSuite& sensors,
+                                         TopicId<CameraFrame> depth_image,
+                                         std::function<void(const stack::Grid234&, Time)> hook) {
+  const auto obstacles =
+      graph.AddTopic<stack::Grid234>({.name = "/local_costmap/obstacles", .type = msg::Grid234()});
+  GridParams params{
+      .grid = config.obstacle_grid, .P = sensors.depth_camera().Info().P, .hook = std::move(hook)};
+
+  if (InHardware(mapping, "obstacle_detection", kSlot0)) {
+    // Point cloud and grid fused in one slot; the cloud is never written (reference §4).
+    params.cloud.hardware_scale = true;
+    AddComponentNode(
+        graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image, obstacles,
+        std::move(params), std::make_shared<DepthScratch>(),
+        [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
+          return Report(p,
+                        stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch), p.P),
+                        frame.stamp);
+        });
+    return obstacles;
+  }
+
+  const auto points =
+      graph.AddTopic<CloudMessage>({.name = "/points", .type = msg::PointCloud640()});
+  params.cloud.hardware_scale = InHardware(mapping, "point_cloud", kSlot0);
+  AddComponentNode(graph, NodeSpec{.name = "point_cloud", .mapping = kSlot0}, depth_image, points,
+                   params, std::make_shared<DepthScratch>(),
+                   [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
+                     auto cloud = std::make_shared<stack::PointCloud640>();
+                     stack::StepPointCloud(p.cloud, RenderDepth(frame, scratch), p.P, cloud.get());
+                     return CloudMessage{std::move(cloud), frame.stamp};
+                   });
+  AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSoftware}, points,
+                   obstacles, std::move(params), std::shared_ptr<void>(),
+                   [](const GridParams& p, const CloudMessage& in, void*) {
+                     return Report(p, stack::StepObstacleGrid(p.grid, *in.cloud), in.stamp);
+                   });
+  return obstacles;
+}
+
+struct LaneParams {
+  std::shared_ptr<stack::LaneDetector> detector;  // its tables are shared by the lane nodes
+  std::function<void(const stack::LanePoints&, Time)> hook;
+};
+
+stack::LanePoints Report(const LaneParams& params, stack::LanePoints lanes, Time stamp) {
+  if (params.hook) params.hook(lanes, stamp);
+  return lanes;
+}
+
+TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig& config,
+                                        const std::map<std::string, NodeMappingConfig>& mapping,
+                                        const SensorSuite& sensors, TopicId<CameraFrame> image,
+                                        std::function<void(const stack::LanePoints&, Time)> hook) {
+  const auto lanes =
+      graph.AddTopic<stack::LanePoints>({.name = kLanePointsTopic, .type = msg::LanePoints()});
+  LaneParams params{.detector = std::make_shared<stack::LaneDetector>(
+                        config.lane_detection, LaneCalibration(sensors.color_camera().model())),
+                    .hook = std::move(hook)};
+
+  if (mapping.count("lane_detection") != 0) {
+    if (InHardware(mapping, "lane_detection", kSoftware)) {
+      throw ConfigError(
+          "platform.mapping: lane_detection is the ROS 2 software node; in hardware the lane "
+          "detection is two nodes: map lane_planner and poly_fit");
+    }
+    AddComponentNode(graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes,
+                     std::move(params), std::make_shared<ColorScratch>(),
+                     [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
+                       return Report(p, p.detector->Step(RenderColor(frame, scratch)), frame.stamp);
+                     });
+    return lanes;
+  }
+
+  const auto bird_view =
+      graph.AddTopic<BirdViewMessage>({.name = "/camera/bird_view", .type = msg::Image640mono()});
+  AddComponentNode(graph, NodeSpec{.name = "lane_planner", .mapping = kSlot1}, image, bird_view,
+                   params, std::make_shared<ColorScratch>(),
+                   [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
+                     BirdViewMessage out{.stamp = frame.stamp};
+                     p.detector->ComputeMasks(RenderColor(frame, scratch), &out.masks);
+                     return out;
+                   });
+  AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,
+                   std::move(params), std::shared_ptr<void>(),
+                   [](const LaneParams& p, const BirdViewMessage& in, void*) {
+                     return Report(p, p.detector->Fit(in.masks), in.stamp);
+                   });
+  return lanes;
+}
+
+}  // namespace
+
+PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
+                                    const std::map<std::string, NodeMappingConfig>& mapping,
+                                    const SensorSuite& sensors, TopicId<CameraFrame> image,
+                                    TopicId<CameraFrame> depth_image, PerceptionHooks hooks) {
+  PerceptionTopics topics;
+  topics.obstacles =
+      AddObstacleNodes(graph, config, mapping, sensors, depth_image, std::move(hooks.on_grid));
+  topics.lanes = AddLaneNodes(graph, config, mapping, sensors, image, std::move(hooks.on_lanes));
+  return topics;
+}
+
+}  // namespace autonomsim::sim

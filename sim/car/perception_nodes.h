@@ -1,0 +1,70 @@
+// The perception part of a car's stack as nodes on its board, under the real topic names
+// (AutonomROS code/reconros_ws/carcontrol/build.cfg), each node mappable to software or to a
+// hardware slot through the scenario's `platform.mapping`:
+//
+//   obstacles, hardware (default; reference §4: point cloud and grid fused in slot 0):
+//     /depth/image_raw → obstacle_detection (depth → grid) → /local_costmap/obstacles
+//   obstacles, software (`obstacle_detection: {target: sw}`):
+//     /depth/image_raw → point_cloud → /points → obstacle_detection → /local_costmap/obstacles
+//     (point_cloud defaults to hardware in slot 0, as in the real build; map it too for all-SW)
+//   lanes, hardware (default; reference §8: slot 1 HSV/threshold/warp, slot 2 polynomial fit):
+//     /image → lane_planner → /camera/bird_view → poly_fit →
+//     /lane_detector/central_line/point_cloud
+//   lanes, software (`lane_detection: {target: sw}`: the ROS 2 node, reference §5):
+//     /image → lane_detection → /lane_detector/central_line/point_cloud
+//
+// Each node runs its pure component (stack/) on the frame at once; the platform decides when the
+// result is published. A point cloud computed in hardware is scaled as the real HLS code scales it
+// (1/1024 m per mm, reference §3), in software by 0.001.
+#pragma once
+
+#include <functional>
+
+#include "sim/car/sensors.h"
+#include "sim/platform/node_graph.h"
+#include "stack/lane_detection.h"
+#include "stack/obstacle_grid.h"
+
+namespace autonomsim::sim {
+
+// A car's `perception:` entry.
+struct PerceptionConfig {
+  bool enabled{false};
+  stack::ObstacleGridParams obstacle_grid;
+  stack::LaneDetectionParams lane_detection;
+
+  template <class V>
+  void Describe(V& v) {
+    v("enabled", enabled);
+    v("obstacle_grid", obstacle_grid);
+    v("lane_detection", lane_detection);
+  }
+  void Validate() const {}  // the parts validate themselves
+};
+
+// The lane detection's output topic (reference §5), read by the controller and by sweeps' tables.
+inline constexpr const char* kLanePointsTopic = "/lane_detector/central_line/point_cloud";
+
+// The topics the rest of the stack reads.
+struct PerceptionTopics {
+  TopicId<stack::Grid234> obstacles;  // /local_costmap/obstacles
+  TopicId<stack::LanePoints> lanes;   // /lane_detector/central_line/point_cloud
+};
+
+// Called with each result when its component has computed it (at the job's start; the topic
+// carries it at the job's completion), with the stamp of the frame it derives from: for
+// monitors that compare perception with ground truth. Either may be empty.
+struct PerceptionHooks {
+  std::function<void(const stack::Grid234&, Time stamp)> on_grid;
+  std::function<void(const stack::LanePoints&, Time stamp)> on_lanes;
+};
+
+// Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
+// `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a
+// mapping the shape cannot take (e.g. lane_detection in hardware: map lane_planner and poly_fit).
+PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
+                                    const std::map<std::string, NodeMappingConfig>& mapping,
+                                    const SensorSuite& sensors, TopicId<CameraFrame> image,
+                                    TopicId<CameraFrame> depth_image, PerceptionHooks hooks = {});
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,316 @@
+// A car's sensors in the closed loop: when each one samples (rates, per-car phases), what it
+// publishes (the real topic names and message sizes) and the seeded noise streams. The sensor
+// models themselves are pure (vehicle/); this file wraps them in time, Drake-style: a sample is a
+// pure function of the world at the sample instant.
+//
+// Cameras are lazy. A frame is published as a CameraFrame: its stamp, the car's pose and the
+// prisms it could see at that instant, and a noise seed; the pixels are rendered only when a node
+// that takes the frame calls Render. A frame no node processes (dropped from a keep-last queue,
+// or no subscriber at all) is never rendered, and because rendering depends on nothing but the
+// frame, results are identical whether it is or not.
+//
+// Random streams (all derived from the scenario seed, sim/core/random.h), for car N:
+//   carN/<camera name>/phase, carN/<camera name>/noise (one seed drawn per frame, rendered or not),
+//   carN/imu/phase, carN/imu/bias, carN/imu/noise, carN/wheel_speed/phase, carN/ultrasonic/phase,
+//   carN/ultrasonic/noise.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim/core/kernel.h"
+#include "sim/core/priorities.h"
+#include "sim/core/random.h"
+#include "vehicle/camera_model.h"
+#include "vehicle/imu.h"
+#include "vehicle/physics_world.h"
+#include "vehicle/ray_caster.h"
+#include "vehicle/ultrasonic.h"
+#include "vehicle/wheel_encoder.h"
+#include "world/floor_raster.h"
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// Priorities: sim/core/priorities.h (kPrioritySensorIntegrate, kPrioritySensor).
+
+// The message types the sensors publish, with their sizes on the wire. Images: reference §8. The
+// others are not in the reference; their sizes are the ROS 2 messages' fixed fields (header stamp,
+// no frame_id string, no CDR padding): ours, for the transport model.
+struct SensorMessageType {
+  std::string name;
+  std::int64_t bytes{0};
+};
+SensorMessageType ColorImageType();  // Image640rgb, 921,600 B (reference §8)
+SensorMessageType DepthImageType();  // Image640mono, 614,400 B (reference §8; mono16 640×480)
+SensorMessageType ImuType();         // sensor_msgs/Imu, 304 B
+SensorMessageType WheelSpeedType();  // geometry_msgs/TwistWithCovarianceStamped, 344 B
+SensorMessageType RangeType();       // sensor_msgs/Range, 25 B
+
+struct CameraStreamParams {
+  vehicle::CameraParams camera;
+  double rate_hz{30.0};  // reference §2: both cameras run at 30 fps
+  // The topic the real car publishes the frame on (code/reconros_ws/carcontrol/build.cfg and the
+  // camera drivers): the colour camera's driver publishes "/image", the depth camera's
+  // "/depth/image_raw" and "/depth/camera_info".
+  std::string topic;
+  std::string info_topic;     // CameraInfo; empty: none (the colour camera's driver sends none)
+  bool publish_color{false};  // which image the topic carries
+  bool publish_depth{false};
+  vehicle::CameraNoiseParams noise;
+
+  template <class V>
+  void Describe(V& v) {
+    v("camera", camera);
+    v("rate_hz", rate_hz);
+    v("topic", topic);
+    v("info_topic", info_topic);
+    v("publish_color", publish_color);
+    v("publish_depth", publish_depth);
+    v("noise", noise);
+  }
+  void Validate() const;
+};
+CameraStreamParams ColorCameraStream();  // See3CAM CU30 on /image (bgr8)
+CameraStreamParams DepthCameraStream();  // Astra Pro depth on /depth/image_raw (mono16, mm)
+
+struct ImuStreamParams {
+  vehicle::ImuParams imu;
+  double rate_hz{100.0};  // reference §2
+  // the EKF's imu0 input (code/ros_ws/src/localization/params/ekf.yaml)
+  std::string topic{"/bno055/imu"};
+
+  template <class V>
+  void Describe(V& v) {
+    v("imu", imu);
+    v("rate_hz", rate_hz);
+    v("topic", topic);
+  }
+  void Validate() const;
+};
+
+struct WheelSpeedStreamParams {
+  vehicle::WheelEncoderParams encoder;
+  double rate_hz{10.0};  // reference §2
+  // the Hall sensor node's publisher (build.cfg), the EKF's twist0 input
+  std::string topic{"/modelcar/speed"};
+
+  template <class V>
+  void Describe(V& v) {
+    v("encoder", encoder);
+    v("rate_hz", rate_hz);
+    v("topic", topic);
+  }
+  void Validate() const;
+};
+
+struct UltrasonicStreamParams {
+  vehicle::UltrasonicParams sensor;
+  double rate_hz{10.0};                        // reference §2
+  std::string topic{"/modelcar/front_range"};  // the ultrasound node's publisher (build.cfg)
+
+  template <class V>
+  void Describe(V& v) {
+    v("sensor", sensor);
+    v("rate_hz", rate_hz);
+    v("topic", topic);
+  }
+  void Validate() const;
+};
+
+// One car's sensors, as a scenario file would set them (e.g. `cars[0].sensors`).
+struct SensorSuiteParams {
+  CameraStreamParams color_camera{ColorCameraStream()};
+  CameraStreamParams depth_camera{DepthCameraStream()};
+  ImuStreamParams imu;
+  WheelSpeedStreamParams wheel_speed;
+  UltrasonicStreamParams ultrasonic;
+
+  template <class V>
+  void Describe(V& v) {
+    v("color_camera", color_camera);
+    v("depth_camera", depth_camera);
+    v("imu", imu);
+    v("wheel_speed", wheel_speed);
+    v("ultrasonic", ultrasonic);
+  }
+  void Validate() const;  // each part, and the two cameras' names differ
+};
+
+// What the sensors of every car share: the world they look at, the floor's texture, the scene's
+// colours, and the per-pixel ray tables (one per distinct camera, however many cars carry it).
+class SensorEnvironment {
+ public:
+  // `physics` is not owned and must outlive the environment and every suite and frame using it.
+  SensorEnvironment(const vehicle::PhysicsWorld* physics, const world::FloorRaster& floor,
+                    const vehicle::SceneAppearance& appearance);
+
+  const vehicle::PhysicsWorld& physics() const { return *physics_; }
+  const vehicle::SceneAppearance& appearance() const { return appearance_; }
+  const std::shared_ptr<const vehicle::FloorTexture>& floor() const { return floor_; }
+  // Built on first use for these params, then shared.
+  std::shared_ptr<const vehicle::CameraRays> Rays(const vehicle::CameraParams& camera);
+  // Every other car and every enabled obstacle, now.
+  std::vector<vehicle::Prism> PrismsSeenBy(int car_id) const;
+
+ private:
+  const vehicle::PhysicsWorld* physics_;
+  vehicle::SceneAppearance appearance_;
+  std::shared_ptr<const vehicle::FloorTexture> floor_;
+  std::vector<std::pair<vehicle::CameraParams, std::shared_ptr<const vehicle::CameraRays>>> rays_;
+};
+
+// A car body or obstacle box as the sensors see it.
+struct CarBody {
+  int id{0};
+  world::Pose2 pose;
+  double length_m{0.0};
+  double width_m{0.0};
+  double height_m{0.0};
+};
+// The prisms of a scene: the cars other than `exclude_car_id` (their body colours from
+// `appearance`), then the obstacles (all of those given: pass only the present ones).
+std::vector<vehicle::Prism> ScenePrisms(const std::vector<CarBody>& cars,
+                                        const std::vector<vehicle::ObstacleBox>& obstacles,
+                                        const vehicle::SceneAppearance& appearance,
+                                        int exclude_car_id);
+
+class CameraSensor;
+
+// One published camera frame: cheap to copy; its pixels are rendered on demand.
+struct CameraFrame {
+  const CameraSensor* camera{nullptr};  // the suite's; the frame must not outlive the suite
+  int car_id{0};
+  std::uint64_t sequence{0};  // 0, 1, 2, ... per camera
+  Time stamp{};               // the sample instant (header.stamp)
+  world::Pose2 X_map_car;
+  std::vector<vehicle::Prism> prisms;  // what the camera could see then
+  std::uint64_t noise_seed{0};
+
+  // The frame's images (either may be null), noise included when it is on; the buffers are
+  // reused (no allocation once they have their size). Identical for the same frame every time.
+  void Render(vehicle::ColorImage* color, vehicle::DepthImage* depth) const;
+  const std::string& topic() const;
+  std::int64_t bytes() const;  // of the message on the topic
+};
+
+// A camera of one car: its model, its renderer and its stream.
+class CameraSensor {
+ public:
+  CameraSensor(SensorEnvironment* environment, const CameraStreamParams& params);
+
+  const CameraStreamParams& params() const { return params_; }
+  const vehicle::CameraModel& model() const { return renderer_.camera(); }
+  vehicle::CameraInfo Info() const { return model().Info(); }
+  std::uint64_t frames_rendered() const { return frames_rendered_; }
+
+  void Render(const CameraFrame& frame, vehicle::ColorImage* color,
+              vehicle::DepthImage* depth) const;
+
+ private:
+  CameraStreamParams params_;
+  mutable vehicle::CameraRenderer renderer_;  // scratch memory only: rendering is pure
+  mutable std::uint64_t frames_rendered_{0};
+};
+
+struct WheelSpeedMessage {
+  Time stamp{};
+  double speed_mps{0.0};  // twist.twist.linear.x, >= 0 (a Hall sensor has no direction)
+};
+
+struct RangeMessage {
+  Time stamp{};
+  double range_m{0.0};  // REP-117: +inf nothing within max_range_m, -inf nearer than min_range_m
+  double min_range_m{0.0};
+  double max_range_m{0.0};
+  double field_of_view_rad{0.0};
+};
+
+// When and where a sensor publishes.
+struct SensorStream {
+  std::string topic;
+  SensorMessageType type;
+  Time first{};  // the first sample: the per-car phase
+  Duration period{};
+};
+
+struct SensorSuiteOptions {
+  // false: the cameras do not sample on their own timers; whoever drives them (e.g. a node
+  // graph's source node, ticking at color_stream().first + k · period) calls CaptureColorFrame /
+  // CaptureDepthFrame at those instants instead. The other sensors always run on their timers.
+  bool camera_timers{true};
+};
+
+// All sensors of one car, sampling on `kernel` from construction on. Subscribe before running the
+// kernel; a callback runs in the sample's event, at the sample instant. The kernel, the
+// environment and the physics world must outlive the suite, and the suite every CameraFrame.
+class SensorSuite {
+ public:
+  // `physics_step`: the physics world's step, which the wheel encoder integrates over.
+  SensorSuite(Kernel* kernel, SensorEnvironment* environment, int car_id,
+              const SensorSuiteParams& params, const RngStreams& streams, Duration physics_step,
+              SensorSuiteOptions options = {});
+  SensorSuite(const SensorSuite&) = delete;
+  SensorSuite& operator=(const SensorSuite&) = delete;
+  ~SensorSuite();
+
+  void OnColorFrame(std::function<void(const CameraFrame&)> callback);
+  void OnDepthFrame(std::function<void(const CameraFrame&)> callback);
+  void OnImu(std::function<void(const vehicle::ImuReading&)> callback);
+  void OnWheelSpeed(std::function<void(const WheelSpeedMessage&)> callback);
+  void OnRange(std::function<void(const RangeMessage&)> callback);
+
+  // A camera frame of the world now (stamp = the kernel's Now()), the next in its camera's
+  // sequence; what the camera timers publish. Each call draws the frame's noise seed.
+  CameraFrame CaptureColorFrame();
+  CameraFrame CaptureDepthFrame();
+
+  int car_id() const { return car_id_; }
+  const SensorSuiteParams& params() const { return params_; }
+  const CameraSensor& color_camera() const { return *color_; }
+  const CameraSensor& depth_camera() const { return *depth_; }
+  const SensorStream& color_stream() const { return color_stream_; }
+  const SensorStream& depth_stream() const { return depth_stream_; }
+  const SensorStream& imu_stream() const { return imu_stream_; }
+  const SensorStream& wheel_speed_stream() const { return wheel_speed_stream_; }
+  const SensorStream& range_stream() const { return range_stream_; }
+
+ private:
+  struct CameraState {
+    Rng noise;
+    std::uint64_t sequence{0};
+  };
+  // The frame's header (sequence, stamp, noise seed), and with `scene` its world.
+  CameraFrame Capture(const CameraSensor& camera, CameraState* state, bool scene);
+  void SampleCamera(const CameraSensor& camera, CameraState* state,
+                    const std::vector<std::function<void(const CameraFrame&)>>& callbacks);
+  void SampleImu();
+  void IntegrateWheel();
+  void SampleWheelSpeed();
+  void SampleRange();
+
+  Kernel* kernel_;
+  SensorEnvironment* environment_;
+  int car_id_;
+  SensorSuiteParams params_;
+  Duration physics_step_;
+  std::unique_ptr<CameraSensor> color_;
+  std::unique_ptr<CameraSensor> depth_;
+  SensorStream color_stream_, depth_stream_, imu_stream_, wheel_speed_stream_, range_stream_;
+  CameraState color_state_;
+  CameraState depth_state_;
+  Rng imu_noise_;
+  vehicle::ImuState imu_state_;
+  vehicle::WheelEncoderState wheel_state_;
+  Rng range_noise_;
+  std::vector<EventId> timers_;
+  std::vector<std::function<void(const CameraFrame&)>> on_color_, on_depth_;
+  std::vector<std::function<void(const vehicle::ImuReading&)>> on_imu_;
+  std::vector<std::function<void(const WheelSpeedMessage&)>> on_wheel_speed_;
+  std::vector<std::function<void(const RangeMessage&)>> on_range_;
+};
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,141 @@
+// The rest of a car's stack as nodes on its board (`driver: stack`): localization, behaviour,
+// planning, control, cruise control and the intersection client, fed by the perception nodes
+// (sim/car/perception_nodes.h) and the car's IMU and Hall sensor, and driving the car's actuators.
+// Every node runs a pure component of stack/ and is timed by the platform model, so a slower
+// perception mapping, a loaded CPU or a DDS topic changes when the car steers and brakes.
+//
+//   imu_driver (100 Hz) ──/bno055/imu──────┐
+//   hall_sensor (10 Hz) ──/modelcar/speed──┴→ ekf_filter_node (20 Hz) ──/odometry/filtered──→ all
+//   obstacle_detection ──/local_costmap/obstacles──→ local_costmap (5 Hz)
+//                                                     ──/local_costmap/costmap_raw──┐
+//   vehicle_communication (10 Hz, V2I) ──/intersection_free──→ bt_navigator (3 Hz)   │
+//   bt_navigator ──/behavior──→ planner_server (1 Hz) ──/plan──┐                     │
+//   lane detection ──/lane_detector/central_line/point_cloud──┴→ controller_server (20 Hz)
+//   controller_server ──/cmd_vel──→ carcontroller (30 Hz) ──/carcontrol/command──→ rt_carcontrol
+//   controller_server ──/controller/status──→ bt_navigator
+//
+// As in Nav2, the behaviour's hold (intersection wait, recovery) cancels the controller, which
+// then publishes one zero velocity and nothing more; the cruise control's 1 s watchdog cuts the
+// throttle after that. A callback that only keeps the latest message (most subscriptions here)
+// costs the profile's `subscription_cache` entry; each node's main job costs the node's entry.
+// Where a ROS message carries strings (headers) its type is variable-size and its topic uses DDS;
+// the fixed-size ones (cmd_vel, the actuator command) default to zero-copy, like the perception
+// topics.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "sim/car/perception_nodes.h"
+#include "sim/car/sensors.h"
+#include "sim/core/config.h"
+#include "sim/core/kernel.h"
+#include "sim/core/random.h"
+#include "sim/platform/node_graph.h"
+#include "stack/behavior.h"
+#include "stack/costmap.h"
+#include "stack/cruise_control.h"
+#include "stack/global_planner.h"
+#include "stack/lane_controller.h"
+#include "stack/localization_ekf.h"
+#include "stack/obstacle_grid.h"
+#include "stack/path_follower.h"
+#include "vehicle/car.h"
+#include "world/occupancy_map.h"
+#include "world/polyline.h"
+#include "world/track_spec.h"
+
+namespace autonomsim::sim {
+
+// An external absolute pose fix for the EKF (an overhead tracking system, say). Beyond the real
+// car, which has no absolute correction (reference §6): used only with
+// stack.localization.use_pose_fix: true. A source node `pose_fix` publishes the true chassis pose
+// with Gaussian noise at rate_hz on /pose_fix (geometry_msgs/PoseWithCovarianceStamped).
+struct PoseFixConfig {
+  double rate_hz{5.0};             // assumed: a modest tracking system
+  double position_stddev_m{0.02};  // assumed: per axis
+  double yaw_stddev_rad{0.02};     // assumed
+
+  template <class V>
+  void Describe(V& v) {
+    v("rate_hz", rate_hz);
+    v("position_stddev_m", position_stddev_m);
+    v("yaw_stddev_rad", yaw_stddev_rad);
+  }
+  void Validate() const;
+};
+
+// The actuator command topic: where the end-to-end latency from the sensor stamp is measured.
+inline constexpr const char* kCarCommandTopic = "/carcontrol/command";
+
+// A car's `stack:` entry: every component's parameters (defaults: the real car's, see each).
+struct StackConfig {
+  stack::LocalizationEkfParams localization;
+  PoseFixConfig pose_fix;  // localization.use_pose_fix only
+  stack::BehaviorParams behavior;
+  stack::GlobalCostmapParams global_costmap;
+  stack::GlobalPlannerParams planner;
+  Duration planner_period{std::chrono::seconds(1)};  // reference §6: path replanned at 1 Hz
+  stack::LocalCostmapParams local_costmap;
+  stack::ObstacleLayerParams obstacle_layer;
+  Duration controller_period{Milliseconds(50)};  // reference §6: controller server at 20 Hz
+  stack::LaneControllerParams lane_controller;
+  stack::PathFollowerParams follow_path;
+  stack::CruiseControlParams cruise_control;
+
+  template <class V>
+  void Describe(V& v) {
+    v("localization", localization);
+    v("pose_fix", pose_fix);
+    v("behavior", behavior);
+    v("global_costmap", global_costmap);
+    v("planner", planner);
+    v("planner_period_s", planner_period);
+    v("local_costmap", local_costmap);
+    v("obstacle_layer", obstacle_layer);
+    v("controller_period_s", controller_period);
+    v("lane_controller", lane_controller);
+    v("follow_path", follow_path);
+    v("cruise_control", cruise_control);
+  }
+  void Validate() const;
+};
+
+// What the stack knows of the world: the map a real car is given, and where it starts.
+struct StackContext {
+  const world::Polyline* route{nullptr};  // the lanes to drive (the behaviour's goals)
+  const std::vector<world::IntersectionSpec>* intersections{nullptr};  // the zone boxes
+  const world::OccupancyMap* static_map{nullptr};           // at global_costmap.resolution_m
+  const stack::ObstacleGridParams* obstacle_grid{nullptr};  // the grid's geometry (perception)
+  world::Pose2 X_map_odom;  // static map→odom: the start pose (reference §6)
+  Duration intersection_client_period{Milliseconds(100)};
+  // For the pose fix (localization.use_pose_fix): the true chassis pose now, and its noise.
+  std::function<world::Pose2()> true_pose;
+  std::optional<Rng> pose_fix_noise;
+};
+
+// How the stack reaches the car and the simulation around it.
+struct StackHooks {
+  // The intersection client's step on the estimated position; returns may_proceed. It sends its
+  // requests and frees over the V2I link itself.
+  std::function<bool(const world::Vec2& p_map)> intersection_client;
+  // The actuator command, when rt_carcontrol receives it.
+  std::function<void(const vehicle::ActuatorCommand&)> actuate;
+  // Whether the operator has ended the drive (laps done).
+  std::function<bool()> mission_done;
+  // Every behaviour tick's result, with the estimated pose it used (events, metrics).
+  std::function<void(const stack::BehaviorOutput&)> on_behavior;
+  // Every EKF estimate.
+  std::function<void(const stack::LocalizationEkfOutput&)> on_estimate;
+  // Every controller cycle that drove: which controller ran, whether it saw a collision ahead.
+  std::function<void(bool follow_path, bool collision_ahead)> on_control;
+};
+
+// Adds the nodes and topics above to `graph`. `kernel` gives the arrival times the cruise
+// control's watchdog needs. The perception topics must be on the same graph.
+void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
+                   SensorSuite& sensors, const PerceptionTopics& perception,
+                   const StackContext& context, StackHooks hooks);
+
+}  // namespace autonomsim::sim

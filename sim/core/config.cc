@@ -1,0 +1,258 @@
+#include "sim/core/config.h"
+
+#include <algorithm>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace autonomsim::sim {
+namespace detail {
+namespace {
+
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+bool IsOverridden(const std::string& path, const ConfigSource& source) {
+  for (const std::string& overridden : source.overridden_paths) {
+    if (path == overridden) return true;
+    if (path.size() > overridden.size() && path.compare(0, overridden.size(), overridden) == 0 &&
+        (path[overridden.size()] == '.' || path[overridden.size()] == '[')) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::string JoinPath(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+std::string JoinIndex(const std::string& parent, std::size_t index) {
+  return parent + "[" + std::to_string(index) + "]";
+}
+
+std::string Where(const YAML::Node& node, const std::string& path, const ConfigSource& source) {
+  std::string key = path.empty() ? "(top level)" : path;
+  if (IsOverridden(path, source)) return "--set " + key + ": ";
+  // a value below this one came from the command line: say so, the file alone would mislead
+  for (const std::string& overridden : source.overridden_paths) {
+    if (!path.empty() && IsOverridden(overridden, ConfigSource{"", {path}})) {
+      key += " (with --set " + overridden + ")";
+      break;
+    }
+  }
+  const YAML::Mark mark = node.Mark();
+  std::string where = source.file;
+  if (!mark.is_null()) {
+    where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+  }
+  return where + ": " + key + ": ";
+}
+
+void Fail(const YAML::Node& node, const std::string& path, const ConfigSource& source,
+          const std::string& message) {
+  throw ConfigError(Where(node, path, source) + message);
+}
+
+std::string Describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null:
+      return "nothing";
+    case YAML::NodeType::Scalar:
+      return "'" + node.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Map:
+      return "a mapping";
+    default:
+      return "an undefined value";
+  }
+}
+
+void CheckKeys(const YAML::Node& node, const std::vector<std::string>& known,
+               const std::string& path, const ConfigSource& source) {
+  for (const auto& item : node) {
+    const std::string key = item.first.Scalar();
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    std::string message = "unknown key '" + key + "'";
+    std::string closest;
+    std::size_t best = std::numeric_limits<std::size_t>::max();
+    for (const std::string& candidate : known) {
+      const std::size_t d = EditDistance(key, candidate);
+      if (d < best) {
+        best = d;
+        closest = candidate;
+      }
+    }
+    if (!closest.empty() && best <= std::max<std::size_t>(2, key.size() / 3)) {
+      message += " (did you mean '" + closest + "'?)";
+    } else {
+      std::string list;
+      for (const std::string& candidate : known) list += (list.empty() ? "" : ", ") + candidate;
+      message += " (known keys: " + list + ")";
+    }
+    Fail(item.first, JoinPath(path, key), source, message);
+  }
+}
+
+void ReadScalar(const YAML::Node& node, bool& out, const std::string& path,
+                const ConfigSource& source) {
+  if (!node.IsScalar()) Fail(node, path, source, "expected true or false, got " + Describe(node));
+  try {
+    out = node.as<bool>();
+  } catch (const YAML::Exception&) {
+    Fail(node, path, source, "expected true or false, got " + Describe(node));
+  }
+}
+
+void ReadScalar(const YAML::Node& node, int& out, const std::string& path,
+                const ConfigSource& source) {
+  if (!node.IsScalar()) Fail(node, path, source, "expected an integer, got " + Describe(node));
+  try {
+    out = node.as<int>();
+  } catch (const YAML::Exception&) {
+    Fail(node, path, source, "expected an integer, got " + Describe(node));
+  }
+}
+
+void ReadScalar(const YAML::Node& node, std::uint64_t& out, const std::string& path,
+                const ConfigSource& source) {
+  const std::string& text = node.IsScalar() ? node.Scalar() : std::string();
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
+    Fail(node, path, source, "expected a non-negative integer, got " + Describe(node));
+  }
+  try {
+    out = node.as<std::uint64_t>();
+  } catch (const YAML::Exception&) {
+    Fail(node, path, source, "expected an integer below 2^64, got " + Describe(node));
+  }
+}
+
+void ReadScalar(const YAML::Node& node, double& out, const std::string& path,
+                const ConfigSource& source) {
+  if (!node.IsScalar()) Fail(node, path, source, "expected a number, got " + Describe(node));
+  try {
+    out = node.as<double>();
+  } catch (const YAML::Exception&) {
+    Fail(node, path, source, "expected a number, got " + Describe(node));
+  }
+  if (!std::isfinite(out))
+    Fail(node, path, source, "expected a finite number, got " + Describe(node));
+}
+
+void ReadScalar(const YAML::Node& node, std::string& out, const std::string& path,
+                const ConfigSource& source) {
+  if (!node.IsScalar()) Fail(node, path, source, "expected a string, got " + Describe(node));
+  out = node.Scalar();
+}
+
+void ReadScalar(const YAML::Node& node, Duration& out, const std::string& path,
+                const ConfigSource& source) {
+  double seconds = 0.0;
+  ReadScalar(node, seconds, path, source);
+  try {
+    out = FromSeconds(seconds);
+  } catch (const std::invalid_argument& e) {
+    Fail(node, path, source, e.what());
+  }
+}
+
+}  // namespace detail
+
+YAML::Node LoadYamlFile(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw ConfigError(file.string() + ": cannot open file");
+  try {
+    YAML::Node root = YAML::Load(in);
+    if (!root || root.IsNull()) throw ConfigError(file.string() + ": the file is empty");
+    return root;
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
+                      std::to_string(e.mark.column + 1) + ": YAML syntax error: " + e.msg);
+  }
+}
+
+void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source) {
+  const std::size_t equals = assignment.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw ConfigError("--set " + assignment + ": expected key=value, e.g. cars[0].laps=3");
+  }
+  const std::string key = assignment.substr(0, equals);
+  const std::string text = assignment.substr(equals + 1);
+
+  // Split "a.b[2].c" / "a.b.2.c" into tokens; numeric tokens index lists.
+  std::vector<std::string> tokens;
+  std::string token;
+  for (char c : key) {
+    if (c == '.' || c == '[' || c == ']') {
+      if (!token.empty()) tokens.push_back(token);
+      token.clear();
+    } else {
+      token += c;
+    }
+  }
+  if (!token.empty()) tokens.push_back(token);
+  if (tokens.empty()) throw ConfigError("--set " + assignment + ": empty key");
+
+  YAML::Node value;
+  try {
+    value = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError("--set " + key + ": cannot parse value '" + text + "': " + e.msg);
+  }
+
+  std::string canonical;
+  YAML::Node node;
+  node.reset(root);
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    const std::string& t = tokens[i];
+    const bool is_index = t.find_first_not_of("0123456789") == std::string::npos;
+    const bool last = i + 1 == tokens.size();
+    if (is_index) {
+      if (!node.IsSequence()) {
+        throw ConfigError("--set " + key + ": '" + (canonical.empty() ? "(top level)" : canonical) +
+                          "' is not a list");
+      }
+      const std::size_t index = std::stoul(t);
+      if (index >= node.size()) {
+        throw ConfigError("--set " + key + ": index " + t + " is out of range ('" + canonical +
+                          "' has " + std::to_string(node.size()) + " entries)");
+      }
+      canonical = detail::JoinIndex(canonical, index);
+      if (last) {
+        node[index] = value;
+      } else {
+        YAML::Node child = node[index];
+        node.reset(child);
+      }
+    } else {
+      if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
+        throw ConfigError("--set " + key + ": '" + canonical + "' is not a mapping");
+      }
+      canonical = detail::JoinPath(canonical, t);
+      if (last) {
+        node[t] = value;
+      } else {
+        YAML::Node child = node[t];
+        node.reset(child);
+      }
+    }
+  }
+  source->overridden_paths.insert(canonical);
+}
+
+}  // namespace autonomsim::sim

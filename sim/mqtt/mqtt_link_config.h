@@ -1,0 +1,46 @@
+// The scenario's `v2i.mqtt` section: how a run with `v2i.link: mqtt` reaches its traffic-light
+// server. Kept apart from sim/v2i/mqtt_endpoint.h so that sim/scenario/scenario.h can hold it
+// cheaply.
+#pragma once
+
+#include <chrono>
+#include <string>
+
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+struct MqttLinkConfig {
+  // Empty: the run starts a private mosquitto on a free loopback port and a `tlserver
+  // --sim-clock` on it, and stops both at its end. "HOST:PORT": a broker that is already running,
+  // with a `tlserver --sim-clock` serving it (`autonomsim run --broker HOST:PORT`).
+  std::string broker;
+  // Our credentials on a given broker (tools/mosquitto/acl knows the user "autonomsim"); the
+  // password file holds the password on its first line. A private broker makes its own password.
+  std::string username{"autonomsim"};
+  std::string password_file;
+  // TLS to a given broker: the CA that signed its certificate, and our certificate and key if it
+  // asks for one.
+  std::string cafile;
+  std::string certfile;
+  std::string keyfile;
+  // The longest the run waits, in wall-clock time, for the server to answer one message (or for
+  // the broker and tlserver to come up) before it stops with an error. Assumed: covers a broker
+  // restart (clients retry after 1-2 s) on a loaded machine.
+  Duration timeout{std::chrono::seconds(20)};
+
+  template <class V>
+  void Describe(V& v) {
+    v("broker", broker);
+    v("username", username);
+    v("password_file", password_file);
+    v("cafile", cafile);
+    v("certfile", certfile);
+    v("keyfile", keyfile);
+    v("timeout_s", timeout);
+  }
+  // Throws std::invalid_argument naming the key and the bad value.
+  void Validate() const;
+};
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,507 @@
+#include "sim/platform/node_graph.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "sim/core/config.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// One software job's core-seconds by its cost entry, before jitter and what-if knobs.
+double SwWorkSeconds(const SwCost& sw, std::int64_t in_bytes, std::int64_t out_bytes) {
+  return sw.work_s + 1e-9 * sw.work_ns_per_input_byte * static_cast<double>(in_bytes) +
+         1e-9 * sw.work_ns_per_output_byte * static_cast<double>(out_bytes);
+}
+
+}  // namespace
+
+const char* TransportName(Transport transport) {
+  return transport == Transport::kDds ? "dds" : "zero_copy";
+}
+
+NodeGraph::NodeGraph(Platform& platform, RunMetrics* metrics, const RngStreams* rng,
+                     std::string rng_prefix)
+    : platform_(platform),
+      kernel_(platform.kernel()),
+      metrics_(metrics),
+      rng_(rng),
+      rng_prefix_(std::move(rng_prefix)) {}
+
+void NodeGraph::ApplyConfig(const PlatformConfig& config) {
+  mapping_config_ = config.mapping;
+  transport_config_ = config.transport;
+  cost_scale_config_ = config.cost_scale;
+  cost_override_config_ = config.cost_override;
+}
+
+void NodeGraph::CheckConfigUsed() const {
+  auto check_nodes = [this](const std::vector<std::string>& names, const std::string& field) {
+    for (const std::string& name : names) {
+      if (HasNode(name)) continue;
+      std::string known;
+      for (const Node& n : nodes_) known += (known.empty() ? "" : ", ") + n.name;
+      throw ConfigError("platform." + field + "." + name +
+                        ": no node of that name (nodes: " + known + ")");
+    }
+  };
+  auto keys = [](const auto& map) {
+    std::vector<std::string> out;
+    for (const auto& [key, unused] : map) out.push_back(key);
+    return out;
+  };
+  check_nodes(keys(mapping_config_), "mapping");
+  check_nodes(keys(cost_scale_config_), "cost_scale");
+  check_nodes(keys(cost_override_config_), "cost_override");
+  for (const auto& [name, unused] : transport_config_) {
+    const bool found = std::any_of(topics_.begin(), topics_.end(),
+                                   [&name](const Topic& t) { return t.spec.name == name; });
+    if (!found) {
+      std::string known;
+      for (const Topic& t : topics_) known += (known.empty() ? "" : ", ") + t.spec.name;
+      throw ConfigError("platform.transport." + name + ": no topic of that name (topics: " + known +
+                        ")");
+    }
+  }
+}
+
+int NodeGraph::AddTopicImpl(TopicSpec spec) {
+  if (const auto it = transport_config_.find(spec.name); it != transport_config_.end()) {
+    spec.transport = it->second.transport == "dds" ? Transport::kDds : Transport::kZeroCopy;
+    if (it->second.depth) spec.depth = *it->second.depth;
+  }
+  if (spec.depth < 1) {
+    throw ConfigError("topic '" + spec.name + "': depth must be >= 1, got " +
+                      std::to_string(spec.depth));
+  }
+  for (const Topic& t : topics_) {
+    if (t.spec.name == spec.name) throw ConfigError("topic '" + spec.name + "' added twice");
+  }
+  Topic topic{.spec = spec};
+  if (spec.transport == Transport::kZeroCopy) {
+    if (!spec.type.fixed_size) {
+      throw ConfigError("topic '" + spec.name +
+                        "': zero_copy (Iceoryx) carries fixed-size types "
+                        "only, and '" +
+                        spec.type.name + "' is not fixed-size; use dds");
+    }
+    topic.pool = platform_.chunk_pools()->PoolFor(spec.type.bytes);
+    if (!topic.pool) {
+      throw ConfigError("topic '" + spec.name + "': a " + spec.type.name + " (" +
+                        std::to_string(spec.type.bytes) +
+                        " bytes) fits no shared-memory chunk of the platform's mempools");
+    }
+  }
+  if (metrics_) {
+    topic.metrics_index =
+        metrics_->AddTopic(spec.name, TransportName(spec.transport), spec.type.bytes);
+  }
+  topics_.push_back(std::move(topic));
+  return static_cast<int>(topics_.size()) - 1;
+}
+
+NodeId NodeGraph::AddNode(NodeSpec spec) {
+  if (const auto it = mapping_config_.find(spec.name); it != mapping_config_.end()) {
+    spec.mapping = it->second;
+  }
+  for (const Node& n : nodes_) {
+    if (n.name == spec.name) throw ConfigError("node '" + spec.name + "' added twice");
+  }
+  const std::string cost_name = spec.mapping.cost.value_or(spec.name);
+  ComponentCost cost = spec.cost ? *spec.cost : platform_.profile().Component(cost_name);
+  const bool hw = spec.mapping.target == "hw";
+  if (hw && !cost.hw) {
+    throw ConfigError("node '" + spec.name + "' is mapped to hw, but components." + cost_name +
+                      " of profile '" + platform_.profile().name + "' has no 'hw' cost");
+  }
+  if (!hw && !cost.sw) {
+    throw ConfigError("node '" + spec.name + "' is mapped to sw, but components." + cost_name +
+                      " of profile '" + platform_.profile().name + "' has no 'sw' cost");
+  }
+  if (hw) platform_.fpga().Claim(*spec.mapping.slot, spec.name);
+
+  Node node{.name = spec.name, .mapping = spec.mapping, .hw = hw, .cost = cost};
+  const double jitter = hw ? cost.hw->jitter : cost.sw->jitter;
+  if (jitter > 0.0) {
+    if (rng_ == nullptr) {
+      throw std::logic_error("node '" + spec.name +
+                             "' has a jittered cost but the graph has no "
+                             "random streams");
+    }
+    node.rng.emplace(rng_->Stream(rng_prefix_ + "platform/" + spec.name));
+  }
+  if (const auto it = cost_scale_config_.find(spec.name); it != cost_scale_config_.end()) {
+    node.cost_scale = it->second;
+  }
+  if (const auto it = cost_override_config_.find(spec.name); it != cost_override_config_.end()) {
+    if (rng_ == nullptr) {
+      throw std::logic_error("node '" + spec.name +
+                             "' has a cost_override but the graph has no random streams");
+    }
+    node.cost_override = it->second;
+    node.override_rng.emplace(
+        rng_->Stream(rng_prefix_ + "platform/" + spec.name + "/cost_override"));
+  }
+  const std::string mapping =
+      hw ? "hw:slot" + std::to_string(*spec.mapping.slot) : std::string("sw");
+  node.metrics_index =
+      metrics_ ? metrics_->AddNode(spec.name, mapping) : static_cast<int>(nodes_.size());
+  nodes_.push_back(std::move(node));
+  return NodeId{static_cast<int>(nodes_.size()) - 1};
+}
+
+int NodeGraph::AddPublisherImpl(int node, int topic) {
+  if (node < 0 || node >= static_cast<int>(nodes_.size()) || topic < 0 ||
+      topic >= static_cast<int>(topics_.size())) {
+    throw std::out_of_range("NodeGraph::AddPublisher: no such node or topic");
+  }
+  publishers_.push_back(Publisher{.node = node, .topic = topic});
+  return static_cast<int>(publishers_.size()) - 1;
+}
+
+void NodeGraph::AddSubscriptionImpl(
+    int node, int topic, std::function<void(const detail::EnvelopeBase&, Outbox&)> handler,
+    SubscriptionOptions options) {
+  Topic& t = topics_.at(static_cast<std::size_t>(topic));
+  Node& n = nodes_.at(static_cast<std::size_t>(node));
+  const int limit = platform_.profile().zero_copy.max_subscribers;
+  if (t.spec.transport == Transport::kZeroCopy &&
+      static_cast<int>(t.subscriptions.size()) >= limit) {
+    throw ConfigError("topic '" + t.spec.name + "': node '" + n.name + "' would be subscriber " +
+                      std::to_string(t.subscriptions.size() + 1) + ", but zero_copy (Iceoryx) " +
+                      "allows at most " + std::to_string(limit) + " subscribers per topic");
+  }
+  if (options.cost && n.hw) {
+    throw ConfigError("node '" + n.name + "': a subscription with its own cost needs a software " +
+                      "node, but the node is mapped to hw");
+  }
+  subscriptions_.push_back(Subscription{.node = node,
+                                        .topic = topic,
+                                        .loaned = options.loaned,
+                                        .cost = options.cost,
+                                        .handler = std::move(handler)});
+  const int index = static_cast<int>(subscriptions_.size()) - 1;
+  t.subscriptions.push_back(index);
+  n.subscriptions.push_back(index);
+}
+
+void NodeGraph::AddTimer(NodeId node, Time first, Duration period,
+                         std::function<void(Time, Outbox&)> handler) {
+  Node& n = nodes_.at(static_cast<std::size_t>(node.index));
+  timers_.push_back(Timer{.node = node.index, .handler = std::move(handler)});
+  const int index = static_cast<int>(timers_.size()) - 1;
+  n.timers.push_back(index);
+  kernel_.SchedulePeriodic(
+      first, period, [this, index] { OnTimer(index); }, kPriorityPlatform);
+}
+
+const TopicSpec& NodeGraph::topic_spec(int topic) const {
+  return topics_.at(static_cast<std::size_t>(topic)).spec;
+}
+
+bool NodeGraph::HasNode(const std::string& name) const {
+  return std::any_of(nodes_.begin(), nodes_.end(), [&](const Node& n) { return n.name == name; });
+}
+
+const std::string& NodeGraph::node_name(NodeId node) const {
+  return nodes_.at(static_cast<std::size_t>(node.index)).name;
+}
+
+bool NodeGraph::busy(NodeId node) const {
+  return nodes_.at(static_cast<std::size_t>(node.index)).job.has_value();
+}
+
+std::size_t NodeGraph::queued(NodeId node) const {
+  std::size_t n = 0;
+  for (int s : nodes_.at(static_cast<std::size_t>(node.index)).subscriptions) {
+    n += subscriptions_[static_cast<std::size_t>(s)].queue.size();
+  }
+  return n;
+}
+
+int NodeGraph::loans_held(int publisher) const {
+  return publishers_.at(static_cast<std::size_t>(publisher)).loans_held;
+}
+
+TransportCost NodeGraph::CostOf(const Topic& topic, std::int64_t bytes, bool loaned_take) const {
+  return topic.spec.transport == Transport::kDds
+             ? DdsCost(platform_.profile(), bytes)
+             : ZeroCopyCost(platform_.profile(), bytes, loaned_take);
+}
+
+double NodeGraph::Jitter(Node& node, double jitter) {
+  if (jitter <= 0.0) return 1.0;
+  return 1.0 + node.rng->Uniform(-jitter, jitter);
+}
+
+void NodeGraph::OnTimer(int timer) {
+  Timer& t = timers_[static_cast<std::size_t>(timer)];
+  const int owner = Owner(t.node);
+  if (metrics_) metrics_->TimerFired(owner, kernel_.Now());
+  if (t.pending) {
+    if (metrics_) metrics_->TimerOverrun(owner, kernel_.Now());
+    return;
+  }
+  t.pending = true;
+  t.fired_at = kernel_.Now();
+  Kick(t.node);
+}
+
+void NodeGraph::Kick(int node) {
+  const Node& n = nodes_[static_cast<std::size_t>(node)];
+  if (n.job) return;
+  for (int t : n.timers) {
+    if (timers_[static_cast<std::size_t>(t)].pending) return StartJob(node);
+  }
+  for (int s : n.subscriptions) {
+    if (!subscriptions_[static_cast<std::size_t>(s)].queue.empty()) return StartJob(node);
+  }
+}
+
+void NodeGraph::StartJob(int node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  // The oldest pending work first; at equal times timers before subscriptions, each in the order
+  // they were added.
+  int timer = -1;
+  int subscription = -1;
+  Time oldest = Time::max();
+  for (int t : n.timers) {
+    const Timer& tm = timers_[static_cast<std::size_t>(t)];
+    if (tm.pending && tm.fired_at < oldest) {
+      oldest = tm.fired_at;
+      timer = t;
+    }
+  }
+  for (int s : n.subscriptions) {
+    const Subscription& sub = subscriptions_[static_cast<std::size_t>(s)];
+    if (!sub.queue.empty() && sub.queue.front().arrival < oldest) {
+      oldest = sub.queue.front().arrival;
+      subscription = s;
+      timer = -1;
+    }
+  }
+  if (timer < 0 && subscription < 0) return;
+
+  n.job.emplace(this);
+  Job& job = *n.job;
+  job.start = kernel_.Now();
+  std::int64_t in_bytes = 0;
+  const SwCost* callback_cost = nullptr;
+  if (subscription >= 0) {
+    Subscription& sub = subscriptions_[static_cast<std::size_t>(subscription)];
+    if (sub.cost) {
+      callback_cost = &*sub.cost;
+      job.own_cost = true;
+    }
+    job.input = std::move(sub.queue.front().message);
+    sub.queue.pop_front();
+    in_bytes = job.input->bytes;
+    const Topic& topic = topics_[static_cast<std::size_t>(sub.topic)];
+    job.take_core_s = CostOf(topic, in_bytes, sub.loaned).take_core_s;
+    sub.handler(*job.input, job.out);  // the functional result, now
+  } else {
+    Timer& tm = timers_[static_cast<std::size_t>(timer)];
+    tm.pending = false;
+    tm.handler(tm.fired_at, job.out);
+  }
+
+  // Zero-copy outputs are loaned now (as the real nodes borrow before they compute); a loan that
+  // fails (the publisher's loan limit, or no free chunk) is counted and its message is not sent.
+  std::int64_t out_bytes = 0;
+  for (Outbox::Pending& p : job.out.pending_) {
+    Publisher& pub = publishers_[static_cast<std::size_t>(p.publisher)];
+    const Topic& topic = topics_[static_cast<std::size_t>(pub.topic)];
+    if (topic.spec.transport == Transport::kZeroCopy) {
+      const bool loan_ok = pub.loans_held < platform_.profile().zero_copy.max_loans_per_publisher &&
+                           platform_.chunk_pools()->Acquire(*topic.pool);
+      if (!loan_ok) {
+        p.dropped = true;
+        if (metrics_) metrics_->LoanFailed(n.metrics_index, topic.metrics_index, kernel_.Now());
+        continue;
+      }
+      ++pub.loans_held;
+      p.message->chunk = std::make_shared<ChunkLease>(platform_.chunk_pools(), *topic.pool);
+    }
+    out_bytes += p.message->bytes;
+    job.publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
+  }
+
+  if (n.hw) {
+    const HwCost& hw = *n.cost.hw;
+    const double factor = Jitter(n, hw.jitter);
+    const double compute_s = n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng)
+                                             : hw.compute_s * factor;
+    const Duration fabric =
+        FromSeconds(compute_s) + platform_.fpga().TransferTime(in_bytes + out_bytes);
+    job.fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
+    job.compute_core_s = hw.delegate_cpu_s * factor;
+  } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
+    job.compute_core_s =
+        SwWorkSeconds(*callback_cost, in_bytes, out_bytes) * Jitter(n, callback_cost->jitter);
+    job.max_parallelism = callback_cost->max_parallelism;
+  } else {
+    const SwCost& sw = *n.cost.sw;
+    const double work = n.cost_override
+                            ? DrawCostSeconds(*n.cost_override, *n.override_rng)
+                            : SwWorkSeconds(sw, in_bytes, out_bytes) * Jitter(n, sw.jitter);
+    job.compute_core_s = work * n.cost_scale;
+    job.max_parallelism = sw.max_parallelism;
+  }
+
+  if (job.take_core_s > 0.0) {
+    platform_.cpu().Start(Owner(node), job.take_core_s, 1.0, [this, node] { RunCompute(node); });
+  } else {
+    RunCompute(node);
+  }
+}
+
+void NodeGraph::RunCompute(int node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  const Job& job = *n.job;
+  if (n.hw) {
+    platform_.RunHwJob(*n.mapping.slot, Owner(node), job.fabric, job.compute_core_s,
+                       [this, node] { RunPublish(node); });
+  } else if (job.compute_core_s > 0.0) {
+    platform_.cpu().Start(Owner(node), job.compute_core_s, job.max_parallelism,
+                          [this, node] { RunPublish(node); });
+  } else {
+    RunPublish(node);
+  }
+}
+
+void NodeGraph::RunPublish(int node) {
+  const Job& job = *nodes_[static_cast<std::size_t>(node)].job;
+  if (job.publish_core_s > 0.0) {
+    platform_.cpu().Start(Owner(node), job.publish_core_s, 1.0, [this, node] { FinishJob(node); });
+  } else {
+    FinishJob(node);
+  }
+}
+
+void NodeGraph::FinishJob(int node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  Job job = std::move(*n.job);
+  n.job.reset();
+  const Time now = kernel_.Now();
+  for (Outbox::Pending& p : job.out.pending_) {
+    if (p.dropped) continue;
+    Publisher& pub = publishers_[static_cast<std::size_t>(p.publisher)];
+    const Topic& topic = topics_[static_cast<std::size_t>(pub.topic)];
+    if (topic.spec.transport == Transport::kZeroCopy) --pub.loans_held;
+    if (metrics_) metrics_->Published(n.metrics_index, topic.metrics_index, now, p.message->stamp);
+    Distribute(topic, std::move(p.message));
+  }
+  if (metrics_) {
+    metrics_->JobDone(n.metrics_index, job.start, now,
+                      job.take_core_s + job.compute_core_s + job.publish_core_s, !job.own_cost);
+    metrics_->Span(TraceLane::kExecutor, n.metrics_index, n.name, job.start, now);
+  }
+  job.input.reset();  // the taken sample (and its chunk) is released here
+  Kick(node);
+}
+
+void NodeGraph::Distribute(const Topic& topic,
+                           std::shared_ptr<const detail::EnvelopeBase> message) {
+  for (int s : topic.subscriptions) {
+    const Subscription& sub = subscriptions_[static_cast<std::size_t>(s)];
+    if (topic.spec.transport == Transport::kZeroCopy) {
+      kernel_.ScheduleIn(
+          platform_.profile().zero_copy.latency, [this, s, message] { Enqueue(s, message); },
+          kPriorityPlatform);
+    } else {
+      // DDS: every sample is received (and paid for) by the subscriber's receive thread.
+      Node& subscriber = nodes_[static_cast<std::size_t>(sub.node)];
+      const double core_s = DdsCost(platform_.profile(), message->bytes).receive_core_s;
+      subscriber.receive_queue.push_back(ReceiveItem{s, message, core_s});
+      if (!subscriber.receiving) StartReceive(sub.node);
+    }
+  }
+}
+
+void NodeGraph::StartReceive(int node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  if (n.receive_queue.empty()) {
+    n.receiving = false;
+    return;
+  }
+  n.receiving = true;
+  n.receive_start = kernel_.Now();
+  const double core_s = n.receive_queue.front().core_s;
+  platform_.cpu().Start(Owner(node), core_s, 1.0, [this, node] {
+    Node& receiver = nodes_[static_cast<std::size_t>(node)];
+    ReceiveItem item = std::move(receiver.receive_queue.front());
+    receiver.receive_queue.pop_front();
+    if (metrics_) {
+      metrics_->ReceiveDone(receiver.metrics_index, kernel_.Now(), item.core_s);
+      metrics_->Span(TraceLane::kReceive, receiver.metrics_index,
+                     topics_[static_cast<std::size_t>(
+                                 subscriptions_[static_cast<std::size_t>(item.subscription)].topic)]
+                         .spec.name,
+                     receiver.receive_start, kernel_.Now());
+    }
+    kernel_.ScheduleIn(
+        platform_.profile().dds.latency,
+        [this, s = item.subscription, message = std::move(item.message)] { Enqueue(s, message); },
+        kPriorityPlatform);
+    StartReceive(node);
+  });
+}
+
+void NodeGraph::Enqueue(int subscription, std::shared_ptr<const detail::EnvelopeBase> message) {
+  Subscription& sub = subscriptions_[static_cast<std::size_t>(subscription)];
+  const Topic& topic = topics_[static_cast<std::size_t>(sub.topic)];
+  const int owner = Owner(sub.node);
+  const Time now = kernel_.Now();
+  if (metrics_) metrics_->Arrival(owner, topic.metrics_index, now);
+  sub.queue.push_back(QueuedMessage{now, std::move(message)});
+  if (static_cast<int>(sub.queue.size()) > topic.spec.depth) {
+    sub.queue.pop_front();  // keep-last: the oldest goes
+    if (metrics_) metrics_->Dropped(owner, topic.metrics_index, now);
+  }
+  Kick(sub.node);
+}
+
+void AddBackgroundLoads(NodeGraph& graph, const PlatformProfile& profile, Time first) {
+  for (const BackgroundLoadConfig& load : profile.background) {
+    const bool replaced = std::any_of(load.replaced_by.begin(), load.replaced_by.end(),
+                                      [&](const std::string& node) { return graph.HasNode(node); });
+    if (replaced) continue;
+    SwCost sw{.work_s = load.cpu_percent / 100.0 * ToSeconds(load.period),
+              .max_parallelism = load.max_parallelism};
+    const NodeId node = graph.AddNode(NodeSpec{.name = load.name, .cost = ComponentCost{.sw = sw}});
+    graph.AddTimer(node, first, load.period, [](Time, Outbox&) {});
+  }
+}
+
+namespace {
+
+MetricsOptions BoardMetricsOptions(const PlatformConfig& config, Time measure_from) {
+  return {.measure_from = measure_from,
+          .load_bin = config.load_bin,
+          .trace = config.trace,
+          .trace_max_events = static_cast<std::size_t>(config.trace_max_events)};
+}
+
+}  // namespace
+
+Board::Board(Kernel& kernel, std::string name, const PlatformConfig& config,
+             const std::filesystem::path& base_dir, const RngStreams* rng, Time measure_from)
+    : Board(kernel, std::move(name), config, LoadPlatformProfile(base_dir / config.profile), rng,
+            measure_from) {}
+
+Board::Board(Kernel& kernel, std::string name, const PlatformConfig& config,
+             PlatformProfile profile, const RngStreams* rng, Time measure_from)
+    : name_(std::move(name)),
+      config_(config),
+      metrics_(BoardMetricsOptions(config, measure_from)),
+      platform_(kernel, WithConfigOverrides(std::move(profile), config), &metrics_),
+      graph_(platform_, &metrics_, rng, name_ + "/") {
+  graph_.ApplyConfig(config_);
+}
+
+void Board::Finish(Time first) {
+  if (config_.background_loads) AddBackgroundLoads(graph_, platform_.profile(), first);
+  graph_.CheckConfigUsed();
+}
+
+}  // namespace autonomsim::sim

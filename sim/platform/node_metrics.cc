@@ -1,0 +1,383 @@
+#include "sim/platform/node_metrics.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <optional>
+#include <set>
+
+namespace autonomsim::sim {
+namespace {
+
+// Trace process ids: per board, four processes from 10 * (board index + 1).
+constexpr int kPidCpu = 0;
+constexpr int kPidExecutors = 1;
+constexpr int kPidReceive = 2;
+constexpr int kPidSlots = 3;
+constexpr int kPidsPerBoard = 10;
+
+int PidOf(TraceLane lane) {
+  switch (lane) {
+    case TraceLane::kExecutor:
+      return kPidExecutors;
+    case TraceLane::kReceive:
+      return kPidReceive;
+    case TraceLane::kSlot:
+      return kPidSlots;
+  }
+  return kPidExecutors;
+}
+
+nlohmann::json StatsJson(const Stats& s) {
+  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50},
+          {"p95", s.p95},     {"p99", s.p99}, {"max", s.max}};
+}
+
+}  // namespace
+
+RunMetrics::RunMetrics(const MetricsOptions& options) : options_(options) {
+  if (options_.load_bin.count() <= 0) throw std::invalid_argument("load_bin must be > 0");
+}
+
+int RunMetrics::AddNode(const std::string& name, const std::string& mapping) {
+  nodes_.push_back(NodeData{.name = name, .mapping = mapping});
+  return static_cast<int>(nodes_.size()) - 1;
+}
+
+int RunMetrics::AddTopic(const std::string& name, const std::string& transport,
+                         std::int64_t bytes) {
+  topics_.push_back(TopicData{.name = name, .transport = transport, .bytes = bytes});
+  return static_cast<int>(topics_.size()) - 1;
+}
+
+double RunMetrics::MeasuredSeconds(Time t0, Time t1) const {
+  const Time from = std::max(t0, options_.measure_from);
+  return t1 > from ? ToSeconds(t1 - from) : 0.0;
+}
+
+void RunMetrics::AddCpu(int node, Time t0, Time t1, double cores) {
+  nodes_.at(static_cast<std::size_t>(node)).cpu_core_s += cores * MeasuredSeconds(t0, t1);
+}
+
+void RunMetrics::AddBusy(Time t0, Time t1, double cores) {
+  busy_core_s_ += cores * MeasuredSeconds(t0, t1);
+  if (cores <= 0.0 || t1 <= t0) return;
+  // Spread over the load bins (whole run, not only the window).
+  const std::int64_t bin_ns = options_.load_bin.count();
+  std::int64_t t = t0.count();
+  while (t < t1.count()) {
+    const std::size_t bin = static_cast<std::size_t>(t / bin_ns);
+    const std::int64_t bin_end = (static_cast<std::int64_t>(bin) + 1) * bin_ns;
+    const std::int64_t until = std::min(bin_end, t1.count());
+    if (load_bins_core_ns_.size() <= bin) load_bins_core_ns_.resize(bin + 1, 0.0);
+    load_bins_core_ns_[bin] += cores * static_cast<double>(until - t);
+    t = until;
+  }
+}
+
+void RunMetrics::BusyChanged(Time t, double cores) {
+  if (cores == last_busy_) return;
+  last_busy_ = cores;
+  AddTrace({'C', kPidCpu, 0, TraceName("busy cores"), t.count(), 0, cores});
+}
+
+void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s, bool timed) {
+  if (!Measured(start)) return;
+  NodeData& n = nodes_.at(static_cast<std::size_t>(node));
+  ++n.jobs;
+  n.job_core_s += nominal_core_s;
+  if (timed) n.turnaround_ms.push_back(ToSeconds(end - start) * 1e3);
+}
+
+void RunMetrics::ReceiveDone(int node, Time t, double core_s) {
+  if (Measured(t)) nodes_.at(static_cast<std::size_t>(node)).receive_core_s += core_s;
+}
+
+void RunMetrics::Arrival(int node, int /*topic*/, Time t) {
+  if (Measured(t)) ++nodes_.at(static_cast<std::size_t>(node)).arrivals;
+}
+
+void RunMetrics::Dropped(int node, int topic, Time t) {
+  if (!Measured(t)) return;
+  ++nodes_.at(static_cast<std::size_t>(node)).drops;
+  ++topics_.at(static_cast<std::size_t>(topic)).drops;
+}
+
+void RunMetrics::LoanFailed(int node, int topic, Time t) {
+  if (!Measured(t)) return;
+  ++nodes_.at(static_cast<std::size_t>(node)).loan_failures;
+  ++topics_.at(static_cast<std::size_t>(topic)).loan_failures;
+}
+
+void RunMetrics::TimerFired(int node, Time t) {
+  if (Measured(t)) ++nodes_.at(static_cast<std::size_t>(node)).timer_ticks;
+}
+
+void RunMetrics::TimerOverrun(int node, Time t) {
+  if (Measured(t)) ++nodes_.at(static_cast<std::size_t>(node)).timer_overruns;
+}
+
+void RunMetrics::Published(int /*node*/, int topic, Time t, Time stamp) {
+  if (!Measured(t)) return;
+  TopicData& d = topics_.at(static_cast<std::size_t>(topic));
+  ++d.published;
+  d.latency_ms.push_back(ToSeconds(t - stamp) * 1e3);
+}
+
+void RunMetrics::Span(TraceLane lane, int id, const std::string& name, Time start, Time end) {
+  AddTrace({'X', PidOf(lane), id, TraceName(name), start.count(), (end - start).count(), 0.0});
+}
+
+int RunMetrics::TraceName(const std::string& name) {
+  // Few distinct names (one per node, slot, topic); a linear search from the back is enough.
+  for (std::size_t i = trace_names_.size(); i-- > 0;) {
+    if (trace_names_[i] == name) return static_cast<int>(i);
+  }
+  trace_names_.push_back(name);
+  return static_cast<int>(trace_names_.size()) - 1;
+}
+
+void RunMetrics::AddTrace(const TraceEvent& event) {
+  if (!options_.trace) return;
+  if (trace_.size() >= options_.trace_max_events) {
+    trace_truncated_ = true;
+    return;
+  }
+  trace_.push_back(event);
+}
+
+Stats ComputeStats(std::vector<double> samples) {
+  Stats s;
+  s.count = samples.size();
+  if (samples.empty()) return s;
+  std::sort(samples.begin(), samples.end());
+  auto rank = [&](double q) {
+    // nearest rank: the smallest value with at least q of the sample at or below it
+    const double r = std::ceil(q * static_cast<double>(samples.size()));
+    const std::size_t i = r < 1.0 ? 0 : static_cast<std::size_t>(r) - 1;
+    return samples[std::min(i, samples.size() - 1)];
+  };
+  s.min = samples.front();
+  s.max = samples.back();
+  s.p50 = rank(0.50);
+  s.p95 = rank(0.95);
+  s.p99 = rank(0.99);
+  return s;
+}
+
+std::vector<double> HistogramEdgesMs() {
+  const int decades =
+      static_cast<int>(std::lround(std::log10(kHistogramMax_ms / kHistogramMin_ms)));
+  std::vector<double> edges;
+  for (int i = 0; i <= decades * kHistogramBinsPerDecade; ++i) {
+    edges.push_back(kHistogramMin_ms *
+                    std::pow(10.0, static_cast<double>(i) / kHistogramBinsPerDecade));
+  }
+  return edges;
+}
+
+std::vector<std::uint64_t> HistogramMs(const std::vector<double>& samples_ms) {
+  const std::vector<double> edges = HistogramEdgesMs();
+  std::vector<std::uint64_t> counts(edges.size() - 1, 0);
+  for (double x : samples_ms) {
+    // the last edge not above x, clamped to the outer bins
+    const auto it = std::upper_bound(edges.begin(), edges.end(), x);
+    const std::ptrdiff_t bin = std::clamp<std::ptrdiff_t>(
+        (it - edges.begin()) - 1, 0, static_cast<std::ptrdiff_t>(counts.size()) - 1);
+    ++counts[static_cast<std::size_t>(bin)];
+  }
+  return counts;
+}
+
+const NodeReport* MetricsReport::FindNode(const std::string& name) const {
+  for (const NodeReport& n : nodes) {
+    if (n.name == name) return &n;
+  }
+  return nullptr;
+}
+
+const TopicReport* MetricsReport::FindTopic(const std::string& name) const {
+  for (const TopicReport& t : topics) {
+    if (t.name == name) return &t;
+  }
+  return nullptr;
+}
+
+MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
+  MetricsReport report;
+  const Time from = metrics.options().measure_from;
+  report.window_s = end > from ? ToSeconds(end - from) : 0.0;
+  report.cores = metrics.cores();
+  report.load_bin = metrics.options().load_bin;
+  const double window = report.window_s > 0.0 ? report.window_s : 1.0;
+  report.cpu_percent = 100.0 * metrics.busy_core_s() / window;
+  const double bin_ns = static_cast<double>(report.load_bin.count());
+  for (double core_ns : metrics.load_bins_core_ns()) {
+    report.cpu_load_percent.push_back(100.0 * core_ns / bin_ns);
+  }
+  for (const RunMetrics::NodeData& n : metrics.nodes()) {
+    NodeReport r;
+    r.name = n.name;
+    r.mapping = n.mapping;
+    r.jobs = n.jobs;
+    r.arrivals = n.arrivals;
+    r.timer_ticks = n.timer_ticks;
+    r.drops = n.drops;
+    r.loan_failures = n.loan_failures;
+    r.timer_overruns = n.timer_overruns;
+    r.input_hz = static_cast<double>(n.arrivals + n.timer_ticks) / window;
+    r.rate_hz = static_cast<double>(n.jobs) / window;
+    r.turnaround_ms = ComputeStats(n.turnaround_ms);
+    r.turnaround_histogram = HistogramMs(n.turnaround_ms);
+    r.cpu_percent = 100.0 * n.cpu_core_s / window;
+    const double per_job = n.jobs > 0 ? n.job_core_s / static_cast<double>(n.jobs) : 0.0;
+    const double triggers = static_cast<double>(n.arrivals + n.timer_ticks);
+    r.demand_percent = 100.0 * (per_job * triggers + n.receive_core_s) / window;
+    report.cpu_demand_percent += r.demand_percent;
+    report.nodes.push_back(std::move(r));
+  }
+  for (const RunMetrics::TopicData& t : metrics.topics()) {
+    TopicReport r;
+    r.name = t.name;
+    r.transport = t.transport;
+    r.bytes = t.bytes;
+    r.published = t.published;
+    r.drops = t.drops;
+    r.loan_failures = t.loan_failures;
+    r.rate_hz = static_cast<double>(t.published) / window;
+    r.latency_ms = ComputeStats(t.latency_ms);
+    report.topics.push_back(std::move(r));
+  }
+  return report;
+}
+
+std::string NodesCsv(const std::vector<BoardReport>& boards) {
+  std::string csv =
+      "board,node,mapping,jobs,input_hz,rate_hz,turnaround_min_ms,turnaround_p50_ms,"
+      "turnaround_p95_ms,turnaround_max_ms,cpu_percent,demand_percent,arrivals,timer_ticks,"
+      "drops,loan_failures,timer_overruns\n";
+  for (const BoardReport& b : boards) {
+    for (const NodeReport& n : b.report.nodes) {
+      csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", b.board, n.name,
+                         n.mapping, n.jobs, n.input_hz, n.rate_hz, n.turnaround_ms.min,
+                         n.turnaround_ms.p50, n.turnaround_ms.p95, n.turnaround_ms.max,
+                         n.cpu_percent, n.demand_percent, n.arrivals, n.timer_ticks, n.drops,
+                         n.loan_failures, n.timer_overruns);
+    }
+  }
+  return csv;
+}
+
+nlohmann::json ReportJson(const MetricsReport& report) {
+  nlohmann::json nodes = nlohmann::json::array();
+  for (const NodeReport& n : report.nodes) {
+    nodes.push_back({{"name", n.name},
+                     {"mapping", n.mapping},
+                     {"jobs", n.jobs},
+                     {"input_hz", n.input_hz},
+                     {"rate_hz", n.rate_hz},
+                     {"turnaround_ms", StatsJson(n.turnaround_ms)},
+                     {"turnaround_histogram_ms",
+                      {{"edges", HistogramEdgesMs()}, {"counts", n.turnaround_histogram}}},
+                     {"cpu_percent", n.cpu_percent},
+                     {"demand_percent", n.demand_percent},
+                     {"arrivals", n.arrivals},
+                     {"timer_ticks", n.timer_ticks},
+                     {"drops", n.drops},
+                     {"loan_failures", n.loan_failures},
+                     {"timer_overruns", n.timer_overruns}});
+  }
+  nlohmann::json topics = nlohmann::json::array();
+  for (const TopicReport& t : report.topics) {
+    topics.push_back({{"name", t.name},
+                      {"transport", t.transport},
+                      {"bytes", t.bytes},
+                      {"published", t.published},
+                      {"rate_hz", t.rate_hz},
+                      {"latency_ms", StatsJson(t.latency_ms)},
+                      {"drops", t.drops},
+                      {"loan_failures", t.loan_failures}});
+  }
+  return {{"cores", report.cores},
+          {"window_s", report.window_s},
+          {"cpu_percent", report.cpu_percent},
+          {"cpu_demand_percent", report.cpu_demand_percent},
+          {"load_bin_s", ToSeconds(report.load_bin)},
+          {"cpu_load_percent", report.cpu_load_percent},
+          {"nodes", nodes},
+          {"topics", topics}};
+}
+
+std::string TraceJson(const std::vector<BoardMetrics>& boards) {
+  // Written event by event rather than through a JSON document: a run's trace holds up to
+  // trace_max_events per board, and a document of them takes ~1 KB per event.
+  std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
+  bool first = true;
+  auto separate = [&] {
+    if (!first) out += ',';
+    first = false;
+  };
+  auto meta = [&](int pid, std::optional<int> tid, const char* what, const std::string& name) {
+    nlohmann::json e = {{"name", what}, {"ph", "M"}, {"pid", pid}, {"args", {{"name", name}}}};
+    if (tid) e["tid"] = *tid;
+    separate();
+    out += e.dump();
+  };
+  std::vector<std::string> truncated;
+  for (std::size_t b = 0; b < boards.size(); ++b) {
+    const RunMetrics& metrics = *boards[b].metrics;
+    const std::string& board = boards[b].board;
+    const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
+    std::vector<std::string> names;  // JSON-quoted
+    for (const std::string& name : metrics.trace_names())
+      names.push_back(nlohmann::json(name).dump());
+    meta(base + kPidCpu, std::nullopt, "process_name",
+         fmt::format("{}: CPU ({} cores; busy cores, 1.0 = one core)", board, metrics.cores()));
+    meta(base + kPidExecutors, std::nullopt, "process_name",
+         board + ": node executors (jobs on the cores or in a slot)");
+    meta(base + kPidReceive, std::nullopt, "process_name", board + ": DDS receive threads");
+    meta(base + kPidSlots, std::nullopt, "process_name", board + ": FPGA slots");
+    for (std::size_t i = 0; i < metrics.nodes().size(); ++i) {
+      const auto& n = metrics.nodes()[i];
+      meta(base + kPidExecutors, static_cast<int>(i), "thread_name",
+           n.name + " (" + n.mapping + ")");
+      meta(base + kPidReceive, static_cast<int>(i), "thread_name", n.name + " receive");
+    }
+    std::set<int> slots;
+    for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
+      if (e.pid == kPidSlots) slots.insert(e.tid);
+    }
+    for (int slot : slots) {
+      meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
+    }
+    auto it = std::back_inserter(out);
+    for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
+      const double ts_us = static_cast<double>(e.ts_ns) / 1e3;
+      const std::string& name = names[static_cast<std::size_t>(e.name)];
+      separate();
+      if (e.phase == 'C') {
+        fmt::format_to(
+            it, "{{\"name\":{},\"ph\":\"C\",\"pid\":{},\"ts\":{},\"args\":{{\"cores\":{}}}}}", name,
+            base + e.pid, ts_us, e.value);
+      } else {
+        fmt::format_to(it,
+                       "{{\"name\":{},\"ph\":\"X\",\"pid\":{},\"tid\":{},\"ts\":{},\"dur\":{}}}",
+                       name, base + e.pid, e.tid, ts_us, static_cast<double>(e.dur_ns) / 1e3);
+      }
+    }
+    if (metrics.trace_truncated()) {
+      truncated.push_back(fmt::format("{}: recording stopped after {} events", board,
+                                      metrics.options().trace_max_events));
+    }
+  }
+  out += ']';
+  if (!truncated.empty()) {
+    out += ",\"otherData\":" + nlohmann::json({{"truncated", truncated}}).dump();
+  }
+  out += "}\n";
+  return out;
+}
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,282 @@
+#include "sim/platform/platform.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "sim/core/config.h"
+
+namespace autonomsim::sim {
+namespace {
+
+std::int64_t CeilDiv(std::int64_t a, std::int64_t b) { return a <= 0 ? 0 : (a + b - 1) / b; }
+
+}  // namespace
+
+double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies) {
+  return static_cast<double>(copies) * static_cast<double>(bytes) / cpu.memcpy_bytes_per_s;
+}
+
+double DdsSideCoreSeconds(const PlatformProfile& profile, const DdsSideCost& side,
+                          std::int64_t bytes) {
+  const std::int64_t datagrams = CeilDiv(bytes, profile.dds.datagram_bytes);
+  const std::int64_t fragments = CeilDiv(bytes, profile.dds.fragment_bytes);
+  return ToSeconds(side.fixed) + CopyCoreSeconds(profile.cpu, bytes, side.copies) +
+         static_cast<double>(datagrams) * ToSeconds(side.per_datagram) +
+         static_cast<double>(fragments) * ToSeconds(side.per_fragment);
+}
+
+TransportCost DdsCost(const PlatformProfile& profile, std::int64_t bytes) {
+  return {.publish_core_s = DdsSideCoreSeconds(profile, profile.dds.write, bytes),
+          .receive_core_s = DdsSideCoreSeconds(profile, profile.dds.receive, bytes),
+          .take_core_s = DdsSideCoreSeconds(profile, profile.dds.take, bytes),
+          .latency = profile.dds.latency};
+}
+
+TransportCost ZeroCopyCost(const PlatformProfile& profile, std::int64_t bytes, bool loaned_take) {
+  const ZeroCopyProfile& zc = profile.zero_copy;
+  double take = ToSeconds(zc.take);
+  if (!loaned_take) take += CopyCoreSeconds(profile.cpu, bytes, zc.non_loaned_take_copies);
+  return {.publish_core_s = ToSeconds(zc.publish),
+          .receive_core_s = 0.0,
+          .take_core_s = take,
+          .latency = zc.latency};
+}
+
+// ---- Cpu ----
+
+Cpu::Cpu(Kernel& kernel, int cores, RunMetrics* metrics)
+    : kernel_(kernel), cores_(cores), metrics_(metrics), last_update_(kernel.Now()) {
+  if (cores < 1) throw std::invalid_argument("Cpu: cores must be >= 1");
+  if (metrics_) metrics_->SetCores(cores);
+}
+
+Cpu::~Cpu() { kernel_.Cancel(next_event_); }
+
+Cpu::JobId Cpu::Start(int owner, double work_core_s, double max_parallelism,
+                      std::function<void()> done) {
+  if (!(work_core_s >= 0.0) || !std::isfinite(work_core_s)) {
+    throw std::invalid_argument("Cpu::Start: work must be finite and >= 0, got " +
+                                std::to_string(work_core_s));
+  }
+  if (!(max_parallelism > 0.0)) {
+    throw std::invalid_argument("Cpu::Start: max_parallelism must be > 0, got " +
+                                std::to_string(max_parallelism));
+  }
+  Advance();
+  const JobId id = next_id_++;
+  jobs_.push_back(Job{.id = id,
+                      .owner = owner,
+                      .remaining_core_ns = work_core_s * 1e9,
+                      .max_parallelism = max_parallelism,
+                      .done = std::move(done)});
+  Reallocate();
+  ScheduleNext();
+  return id;
+}
+
+double Cpu::busy_cores() const {
+  double busy = 0.0;
+  for (const Job& job : jobs_) busy += job.rate;
+  return busy;
+}
+
+double Cpu::share(JobId id) const {
+  for (const Job& job : jobs_) {
+    if (job.id == id) return job.rate;
+  }
+  return 0.0;
+}
+
+void Cpu::Advance() {
+  const Time now = kernel_.Now();
+  if (now <= last_update_) {
+    last_update_ = now;
+    return;
+  }
+  const double dt_ns = static_cast<double>((now - last_update_).count());
+  double busy = 0.0;
+  for (Job& job : jobs_) {
+    job.remaining_core_ns -= job.rate * dt_ns;
+    busy += job.rate;
+    if (metrics_ && job.owner >= 0 && job.rate > 0.0) {
+      metrics_->AddCpu(job.owner, last_update_, now, job.rate);
+    }
+  }
+  if (metrics_) metrics_->AddBusy(last_update_, now, busy);
+  last_update_ = now;
+}
+
+void Cpu::Reallocate() {
+  std::vector<std::size_t> order(jobs_.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [this](std::size_t a, std::size_t b) {
+    return jobs_[a].max_parallelism < jobs_[b].max_parallelism;
+  });
+  double capacity = static_cast<double>(cores_);
+  std::size_t left = jobs_.size();
+  for (std::size_t i : order) {
+    const double fair = capacity / static_cast<double>(left);
+    const double rate = std::min(jobs_[i].max_parallelism, fair);
+    jobs_[i].rate = rate;
+    capacity -= rate;
+    --left;
+  }
+  if (metrics_) metrics_->BusyChanged(kernel_.Now(), busy_cores());
+}
+
+void Cpu::ScheduleNext() {
+  kernel_.Cancel(next_event_);
+  next_event_ = EventId{};
+  if (jobs_.empty()) return;
+  double soonest_ns = std::numeric_limits<double>::infinity();
+  for (const Job& job : jobs_) {
+    if (job.rate <= 0.0) continue;
+    soonest_ns = std::min(soonest_ns, std::max(0.0, job.remaining_core_ns) / job.rate);
+  }
+  if (!std::isfinite(soonest_ns)) {
+    throw std::logic_error("Cpu: running jobs but none gets a share of the cores");
+  }
+  // Rounding up: the event never comes before the job's exact end, so it is done when it fires.
+  const Time at = kernel_.Now() + Duration{static_cast<std::int64_t>(std::ceil(soonest_ns))};
+  next_event_ = kernel_.ScheduleAt(
+      at, [this] { OnCompletion(); }, kPriorityPlatform);
+}
+
+void Cpu::OnCompletion() {
+  next_event_ = EventId{};
+  Advance();
+  // Done: nothing left but rounding (less than half a nanosecond of its current share).
+  std::vector<std::function<void()>> finished;
+  std::vector<Job> still;
+  still.reserve(jobs_.size());
+  for (Job& job : jobs_) {
+    if (job.remaining_core_ns <= 0.5 * job.rate) {
+      finished.push_back(std::move(job.done));
+    } else {
+      still.push_back(std::move(job));
+    }
+  }
+  jobs_ = std::move(still);
+  Reallocate();
+  ScheduleNext();
+  for (auto& done : finished) {
+    if (done) done();
+  }
+}
+
+// ---- Fpga ----
+
+Fpga::Fpga(Kernel& kernel, const FpgaProfile& profile, RunMetrics* metrics)
+    : kernel_(kernel),
+      profile_(profile),
+      metrics_(metrics),
+      owner_(static_cast<std::size_t>(profile.slots)),
+      busy_(static_cast<std::size_t>(profile.slots), false) {}
+
+void Fpga::Claim(int slot, const std::string& node) {
+  if (slot < 0 || slot >= profile_.slots) {
+    throw ConfigError("node '" + node + "' is mapped to FPGA slot " + std::to_string(slot) +
+                      ", but the platform has slots 0.." + std::to_string(profile_.slots - 1));
+  }
+  std::string& owner = owner_[static_cast<std::size_t>(slot)];
+  if (!owner.empty()) {
+    throw ConfigError("node '" + node + "' is mapped to FPGA slot " + std::to_string(slot) +
+                      ", which already serves node '" + owner + "' (one hardware node per slot)");
+  }
+  owner = node;
+}
+
+Duration Fpga::TransferTime(std::int64_t bytes) const {
+  return FromSeconds(static_cast<double>(bytes) / profile_.memif_bytes_per_s);
+}
+
+bool Fpga::busy(int slot) const { return busy_.at(static_cast<std::size_t>(slot)); }
+
+void Fpga::Run(int slot, Duration duration, std::function<void()> done) {
+  if (busy_.at(static_cast<std::size_t>(slot))) {
+    throw std::logic_error("Fpga::Run: slot " + std::to_string(slot) + " is busy");
+  }
+  busy_[static_cast<std::size_t>(slot)] = true;
+  const Time start = kernel_.Now();
+  kernel_.ScheduleIn(
+      duration,
+      [this, slot, start, done = std::move(done)] {
+        busy_[static_cast<std::size_t>(slot)] = false;
+        if (metrics_) {
+          metrics_->Span(TraceLane::kSlot, slot, owner_[static_cast<std::size_t>(slot)], start,
+                         kernel_.Now());
+        }
+        done();
+      },
+      kPriorityPlatform);
+}
+
+// ---- ChunkPools ----
+
+ChunkPools::ChunkPools(const std::vector<MempoolConfig>& pools)
+    : pools_(pools), in_use_(pools.size(), 0) {}
+
+std::optional<int> ChunkPools::PoolFor(std::int64_t bytes) const {
+  for (std::size_t i = 0; i < pools_.size(); ++i) {
+    if (bytes <= pools_[i].chunk_bytes) return static_cast<int>(i);
+  }
+  return std::nullopt;
+}
+
+bool ChunkPools::Acquire(int pool) {
+  const std::size_t i = static_cast<std::size_t>(pool);
+  if (in_use_.at(i) >= pools_.at(i).chunks) return false;
+  ++in_use_[i];
+  return true;
+}
+
+void ChunkPools::Release(int pool) {
+  const std::size_t i = static_cast<std::size_t>(pool);
+  if (in_use_.at(i) <= 0) throw std::logic_error("ChunkPools::Release: pool has no chunk in use");
+  --in_use_[i];
+}
+
+// ---- Platform ----
+
+Platform::Platform(Kernel& kernel, PlatformProfile profile, RunMetrics* metrics)
+    : kernel_(kernel),
+      profile_(std::move(profile)),
+      metrics_(metrics),
+      cpu_(kernel, profile_.cpu.cores, metrics),
+      fpga_(kernel, profile_.fpga, metrics),
+      chunk_pools_(std::make_shared<ChunkPools>(profile_.zero_copy.mempools)) {}
+
+double DrawCostSeconds(const CostDistributionConfig& d, Rng& rng) {
+  if (d.distribution == "fixed") return *d.value_s;
+  if (d.distribution == "uniform") return rng.Uniform(*d.min_s, *d.max_s);
+  if (d.distribution == "normal") return std::max(0.0, rng.Normal(*d.mean_s, *d.stddev_s));
+  if (d.distribution == "lognormal") {
+    // mean m and standard deviation s of the cost: sigma^2 = ln(1 + s^2/m^2), mu = ln m - sigma^2/2
+    const double ratio = *d.stddev_s / *d.mean_s;
+    const double sigma2 = std::log1p(ratio * ratio);
+    return std::exp(rng.Normal(std::log(*d.mean_s) - 0.5 * sigma2, std::sqrt(sigma2)));
+  }
+  throw std::logic_error("DrawCostSeconds: unknown distribution '" + d.distribution + "'");
+}
+
+PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config) {
+  if (config.cores) profile.cpu.cores = *config.cores;
+  return profile;
+}
+
+void Platform::RunHwJob(int slot, int owner, Duration fabric, double delegate_core_s,
+                        std::function<void()> done) {
+  // Both halves report to one counter; the second to finish calls `done`.
+  auto pending = std::make_shared<int>(2);
+  auto shared_done = std::make_shared<std::function<void()>>(std::move(done));
+  auto join = [pending, shared_done] {
+    if (--*pending == 0) (*shared_done)();
+  };
+  fpga_.Run(slot, fabric, join);
+  cpu_.Start(owner, delegate_core_s, 1.0, join);
+}
+
+}  // namespace autonomsim::sim

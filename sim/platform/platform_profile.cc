@@ -1,0 +1,196 @@
+#include "sim/platform/platform_profile.h"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "world/validation.h"
+
+namespace autonomsim::sim {
+namespace {
+
+std::string Num(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+void RequireNonNegative(Duration d, const std::string& key) {
+  Require(d.count() >= 0, key + " must be >= 0, got " + Num(ToSeconds(d)));
+}
+
+void RequireJitter(double jitter) {
+  Require(jitter >= 0.0 && jitter < 1.0, "jitter must be in [0, 1), got " + Num(jitter));
+}
+
+}  // namespace
+
+void SwCost::Validate() const {
+  Require(work_s >= 0.0, "work_s must be >= 0, got " + Num(work_s));
+  Require(work_ns_per_input_byte >= 0.0,
+          "work_ns_per_input_byte must be >= 0, got " + Num(work_ns_per_input_byte));
+  Require(work_ns_per_output_byte >= 0.0,
+          "work_ns_per_output_byte must be >= 0, got " + Num(work_ns_per_output_byte));
+  Require(max_parallelism > 0.0, "max_parallelism must be > 0, got " + Num(max_parallelism));
+  RequireJitter(jitter);
+}
+
+void HwCost::Validate() const {
+  Require(compute_s >= 0.0, "compute_s must be >= 0, got " + Num(compute_s));
+  Require(delegate_cpu_s >= 0.0, "delegate_cpu_s must be >= 0, got " + Num(delegate_cpu_s));
+  RequireJitter(jitter);
+}
+
+void ComponentCost::Validate() const {
+  Require(sw.has_value() || hw.has_value(), "a component needs a 'sw' or an 'hw' cost");
+}
+
+void CpuProfile::Validate() const {
+  Require(cores >= 1, "cores must be >= 1, got " + std::to_string(cores));
+  Require(memcpy_bytes_per_s > 0.0,
+          "memcpy_bytes_per_s must be > 0, got " + Num(memcpy_bytes_per_s));
+}
+
+void FpgaProfile::Validate() const {
+  Require(slots >= 0, "slots must be >= 0, got " + std::to_string(slots));
+  Require(memif_bytes_per_s > 0.0, "memif_bytes_per_s must be > 0, got " + Num(memif_bytes_per_s));
+}
+
+void DdsSideCost::Validate() const {
+  RequireNonNegative(fixed, "fixed_s");
+  Require(copies >= 0, "copies must be >= 0, got " + std::to_string(copies));
+  RequireNonNegative(per_datagram, "per_datagram_s");
+  RequireNonNegative(per_fragment, "per_fragment_s");
+}
+
+void DdsProfile::Validate() const {
+  Require(fragment_bytes > 0, "fragment_bytes must be > 0, got " + std::to_string(fragment_bytes));
+  Require(datagram_bytes >= fragment_bytes, "datagram_bytes must be >= fragment_bytes (" +
+                                                std::to_string(fragment_bytes) + "), got " +
+                                                std::to_string(datagram_bytes));
+  RequireNonNegative(latency, "latency_s");
+}
+
+void MempoolConfig::Validate() const {
+  Require(chunk_bytes > 0, "chunk_bytes must be > 0, got " + std::to_string(chunk_bytes));
+  Require(chunks > 0, "chunks must be > 0, got " + std::to_string(chunks));
+}
+
+void ZeroCopyProfile::Validate() const {
+  RequireNonNegative(publish, "publish_s");
+  RequireNonNegative(take, "take_s");
+  RequireNonNegative(latency, "latency_s");
+  Require(non_loaned_take_copies >= 0,
+          "non_loaned_take_copies must be >= 0, got " + std::to_string(non_loaned_take_copies));
+  Require(max_subscribers >= 1,
+          "max_subscribers must be >= 1, got " + std::to_string(max_subscribers));
+  Require(max_loans_per_publisher >= 1,
+          "max_loans_per_publisher must be >= 1, got " + std::to_string(max_loans_per_publisher));
+  Require(!mempools.empty(), "mempools must list at least one pool");
+  for (std::size_t i = 1; i < mempools.size(); ++i) {
+    Require(mempools[i].chunk_bytes > mempools[i - 1].chunk_bytes,
+            "mempools must be listed by increasing chunk_bytes (entry " + std::to_string(i) + ": " +
+                std::to_string(mempools[i].chunk_bytes) + " after " +
+                std::to_string(mempools[i - 1].chunk_bytes) + ")");
+  }
+}
+
+void BackgroundLoadConfig::Validate() const {
+  Require(!name.empty(), "a background load needs a name");
+  Require(cpu_percent >= 0.0, "cpu_percent must be >= 0, got " + Num(cpu_percent));
+  Require(period.count() > 0, "period_s must be > 0, got " + Num(ToSeconds(period)));
+  Require(max_parallelism > 0.0, "max_parallelism must be > 0, got " + Num(max_parallelism));
+  Require(cpu_percent <= 100.0 * max_parallelism, "cpu_percent " + Num(cpu_percent) +
+                                                      " needs more than max_parallelism " +
+                                                      Num(max_parallelism) + " cores");
+}
+
+void PlatformProfile::Validate() const {
+  Require(!name.empty(), "a platform profile needs a name");
+  std::set<std::string> names;
+  for (const BackgroundLoadConfig& load : background) {
+    Require(names.insert(load.name).second, "background load '" + load.name + "' appears twice");
+  }
+}
+
+const ComponentCost& PlatformProfile::Component(const std::string& cost_name) const {
+  const auto it = components.find(cost_name);
+  if (it == components.end()) {
+    std::string known;
+    for (const auto& [key, unused] : components) known += (known.empty() ? "" : ", ") + key;
+    throw ConfigError("platform profile '" + name + "': components." + cost_name +
+                      ": no such component cost (known: " + known + ")");
+  }
+  return it->second;
+}
+
+PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
+                                    const std::vector<std::string>& overrides) {
+  YAML::Node root = LoadYamlFile(file);
+  ConfigSource source{file.string(), {}};
+  for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
+  return ReadConfig<PlatformProfile>(root, source);
+}
+
+void NodeMappingConfig::Validate() const {
+  Require(target == "sw" || target == "hw", "target must be 'sw' or 'hw', got '" + target + "'");
+  if (target == "hw") Require(slot.has_value(), "a node mapped to 'hw' needs a 'slot'");
+  if (target == "sw") Require(!slot.has_value(), "'slot' is only for target 'hw'");
+  if (slot) Require(*slot >= 0, "slot must be >= 0, got " + std::to_string(*slot));
+}
+
+void TopicTransportConfig::Validate() const {
+  Require(transport == "dds" || transport == "zero_copy",
+          "transport must be 'dds' or 'zero_copy', got '" + transport + "'");
+  if (depth) Require(*depth >= 1, "depth must be >= 1, got " + std::to_string(*depth));
+}
+
+void CostDistributionConfig::Validate() const {
+  auto need = [this](const std::optional<double>& value, const char* key) {
+    Require(value.has_value(), "distribution '" + distribution + "' needs " + key);
+    Require(std::isfinite(*value) && *value >= 0.0,
+            std::string(key) + " must be finite and >= 0, got " + Num(*value));
+  };
+  auto forbid = [this](const std::optional<double>& value, const char* key) {
+    Require(!value.has_value(), "distribution '" + distribution + "' takes no " + key);
+  };
+  if (distribution == "fixed") {
+    need(value_s, "value_s");
+    forbid(min_s, "min_s");
+    forbid(max_s, "max_s");
+    forbid(mean_s, "mean_s");
+    forbid(stddev_s, "stddev_s");
+  } else if (distribution == "uniform") {
+    need(min_s, "min_s");
+    need(max_s, "max_s");
+    Require(*min_s <= *max_s, "min_s must be <= max_s, got " + Num(*min_s) + " > " + Num(*max_s));
+    forbid(value_s, "value_s");
+    forbid(mean_s, "mean_s");
+    forbid(stddev_s, "stddev_s");
+  } else if (distribution == "normal" || distribution == "lognormal") {
+    need(mean_s, "mean_s");
+    need(stddev_s, "stddev_s");
+    Require(distribution == "normal" || *mean_s > 0.0, "lognormal needs mean_s > 0");
+    forbid(value_s, "value_s");
+    forbid(min_s, "min_s");
+    forbid(max_s, "max_s");
+  } else {
+    Require(false,
+            "distribution must be fixed, uniform, normal or lognormal, got '" + distribution + "'");
+  }
+}
+
+void PlatformConfig::Validate() const {
+  Require(!profile.empty(), "profile must name a platform profile file");
+  Require(!cores || *cores >= 1, "cores must be >= 1, got " + std::to_string(cores.value_or(0)));
+  for (const auto& [node, scale] : cost_scale) {
+    Require(std::isfinite(scale) && scale > 0.0,
+            "cost_scale." + node + " must be finite and > 0, got " + Num(scale));
+  }
+  Require(load_bin.count() > 0, "load_bin_s must be > 0, got " + Num(ToSeconds(load_bin)));
+  Require(trace_max_events >= 0,
+          "trace_max_events must be >= 0, got " + std::to_string(trace_max_events));
+}
+
+}  // namespace autonomsim::sim

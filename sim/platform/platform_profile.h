@@ -1,0 +1,315 @@
+// The numbers of a compute platform (scenarios/platforms/*.yaml) and how a run maps its nodes and
+// topics onto it. Every figure lives in the profile file with its provenance (a Table I row, a
+// datasheet, a documented default, or "assumed: why"); the defaults here only make an empty
+// struct valid, they are not the ZCU104.
+//
+// CPU units: work is in core-seconds (one core busy for one second). CPU load is reported as the
+// paper does, "CPU in % of 4 cores": 100 % = one core fully busy, 400 % = all four.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/core/config.h"
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// CPU work of one software job (one callback run) of a node.
+struct SwCost {
+  double work_s{0.0};                   // core-seconds per job
+  double work_ns_per_input_byte{0.0};   // plus this per byte of the message taken
+  double work_ns_per_output_byte{0.0};  // plus this per byte of the messages published
+  double max_parallelism{1.0};          // cores one job can use at once (threads it runs on)
+  double jitter{0.0};  // each job's work is scaled by a uniform factor in [1 - jitter, 1 + jitter]
+
+  template <class V>
+  void Describe(V& v) {
+    v("work_s", work_s);
+    v("work_ns_per_input_byte", work_ns_per_input_byte);
+    v("work_ns_per_output_byte", work_ns_per_output_byte);
+    v("max_parallelism", max_parallelism);
+    v("jitter", jitter);
+  }
+  void Validate() const;
+};
+
+// One job of a hardware node in a reconfigurable slot: the fabric computes and moves its input and
+// output over the slot's memory interface; meanwhile its delegate thread (one CPU thread) serves
+// the hardware thread's OS calls. The job ends when both are done.
+struct HwCost {
+  double compute_s{0.0};       // fabric time per job besides the memory transfers
+  double delegate_cpu_s{0.0};  // core-seconds of the delegate thread per job (at most one core)
+  double jitter{0.0};          // as SwCost::jitter, on compute_s and delegate_cpu_s
+
+  template <class V>
+  void Describe(V& v) {
+    v("compute_s", compute_s);
+    v("delegate_cpu_s", delegate_cpu_s);
+    v("jitter", jitter);
+  }
+  void Validate() const;
+};
+
+// What one node costs in software and, if it has a hardware implementation, in a slot.
+struct ComponentCost {
+  std::optional<SwCost> sw;
+  std::optional<HwCost> hw;
+
+  template <class V>
+  void Describe(V& v) {
+    v("sw", sw);
+    v("hw", hw);
+  }
+  void Validate() const;
+};
+
+struct CpuProfile {
+  int cores{1};
+  double memcpy_bytes_per_s{1e9};  // one core copying a large buffer (used by every "copy")
+
+  template <class V>
+  void Describe(V& v) {
+    v("cores", cores);
+    v("memcpy_bytes_per_s", memcpy_bytes_per_s);
+  }
+  void Validate() const;
+};
+
+struct FpgaProfile {
+  int slots{0};
+  double memif_bytes_per_s{1e9};  // one slot's memory interface (bytes read + written)
+
+  template <class V>
+  void Describe(V& v) {
+    v("slots", slots);
+    v("memif_bytes_per_s", memif_bytes_per_s);
+  }
+  void Validate() const;
+};
+
+// CPU cost of one side of a DDS transfer of a B-byte sample:
+//   fixed + copies * B / memcpy + ceil(B / datagram_bytes) * per_datagram
+//         + ceil(B / fragment_bytes) * per_fragment
+struct DdsSideCost {
+  Duration fixed{0};
+  int copies{0};  // passes over the B bytes at cpu.memcpy_bytes_per_s
+  Duration per_datagram{0};
+  Duration per_fragment{0};
+
+  template <class V>
+  void Describe(V& v) {
+    v("fixed_s", fixed);
+    v("copies", copies);
+    v("per_datagram_s", per_datagram);
+    v("per_fragment_s", per_fragment);
+  }
+  void Validate() const;
+};
+
+// DDS over loopback UDP. `write` is paid by the publishing job (publish is synchronous), `receive`
+// by the subscriber's DDS receive thread for every sample that arrives (taken or not), `take` by
+// the subscriber's job (deserialization into its message).
+struct DdsProfile {
+  int datagram_bytes{14720};
+  int fragment_bytes{1344};
+  DdsSideCost write;
+  DdsSideCost receive;
+  DdsSideCost take;
+  Duration latency{0};  // wire time on top of the receive processing
+
+  template <class V>
+  void Describe(V& v) {
+    v("datagram_bytes", datagram_bytes);
+    v("fragment_bytes", fragment_bytes);
+    v("write", write);
+    v("receive", receive);
+    v("take", take);
+    v("latency_s", latency);
+  }
+  void Validate() const;
+};
+
+struct MempoolConfig {
+  int chunk_bytes{1024};
+  int chunks{1};
+
+  template <class V>
+  void Describe(V& v) {
+    v("chunk_bytes", chunk_bytes);
+    v("chunks", chunks);
+  }
+  void Validate() const;
+};
+
+// Zero-copy shared memory (Iceoryx under CycloneDDS): near-constant cost per message, and its
+// limits, which the graph enforces.
+struct ZeroCopyProfile {
+  Duration publish{0};             // CPU of loan + publish on the publisher
+  Duration take{0};                // CPU of take-loaned + return on a subscriber
+  int non_loaned_take_copies{1};   // a subscriber without the loan API gets a copy of the sample
+  Duration latency{0};             // publish to the subscriber's wake-up
+  int max_subscribers{127};        // per topic
+  int max_loans_per_publisher{8};  // loaned, not yet published, per publisher
+  std::vector<MempoolConfig> mempools;  // shared memory chunks; a sample uses the smallest fitting
+
+  template <class V>
+  void Describe(V& v) {
+    v("publish_s", publish);
+    v("take_s", take);
+    v("non_loaned_take_copies", non_loaned_take_copies);
+    v("latency_s", latency);
+    v("max_subscribers", max_subscribers);
+    v("max_loans_per_publisher", max_loans_per_publisher);
+    v("mempools", mempools);
+  }
+  void Validate() const;
+};
+
+// Load on the CPU from parts of the stack that are not modelled node by node: a periodic job of
+// cpu_percent / 100 * period core-seconds. A load stands in for the nodes in `replaced_by`: it is
+// left out of a board that runs any of them (a car driven by the modelled stack).
+struct BackgroundLoadConfig {
+  std::string name;
+  double cpu_percent{0.0};  // 100 = one core
+  Duration period{std::chrono::milliseconds(50)};
+  double max_parallelism{1.0};
+  std::vector<std::string> replaced_by;  // node names
+
+  template <class V>
+  void Describe(V& v) {
+    v("name", name);
+    v("cpu_percent", cpu_percent);
+    v("period_s", period);
+    v("max_parallelism", max_parallelism);
+    v("replaced_by", replaced_by);
+  }
+  void Validate() const;
+};
+
+struct PlatformProfile {
+  std::string name;
+  std::string description;
+  CpuProfile cpu;
+  FpgaProfile fpga;
+  DdsProfile dds;
+  ZeroCopyProfile zero_copy;
+  std::map<std::string, ComponentCost> components;  // by cost name (usually the node's name)
+  std::vector<BackgroundLoadConfig> background;
+
+  template <class V>
+  void Describe(V& v) {
+    v("name", name);
+    v("description", description);
+    v("cpu", cpu);
+    v("fpga", fpga);
+    v("dds", dds);
+    v("zero_copy", zero_copy);
+    v("components", components);
+    v("background", background);
+  }
+  void Validate() const;
+
+  // The cost entry `name`; throws ConfigError naming the profile and the missing key.
+  const ComponentCost& Component(const std::string& name) const;
+};
+
+// Reads a profile file strictly (sim/core/config.h); `overrides` are --set style key=value pairs.
+PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
+                                    const std::vector<std::string>& overrides = {});
+
+// ---- How a run uses the platform: the fields a scenario embeds as `platform:` ----
+
+// Where one node runs: "sw" on the CPU cores, or "hw" in FPGA slot `slot`. `cost` names the
+// profile's components entry (default: the node's name).
+struct NodeMappingConfig {
+  std::string target{"sw"};
+  std::optional<int> slot;
+  std::optional<std::string> cost;
+
+  template <class V>
+  void Describe(V& v) {
+    v("target", target);
+    v("slot", slot);
+    v("cost", cost);
+  }
+  void Validate() const;
+};
+
+// How one topic is carried: "dds" (loopback sockets) or "zero_copy" (Iceoryx), and its QoS
+// history depth (keep-last).
+struct TopicTransportConfig {
+  std::string transport{"zero_copy"};
+  std::optional<int> depth;
+
+  template <class V>
+  void Describe(V& v) {
+    v("transport", transport);
+    v("depth", depth);
+  }
+  void Validate() const;
+};
+
+// A distribution that replaces a node's per-job compute cost (PlatformConfig::cost_override):
+// "fixed" (value_s), "uniform" (min_s, max_s), "normal" (mean_s, stddev_s; a draw below 0 counts
+// as 0) or "lognormal" (mean_s and stddev_s of the cost itself, not of its logarithm). Seconds are
+// core-seconds of work for a software node and fabric seconds for a hardware node.
+struct CostDistributionConfig {
+  std::string distribution{"fixed"};
+  std::optional<double> value_s;
+  std::optional<double> min_s;
+  std::optional<double> max_s;
+  std::optional<double> mean_s;
+  std::optional<double> stddev_s;
+
+  template <class V>
+  void Describe(V& v) {
+    v("distribution", distribution);
+    v("value_s", value_s);
+    v("min_s", min_s);
+    v("max_s", max_s);
+    v("mean_s", mean_s);
+    v("stddev_s", stddev_s);
+  }
+  void Validate() const;
+};
+
+struct PlatformConfig {
+  std::string profile{"platforms/zcu104.yaml"};           // relative to the scenario's folder
+  std::map<std::string, NodeMappingConfig> mapping;       // by node name; others keep defaults
+  std::map<std::string, TopicTransportConfig> transport;  // by topic name; others keep defaults
+  // What-if knobs (sweeps). cores: the CPU's core count instead of the profile's cpu.cores.
+  // cost_scale: by node name, a factor on each job's compute cost (software: its core-seconds of
+  // work; hardware: its fabric time, memory transfers included, not its delegate thread's CPU).
+  // cost_override: by node name, each job's compute cost drawn from a distribution instead of the
+  // profile's (software: core-seconds of work; hardware: fabric compute time, memory transfers
+  // still added), from the seeded stream "<board>/platform/<node>/cost_override"; cost_scale
+  // applies on top. Neither touches a subscription's own cost or the transports.
+  std::optional<int> cores;
+  std::map<std::string, double> cost_scale;
+  std::map<std::string, CostDistributionConfig> cost_override;
+  bool background_loads{true};                 // add the profile's background loads
+  Duration load_bin{std::chrono::seconds(1)};  // CPU load over time: one value per bin
+  bool trace{true};                            // record trace.json
+  int trace_max_events{200000};                // then stop recording (noted in it)
+
+  template <class V>
+  void Describe(V& v) {
+    v("profile", profile);
+    v("mapping", mapping);
+    v("transport", transport);
+    v("cores", cores);
+    v("cost_scale", cost_scale);
+    v("cost_override", cost_override);
+    v("background_loads", background_loads);
+    v("load_bin_s", load_bin);
+    v("trace", trace);
+    v("trace_max_events", trace_max_events);
+  }
+  void Validate() const;
+};
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,259 @@
+#include "sim/platform/table1.h"
+
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "sim/core/kernel.h"
+#include "sim/platform/node_graph.h"
+#include "sim/platform/platform.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// What the Table I setup moves between nodes: a frame token. The functional content does not
+// matter for timing; a topic's byte size comes from its message type.
+struct Frame {
+  std::uint64_t sequence{0};
+};
+struct PassParams {};
+struct PassState {
+  std::uint64_t frames{0};
+};
+Frame PassStep(const PassParams&, const Frame& in, PassState* state) {
+  ++state->frames;
+  return in;
+}
+
+// One processing stage of a test setup.
+struct Stage {
+  std::string node;  // also its cost name in the profile
+  bool hw{false};
+  int slot{0};
+  MessageType output;
+};
+
+struct Setup {
+  MessageType input;  // what the camera publisher publishes
+  std::vector<Stage> stages;
+  Transport transport{Transport::kZeroCopy};
+};
+
+// Test setups of the eight rows, in PaperTable1() order. In hardware the point cloud and the
+// obstacle grid are fused in slot 0, lane detection is the lane planner (slot 1) followed by the
+// polynomial fit (slot 2) (reference §8). Software obstacle detection takes point clouds.
+std::vector<Setup> Setups() {
+  const Stage pc_sw{"point_cloud", false, 0, msg::PointCloud640()};
+  const Stage pc_hw{"point_cloud", true, 0, msg::PointCloud640()};
+  return {
+      {msg::Image640mono(), {pc_sw}, Transport::kDds},
+      {msg::Image640mono(), {pc_hw}, Transport::kDds},
+      {msg::Image640mono(), {pc_sw}, Transport::kZeroCopy},
+      {msg::Image640mono(), {pc_hw}, Transport::kZeroCopy},
+      {msg::PointCloud640(), {{"obstacle_detection", false, 0, msg::Grid234()}}},
+      {msg::Image640mono(), {{"obstacle_detection", true, 0, msg::Grid234()}}},
+      {msg::Image640rgb(), {{"lane_detection", false, 0, msg::LanePoints()}}},
+      {msg::Image640rgb(),
+       {{"lane_planner", true, 1, msg::Image640mono()}, {"poly_fit", true, 2, msg::LanePoints()}}},
+  };
+}
+
+Duration CameraPeriod(const Table1Options& options) {
+  return FromSeconds(1.0 / options.camera_fps);
+}
+
+Table1Result RunOne(const PlatformProfile& profile, const Table1Row& row, const Setup& setup,
+                    const Table1Options& options) {
+  Kernel kernel;
+  RunMetrics metrics(MetricsOptions{.measure_from = options.warmup, .trace = false});
+  Platform platform(kernel, profile, &metrics);
+  NodeGraph graph(platform, &metrics);
+
+  TopicId<Frame> in =
+      graph.AddTopic<Frame>({.name = "/camera", .type = setup.input, .transport = setup.transport});
+  auto frames = std::make_shared<std::uint64_t>(0);
+  AddSourceNode(graph, NodeSpec{.name = "camera", .mapping = {.cost = "camera_publisher"}}, in,
+                kZeroTime, CameraPeriod(options), [frames](Time) { return Frame{(*frames)++}; });
+  for (const Stage& stage : setup.stages) {
+    TopicId<Frame> out = graph.AddTopic<Frame>(
+        {.name = "/" + stage.node, .type = stage.output, .transport = setup.transport});
+    NodeMappingConfig mapping;
+    if (stage.hw) mapping = {.target = "hw", .slot = stage.slot};
+    AddComponentNode(graph, NodeSpec{.name = stage.node, .mapping = mapping}, in, out, PassParams{},
+                     std::make_shared<PassState>(), PassStep);
+    in = out;
+  }
+  AddSinkNode(graph, NodeSpec{.name = "fps_probe"}, in, SubscriptionOptions{.loaned = false});
+
+  kernel.RunUntil(options.duration);
+  const MetricsReport report = BuildReport(metrics, options.duration);
+
+  Table1Result result{.row = row};
+  result.cpu_percent = report.cpu_percent;
+  result.fps = report.FindTopic("/" + setup.stages.back().node)->rate_hz;
+  for (std::size_t i = 0; i < setup.stages.size(); ++i) {
+    result.turnaround_ms += report.FindNode(setup.stages[i].node)->turnaround_ms.p50;
+    if (i > 0) {  // a chain: the hand-over between its stages counts too
+      const Duration latency =
+          setup.transport == Transport::kDds ? profile.dds.latency : profile.zero_copy.latency;
+      result.turnaround_ms += ToSeconds(latency) * 1e3;
+    }
+  }
+  result.in_cpu = row.cpu_percent.Contains(result.cpu_percent);
+  result.in_fps = row.fps.Contains(result.fps);
+  result.in_turnaround = row.turnaround_ms.Contains(result.turnaround_ms);
+  return result;
+}
+
+nlohmann::json RangeJson(const PaperRange& r) { return nlohmann::json::array({r.lo, r.hi}); }
+
+std::string Cell(double value, const PaperRange& range, bool in) {
+  return fmt::format("{:7.1f} ({:g}-{:g}) {:<3}", value, range.lo, range.hi, in ? "in" : "OUT");
+}
+
+}  // namespace
+
+const std::vector<Table1Row>& PaperTable1() {
+  // Reference §8, the paper's Table I (min–max), rows in the paper's order.
+  static const std::vector<Table1Row> rows = {
+      {"point cloud @640x480", "SW, without Iceoryx", true, {180, 220}, {9, 12}, {83, 111}},
+      {"point cloud @640x480", "HW, without Iceoryx", true, {180, 210}, {13, 14}, {71, 76}},
+      {"point cloud @640x480", "SW, with Iceoryx", false, {90, 110}, {29, 30}, {11, 15}},
+      {"point cloud @640x480", "HW, with Iceoryx", false, {64, 78}, {29, 30}, {17, 18}},
+      {"obstacle detection", "SW, with Iceoryx", false, {50, 60}, {29, 30}, {15, 17}},
+      {"obstacle detection", "HW, with Iceoryx", false, {4, 8}, {29, 30}, {9, 11}},
+      {"lane detection", "ROS 2 SW node, with Iceoryx", false, {170, 190}, {29, 30}, {27, 31}},
+      {"lane detection", "HW, with Iceoryx", false, {24, 38}, {29, 30}, {9, 18}},
+  };
+  return rows;
+}
+
+std::vector<Table1Result> RunTable1(const PlatformProfile& profile, const Table1Options& options) {
+  const std::vector<Setup> setups = Setups();
+  std::vector<Table1Result> results;
+  for (std::size_t i = 0; i < setups.size(); ++i) {
+    results.push_back(RunOne(profile, PaperTable1()[i], setups[i], options));
+  }
+  return results;
+}
+
+WholeUnitResult RunWholeUnit(const PlatformProfile& profile, const Table1Options& options,
+                             Transport transport) {
+  Kernel kernel;
+  PlatformConfig config;
+  config.trace = options.trace;
+  Board board(kernel, "zcu104", config, profile, nullptr, options.warmup);
+  NodeGraph& graph = board.graph();
+
+  const Duration period = CameraPeriod(options);
+  auto topic = [&](const char* name, MessageType type) {
+    return graph.AddTopic<Frame>({.name = name, .type = type, .transport = transport});
+  };
+  auto depth = topic("/depth", msg::Image640mono());
+  auto image = topic("/image", msg::Image640rgb());
+  auto points = topic("/points", msg::PointCloud640());
+  auto grid = topic("/grid", msg::Grid234());
+  auto lanes = topic("/lane_points", msg::LanePoints());
+  auto depth_frames = std::make_shared<std::uint64_t>(0);
+  auto image_frames = std::make_shared<std::uint64_t>(0);
+  const NodeMappingConfig camera{.cost = "camera_publisher"};
+  // The colour camera runs half a period after the depth camera (free-running sensors).
+  AddSourceNode(graph, NodeSpec{.name = "depth_camera", .mapping = camera}, depth, kZeroTime,
+                period, [depth_frames](Time) { return Frame{(*depth_frames)++}; });
+  AddSourceNode(graph, NodeSpec{.name = "colour_camera", .mapping = camera}, image, period / 2,
+                period, [image_frames](Time) { return Frame{(*image_frames)++}; });
+  AddComponentNode(graph, NodeSpec{.name = "point_cloud"}, depth, points, PassParams{},
+                   std::make_shared<PassState>(), PassStep);
+  AddComponentNode(graph, NodeSpec{.name = "obstacle_detection"}, points, grid, PassParams{},
+                   std::make_shared<PassState>(), PassStep);
+  AddComponentNode(graph, NodeSpec{.name = "lane_detection"}, image, lanes, PassParams{},
+                   std::make_shared<PassState>(), PassStep);
+  board.Finish(kZeroTime);
+
+  kernel.RunUntil(options.duration);
+  WholeUnitResult result;
+  result.transport = TransportName(transport);
+  BoardReport report = board.Report(options.duration);
+  result.cpu_percent = report.report.cpu_percent;
+  result.demand_percent = report.report.cpu_demand_percent;
+  result.capacity_percent = 100.0 * profile.cpu.cores;
+  if (options.trace) {
+    result.nodes_csv = NodesCsv({report});
+    result.trace_json = TraceJson({{board.name(), &board.metrics()}});
+  }
+  result.report = std::move(report.report);
+  return result;
+}
+
+nlohmann::json Table1Json(const std::vector<Table1Result>& rows,
+                          const std::vector<WholeUnitResult>& whole) {
+  nlohmann::json out = {{"rows", nlohmann::json::array()}, {"held_out", nlohmann::json::array()}};
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Table1Result& r = rows[i];
+    out["rows"].push_back(
+        {{"component", r.row.component},
+         {"configuration", r.row.configuration},
+         {"cpu_percent", r.cpu_percent},
+         {"fps", r.fps},
+         {"turnaround_ms", r.turnaround_ms},
+         {"paper",
+          {{"cpu_percent", RangeJson(r.row.cpu_percent)},
+           {"fps", RangeJson(r.row.fps)},
+           {"turnaround_ms", RangeJson(r.row.turnaround_ms)}}},
+         {"in_range",
+          {{"cpu_percent", r.in_cpu}, {"fps", r.in_fps}, {"turnaround_ms", r.in_turnaround}}}});
+    if (r.row.held_out) out["held_out"].push_back(i);
+  }
+  out["whole_unit"] = nlohmann::json::object();
+  for (const WholeUnitResult& w : whole) {
+    out["whole_unit"][w.transport] = {{"cpu_percent", w.cpu_percent},
+                                      {"demand_percent", w.demand_percent},
+                                      {"capacity_percent", w.capacity_percent},
+                                      {"platform", ReportJson(w.report)}};
+  }
+  return out;
+}
+
+std::string Table1Text(const std::vector<Table1Result>& rows,
+                       const std::vector<WholeUnitResult>& whole, const std::string& profile_name,
+                       const Table1Options& options) {
+  std::string text = fmt::format(
+      "Table I: the paper (min-max) vs autonomsim, profile '{}'.\n"
+      "Setup per row: camera publisher at {:g} fps -> component -> rate probe; {:g} s simulated, "
+      "the first {:g} s not measured.\n"
+      "CPU in % of one core (400 = all four). * = held-out row (nothing fitted to it).\n\n",
+      profile_name, options.camera_fps, ToSeconds(options.duration), ToSeconds(options.warmup));
+  text += fmt::format("{:<21}{:<30}{:<26}{:<24}{}\n", "component", "configuration", "CPU %", "FPS",
+                      "turnaround ms");
+  int in = 0;
+  int cells = 0;
+  for (const Table1Result& r : rows) {
+    text += fmt::format("{:<21}{:<30}{:<26}{:<24}{}\n", r.row.component,
+                        r.row.configuration + (r.row.held_out ? " *" : ""),
+                        Cell(r.cpu_percent, r.row.cpu_percent, r.in_cpu),
+                        Cell(r.fps, r.row.fps, r.in_fps),
+                        Cell(r.turnaround_ms, r.row.turnaround_ms, r.in_turnaround));
+    in +=
+        static_cast<int>(r.in_cpu) + static_cast<int>(r.in_fps) + static_cast<int>(r.in_turnaround);
+    cells += 3;
+  }
+  text += fmt::format("\n{} of {} cells in the paper's range.\n", in, cells);
+
+  for (const WholeUnitResult& w : whole) {
+    text += fmt::format(
+        "\nWhole unit in software (point cloud, obstacle detection, lane detection), every topic "
+        "{}, plus background loads:\n"
+        "  CPU demand {:.1f} % of {:.0f} % available; delivered {:.1f} %\n",
+        w.transport, w.demand_percent, w.capacity_percent, w.cpu_percent);
+    text += fmt::format("  {:<20}{:>9}{:>9}{:>8}{:>8}{:>12}{:>12}{:>8}\n", "node", "demand%",
+                        "cpu%", "in/s", "out/s", "turn p50", "turn p95", "drops");
+    for (const NodeReport& n : w.report.nodes) {
+      text += fmt::format("  {:<20}{:>9.1f}{:>9.1f}{:>8.1f}{:>8.1f}{:>9.1f} ms{:>9.1f} ms{:>8}\n",
+                          n.name, n.demand_percent, n.cpu_percent, n.input_hz, n.rate_hz,
+                          n.turnaround_ms.p50, n.turnaround_ms.p95, n.drops);
+    }
+  }
+  return text;
+}
+
+}  // namespace autonomsim::sim

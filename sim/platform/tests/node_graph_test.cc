@@ -1,0 +1,487 @@
+// The node graph's semantics on small hand-built graphs: keep-last QoS, one job at a time per
+// executor, immediate functional results published at the job's end, timers, the zero-copy limits,
+// mapping and transport from a scenario's config, determinism with jitter.
+#include "sim/platform/node_graph.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "sim/core/config.h"
+#include "sim/platform/tests/free_transport_profile.h"
+
+namespace autonomsim::sim {
+namespace {
+
+using std::chrono::milliseconds;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+// Free transports (job times are the nodes' own work): "source", "slow" (95 ms) and "sink".
+PlatformProfile FreeTransportProfile(int cores = 1) {
+  PlatformProfile p = testing::FreeTransportProfile(cores);
+  p.components["slow"] = ComponentCost{.sw = SwCost{.work_s = 0.095}};
+  p.components["sink"] = ComponentCost{.sw = SwCost{}};
+  return p;
+}
+
+struct Counter {
+  int value{0};
+};
+
+// A graph on its own kernel, platform and metrics.
+struct Rig {
+  explicit Rig(PlatformProfile profile, const RngStreams* rng = nullptr)
+      : platform(kernel, std::move(profile), &metrics), graph(platform, &metrics, rng) {}
+  Kernel kernel;
+  RunMetrics metrics;
+  Platform platform;
+  NodeGraph graph;
+};
+
+TEST(NodeGraph, KeepLastDropsTheOldestAtTheDepth) {
+  // A source every 30 ms into a node whose jobs take 95 ms, depth 3. Hand-computed: jobs take
+  // frames 0 (0-95 ms), 1 (95-190), 4 (190-285), 7 (285-380), 10 (380-); frames 2, 3, 5, 6, 8, 9
+  // are pushed out of the queue.
+  Rig rig(FreeTransportProfile());
+  auto topic = rig.graph.AddTopic<int>({.name = "/frames", .type = {"Frame", 64, true}});
+  int next = 0;
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, topic, kZeroTime, milliseconds(30),
+                [&next](Time) { return next++; });
+  std::vector<int> taken;
+  std::vector<Time> taken_at;
+  const NodeId slow = rig.graph.AddNode(NodeSpec{.name = "slow"});
+  rig.graph.AddSubscription<int>(slow, topic, [&](const int& frame, Time, Outbox&) {
+    taken.push_back(frame);
+    taken_at.push_back(rig.kernel.Now());
+  });
+  rig.kernel.RunUntil(milliseconds(400));
+
+  EXPECT_THAT(taken, ElementsAre(0, 1, 4, 7, 10));
+  EXPECT_THAT(taken_at, ElementsAre(milliseconds(0), milliseconds(95), milliseconds(190),
+                                    milliseconds(285), milliseconds(380)));
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(400));
+  const NodeReport* n = report.FindNode("slow");
+  ASSERT_NE(n, nullptr);
+  EXPECT_EQ(n->drops, 6u);
+  EXPECT_EQ(n->arrivals, 14u);  // frames 0..13 (13 at 390 ms)
+  EXPECT_EQ(n->jobs, 4u);       // 10's job is still running at 400 ms
+  EXPECT_DOUBLE_EQ(n->turnaround_ms.p50, 95.0);
+  EXPECT_EQ(rig.graph.queued(slow), 3u);  // 11, 12, 13
+  EXPECT_EQ(report.FindTopic("/frames")->drops, 6u);
+}
+
+TEST(NodeGraph, OneJobAtATimePerExecutor) {
+  // Two subscriptions of one node get a message each at t = 0: the second job starts when the
+  // first ends, although the platform has cores to spare.
+  Rig rig(FreeTransportProfile(4));
+  auto a = rig.graph.AddTopic<int>({.name = "/a", .type = {"A", 8, true}});
+  auto b = rig.graph.AddTopic<int>({.name = "/b", .type = {"B", 8, true}});
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, a, kZeroTime, milliseconds(1000),
+                [](Time) { return 1; });
+  const NodeId other =
+      rig.graph.AddNode(NodeSpec{.name = "source_b", .cost = ComponentCost{.sw = SwCost{}}});
+  const PublisherId<int> pub_b = rig.graph.AddPublisher(other, b);
+  rig.graph.AddTimer(other, kZeroTime, milliseconds(1000),
+                     [pub_b](Time now, Outbox& out) { out.Publish(pub_b, 2, now); });
+  std::vector<std::pair<int, Time>> starts;
+  const NodeId slow = rig.graph.AddNode(NodeSpec{.name = "slow"});
+  auto record = [&](const int& v, Time, Outbox&) { starts.emplace_back(v, rig.kernel.Now()); };
+  rig.graph.AddSubscription<int>(slow, a, record);
+  rig.graph.AddSubscription<int>(slow, b, record);
+  rig.kernel.RunUntil(milliseconds(150));
+  ASSERT_EQ(starts.size(), 2u);
+  EXPECT_EQ(starts[0], std::make_pair(1, Time{0}));
+  EXPECT_EQ(starts[1], std::make_pair(2, Time{milliseconds(95)}));
+  EXPECT_TRUE(rig.graph.busy(slow));
+}
+
+struct DoubleParams {
+  int factor{2};
+};
+struct DoubleState {
+  int calls{0};
+};
+int DoubleStep(const DoubleParams& p, const int& in, DoubleState* s) {
+  ++s->calls;
+  return in * p.factor;
+}
+
+TEST(NodeGraph, ComponentRunsAtOnceAndPublishesAtTheJobsEndWithTheSensorStamp) {
+  PlatformProfile profile = FreeTransportProfile(2);
+  profile.components["double"] = ComponentCost{.sw = SwCost{.work_s = 0.040}};
+  Rig rig(profile);
+  auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
+  auto out = rig.graph.AddTopic<int>({.name = "/out", .type = {"I", 8, true}});
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, in, milliseconds(10), milliseconds(100),
+                [](Time now) { return static_cast<int>(now / milliseconds(1)); });
+  auto state = std::make_shared<DoubleState>();
+  AddComponentNode(rig.graph, NodeSpec{.name = "double"}, in, out, DoubleParams{}, state,
+                   DoubleStep);
+  struct Seen {
+    int value;
+    Time stamp;
+    Time at;
+  };
+  std::vector<Seen> seen;
+  const NodeId sink = rig.graph.AddNode(NodeSpec{.name = "sink"});
+  rig.graph.AddSubscription<int>(sink, out, [&](const int& v, Time stamp, Outbox&) {
+    seen.push_back({v, stamp, rig.kernel.Now()});
+  });
+
+  rig.kernel.RunUntil(milliseconds(45));
+  EXPECT_EQ(state->calls, 1);  // ran when its job started (10 ms), before the output exists
+  EXPECT_TRUE(seen.empty());
+  rig.kernel.RunUntil(milliseconds(250));
+  ASSERT_EQ(seen.size(), 3u);
+  EXPECT_EQ(seen[0].value, 20);
+  EXPECT_EQ(seen[0].stamp, milliseconds(10));  // the sensor time
+  EXPECT_EQ(seen[0].at, milliseconds(50));     // 10 ms + 40 ms of work
+  EXPECT_EQ(seen[2].value, 420);
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(250));
+  EXPECT_DOUBLE_EQ(report.FindTopic("/out")->latency_ms.max, 40.0);
+  // 3 jobs of 40 ms of one core in 250 ms
+  EXPECT_NEAR(report.FindNode("double")->cpu_percent, 100.0 * 0.120 / 0.250, 1e-9);
+}
+
+TEST(NodeGraph, OptionalOutputPublishesOnlyWhenSet) {
+  Rig rig(FreeTransportProfile(2));
+  auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
+  auto out = rig.graph.AddTopic<int>({.name = "/odd", .type = {"I", 8, true}});
+  int next = 0;
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, in, kZeroTime, milliseconds(10),
+                [&next](Time) { return next++; });
+  AddComponentNode(rig.graph, NodeSpec{.name = "odd", .cost = ComponentCost{.sw = SwCost{}}}, in,
+                   out, 0, std::make_shared<int>(0),
+                   [](const int&, const int& v, int*) -> std::optional<int> {
+                     if (v % 2 == 1) return v;
+                     return std::nullopt;
+                   });
+  std::vector<int> odd;
+  const NodeId sink = rig.graph.AddNode(NodeSpec{.name = "sink"});
+  rig.graph.AddSubscription<int>(sink, out,
+                                 [&odd](const int& v, Time, Outbox&) { odd.push_back(v); });
+  rig.kernel.RunUntil(milliseconds(55));
+  EXPECT_THAT(odd, ElementsAre(1, 3, 5));
+}
+
+TEST(NodeGraph, TimerTicksWhileItsJobWaitsAreCoalescedAndCounted) {
+  PlatformProfile profile = FreeTransportProfile();
+  profile.components["ticker"] = ComponentCost{.sw = SwCost{.work_s = 0.025}};
+  Rig rig(profile);
+  const NodeId ticker = rig.graph.AddNode(NodeSpec{.name = "ticker"});
+  int runs = 0;
+  rig.graph.AddTimer(ticker, kZeroTime, milliseconds(10), [&runs](Time, Outbox&) { ++runs; });
+  rig.kernel.RunUntil(milliseconds(99));
+  // Ticks every 10 ms, jobs of 25 ms: jobs run 0-25 (tick 0), 25-50 (tick 10), 50-75 (tick 30),
+  // 75-100 (tick 50); the ticks at 20, 40, 60, 70, 90 find one already waiting; 80 waits.
+  EXPECT_EQ(runs, 4);
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(99));
+  const NodeReport* n = report.FindNode("ticker");
+  EXPECT_EQ(n->timer_overruns, 5u);
+}
+
+TEST(NodeGraph, ZeroCopyNeedsFixedSizeTypesAndFittingChunks) {
+  Rig rig(FreeTransportProfile());
+  try {
+    rig.graph.AddTopic<int>({.name = "/var", .type = {"Var", 100, false}});
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("fixed-size"));
+    EXPECT_THAT(e.what(), HasSubstr("/var"));
+  }
+  EXPECT_NO_THROW(rig.graph.AddTopic<int>(
+      {.name = "/var_dds", .type = {"Var", 100, false}, .transport = Transport::kDds}));
+  try {
+    rig.graph.AddTopic<int>({.name = "/huge", .type = {"Huge", 4096, true}});
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("fits no shared-memory chunk"));
+  }
+}
+
+TEST(NodeGraph, ZeroCopyAllowsAtMost127SubscribersPerTopic) {
+  PlatformProfile profile = FreeTransportProfile();
+  Rig rig(profile);
+  auto topic = rig.graph.AddTopic<int>({.name = "/many", .type = {"I", 8, true}});
+  auto dds = rig.graph.AddTopic<int>(
+      {.name = "/many_dds", .type = {"I", 8, true}, .transport = Transport::kDds});
+  for (int i = 0; i < 127; ++i) {
+    const NodeId n = rig.graph.AddNode(
+        NodeSpec{.name = "s" + std::to_string(i), .cost = ComponentCost{.sw = SwCost{}}});
+    rig.graph.AddSubscription<int>(n, topic, [](const int&, Time, Outbox&) {});
+    rig.graph.AddSubscription<int>(n, dds, [](const int&, Time, Outbox&) {});
+  }
+  const NodeId extra =
+      rig.graph.AddNode(NodeSpec{.name = "extra", .cost = ComponentCost{.sw = SwCost{}}});
+  EXPECT_NO_THROW(rig.graph.AddSubscription<int>(extra, dds, [](const int&, Time, Outbox&) {}));
+  try {
+    rig.graph.AddSubscription<int>(extra, topic, [](const int&, Time, Outbox&) {});
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("at most 127 subscribers"));
+  }
+}
+
+TEST(NodeGraph, ANinthLoanIsACountedFailureNotASilentSend) {
+  Rig rig(FreeTransportProfile());
+  auto topic = rig.graph.AddTopic<int>({.name = "/burst", .type = {"I", 8, true}});
+  const NodeId burst = rig.graph.AddNode(NodeSpec{.name = "source"});
+  const PublisherId<int> pub = rig.graph.AddPublisher(burst, topic);
+  // Nine messages in one job: nine loans held at once before the job publishes.
+  rig.graph.AddTimer(burst, kZeroTime, std::chrono::seconds(1), [pub](Time now, Outbox& out) {
+    for (int i = 0; i < 9; ++i) out.Publish(pub, i, now);
+  });
+  std::vector<int> got;
+  const NodeId slow = rig.graph.AddNode(NodeSpec{.name = "slow"});
+  rig.graph.AddSubscription<int>(slow, topic,
+                                 [&got](const int& v, Time, Outbox&) { got.push_back(v); });
+  rig.kernel.RunUntil(milliseconds(300));
+  // The eight sent arrive at once: 0 is taken, depth 3 keeps 5, 6, 7; the ninth never left.
+  EXPECT_THAT(got, ElementsAre(0, 5, 6, 7));
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(300));
+  EXPECT_EQ(report.FindNode("source")->loan_failures, 1u);
+  EXPECT_EQ(report.FindTopic("/burst")->loan_failures, 1u);
+  EXPECT_EQ(report.FindTopic("/burst")->published, 8u);
+  EXPECT_EQ(report.FindNode("slow")->drops, 4u);
+  EXPECT_EQ(rig.graph.loans_held(pub.index), 0);
+}
+
+TEST(NodeGraph, ExhaustedMempoolIsACountedLoanFailure) {
+  PlatformProfile profile = FreeTransportProfile();
+  profile.zero_copy.mempools = {{.chunk_bytes = 64, .chunks = 2}};
+  profile.components["stuck"] = ComponentCost{.sw = SwCost{.work_s = 10.0}};
+  Rig rig(profile);
+  auto topic = rig.graph.AddTopic<int>({.name = "/t", .type = {"I", 8, true}, .depth = 5});
+  int next = 0;
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, topic, kZeroTime, milliseconds(10),
+                [&next](Time) { return next++; });
+  // The subscriber holds sample 0 in its (long) job and sample 1 in its queue: both chunks are in
+  // use, so the source's further loans fail until one comes back.
+  AddSinkNode(rig.graph, NodeSpec{.name = "stuck"}, topic);
+  rig.kernel.RunUntil(milliseconds(55));
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(55));
+  EXPECT_EQ(report.FindTopic("/t")->published, 2u);
+  EXPECT_EQ(report.FindNode("source")->loan_failures, 4u);  // ticks at 20, 30, 40, 50 ms
+  EXPECT_EQ(rig.platform.chunk_pools()->in_use(0), 2);
+}
+
+TEST(NodeGraph, ScenarioMappingAndTransportApplyByName) {
+  PlatformProfile profile = FreeTransportProfile(2);
+  profile.components["work"] =
+      ComponentCost{.sw = SwCost{.work_s = 0.030}, .hw = HwCost{.compute_s = 0.005}};
+  PlatformConfig config;
+  config.mapping["work"] = NodeMappingConfig{.target = "hw", .slot = 1};
+  config.transport["/in"] = TopicTransportConfig{.transport = "dds", .depth = 1};
+  Rig rig(profile);
+  rig.graph.ApplyConfig(config);
+  auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
+  auto out = rig.graph.AddTopic<int>({.name = "/out", .type = {"I", 8, true}});
+  EXPECT_EQ(rig.graph.topic_spec(in.index).transport, Transport::kDds);
+  EXPECT_EQ(rig.graph.topic_spec(in.index).depth, 1);
+  EXPECT_EQ(rig.graph.topic_spec(out.index).transport, Transport::kZeroCopy);
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, in, kZeroTime, milliseconds(100),
+                [](Time) { return 0; });
+  AddComponentNode(rig.graph, NodeSpec{.name = "work"}, in, out, DoubleParams{},
+                   std::make_shared<DoubleState>(), DoubleStep);
+  EXPECT_NO_THROW(rig.graph.CheckConfigUsed());
+  rig.kernel.RunUntil(milliseconds(50));
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(50));
+  EXPECT_EQ(report.FindNode("work")->mapping, "hw:slot1");
+  // hardware: 5 ms in the fabric + 16 bytes at 1 GB/s; the DDS take and publish of 8-byte
+  // messages cost nothing in this profile
+  EXPECT_NEAR(report.FindNode("work")->turnaround_ms.p50, 5.000016, 1e-6);
+
+  PlatformConfig typo;
+  typo.mapping["wrok"] = NodeMappingConfig{};
+  Rig other(profile);
+  other.graph.ApplyConfig(typo);
+  other.graph.AddNode(NodeSpec{.name = "work"});
+  try {
+    other.graph.CheckConfigUsed();
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("platform.mapping.wrok"));
+  }
+}
+
+TEST(NodeGraph, MappingErrorsAreConfigErrors) {
+  PlatformProfile profile = FreeTransportProfile();
+  profile.components["hw_only"] = ComponentCost{.hw = HwCost{.compute_s = 0.001}};
+  Rig rig(profile);
+  EXPECT_THROW(rig.graph.AddNode(NodeSpec{.name = "hw_only"}), ConfigError);  // no sw cost
+  EXPECT_THROW(rig.graph.AddNode(NodeSpec{.name = "missing"}), ConfigError);  // no cost at all
+  rig.graph.AddNode(
+      NodeSpec{.name = "a", .mapping = {.target = "hw", .slot = 0, .cost = "hw_only"}});
+  try {
+    rig.graph.AddNode(
+        NodeSpec{.name = "b", .mapping = {.target = "hw", .slot = 0, .cost = "hw_only"}});
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("already serves node 'a'"));
+  }
+  EXPECT_THROW(rig.graph.AddNode(NodeSpec{
+                   .name = "c", .mapping = {.target = "hw", .slot = 7, .cost = "hw_only"}}),
+               ConfigError);
+}
+
+// A small pipeline with jittered costs on 2 cores; returns every job's turnaround in order.
+std::vector<double> JitteredRun(std::uint64_t seed) {
+  PlatformProfile profile = FreeTransportProfile(2);
+  profile.components["slow"] =
+      ComponentCost{.sw = SwCost{.work_s = 0.020, .max_parallelism = 1.5, .jitter = 0.3}};
+  profile.components["other"] = ComponentCost{.sw = SwCost{.work_s = 0.015, .jitter = 0.2}};
+  RngStreams rng(seed);
+  Rig rig(profile, &rng);
+  auto a = rig.graph.AddTopic<int>({.name = "/a", .type = {"I", 8, true}});
+  auto b = rig.graph.AddTopic<int>({.name = "/b", .type = {"I", 8, true}});
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, a, kZeroTime, milliseconds(20),
+                [](Time) { return 1; });
+  AddComponentNode(rig.graph, NodeSpec{.name = "slow"}, a, b, DoubleParams{},
+                   std::make_shared<DoubleState>(), DoubleStep);
+  AddSinkNode(rig.graph, NodeSpec{.name = "other"}, b);
+  rig.kernel.RunUntil(std::chrono::seconds(2));
+  std::vector<double> all;
+  for (const auto& n : rig.metrics.nodes()) {
+    all.insert(all.end(), n.turnaround_ms.begin(), n.turnaround_ms.end());
+  }
+  return all;
+}
+
+TEST(NodeGraph, DeterministicWithThePlatformAndJitterOn) {
+  const std::vector<double> first = JitteredRun(7);
+  const std::vector<double> second = JitteredRun(7);
+  ASSERT_GT(first.size(), 150u);
+  EXPECT_EQ(first, second);  // bit for bit
+  EXPECT_NE(first, JitteredRun(8));
+}
+
+TEST(NodeMetrics, PercentilesAreNearestRank) {
+  const Stats s = ComputeStats({5, 1, 4, 2, 3, 10, 9, 8, 7, 6});
+  EXPECT_EQ(s.count, 10u);
+  EXPECT_EQ(s.min, 1);
+  EXPECT_EQ(s.p50, 5);
+  EXPECT_EQ(s.p95, 10);
+  EXPECT_EQ(s.max, 10);
+  EXPECT_EQ(ComputeStats({}).count, 0u);
+}
+
+TEST(Board, BuildsFromAScenarioConfigAndWritesNodesCsvTraceAndSummary) {
+  // The closed loop's way in: a board per car from the scenario's `platform:` section.
+  PlatformConfig config;
+  config.profile = "platforms/zcu104.yaml";
+  config.mapping["point_cloud"] = NodeMappingConfig{.target = "hw", .slot = 0};
+  config.transport["/points"] = TopicTransportConfig{.transport = "dds"};
+  Kernel kernel;
+  RngStreams rng(1);
+  Board board(kernel, "car0", config, "scenarios", &rng, milliseconds(500));
+  NodeGraph& graph = board.graph();
+  auto depth = graph.AddTopic<int>({.name = "/depth", .type = msg::Image640mono()});
+  auto points = graph.AddTopic<int>({.name = "/points", .type = msg::PointCloud640()});
+  AddSourceNode(graph, NodeSpec{.name = "camera", .mapping = {.cost = "camera_publisher"}}, depth,
+                kZeroTime, FromSeconds(1.0 / 30.0), [](Time) { return 0; });
+  AddComponentNode(graph, NodeSpec{.name = "point_cloud"}, depth, points, DoubleParams{},
+                   std::make_shared<DoubleState>(), DoubleStep);
+  AddSinkNode(graph, NodeSpec{.name = "obstacle_detection"}, points);
+  board.Finish();
+  kernel.RunUntil(std::chrono::seconds(3));
+
+  const BoardReport report = board.Report(std::chrono::seconds(3));
+  EXPECT_EQ(report.report.FindNode("point_cloud")->mapping, "hw:slot0");
+  EXPECT_NE(report.report.FindNode("nav2_controller"), nullptr);  // a background load
+  EXPECT_EQ(report.report.FindTopic("/points")->transport, "dds");
+  EXPECT_NEAR(report.report.FindTopic("/points")->rate_hz, 30.0, 0.5);
+  EXPECT_EQ(report.report.cpu_load_percent.size(), 3u);
+
+  const std::string csv = NodesCsv({report});
+  EXPECT_THAT(csv, ::testing::StartsWith("board,node,mapping,jobs,input_hz,rate_hz,"));
+  EXPECT_THAT(csv, HasSubstr("\ncar0,point_cloud,hw:slot0,"));
+
+  const nlohmann::json summary = ReportJson(report.report);
+  for (const char* key : {"cpu_percent", "cpu_demand_percent", "cpu_load_percent", "load_bin_s",
+                          "nodes", "topics", "window_s", "cores"}) {
+    EXPECT_TRUE(summary.contains(key)) << key;
+  }
+  EXPECT_TRUE(summary["nodes"][0]["turnaround_ms"].contains("p95"));
+
+  const nlohmann::json trace = nlohmann::json::parse(TraceJson({{"car0", &board.metrics()}}));
+  ASSERT_TRUE(trace["traceEvents"].is_array());
+  std::set<std::string> phases;
+  bool slot_span = false;
+  for (const auto& e : trace["traceEvents"]) {
+    phases.insert(e["ph"].get<std::string>());
+    ASSERT_TRUE(e.contains("pid"));
+    if (e["ph"] == "X") {
+      ASSERT_TRUE(e.contains("tid") && e.contains("ts") && e.contains("dur"));
+      EXPECT_GE(e["dur"].get<double>(), 0.0);
+      if (e["name"] == "point_cloud" && e["pid"] == 13) slot_span = true;  // car0's slots
+    }
+  }
+  EXPECT_EQ(phases, (std::set<std::string>{"M", "X", "C"}));
+  EXPECT_TRUE(slot_span);
+
+  PlatformConfig typo = config;
+  typo.transport["/pionts"] = TopicTransportConfig{};
+  Kernel other_kernel;
+  Board other(other_kernel, "car1", typo, "scenarios", &rng);
+  EXPECT_THROW(other.Finish(), ConfigError);
+  PlatformConfig missing;
+  missing.profile = "platforms/nope.yaml";
+  EXPECT_THROW(Board(other_kernel, "car2", missing, "scenarios", &rng), ConfigError);
+}
+
+// A subscription with its own cost (a callback that only keeps the message) costs that instead of
+// the node's: a 95 ms node takes a message on its caching subscription in 1 ms. Hand-computed:
+// frames at 0, 30, 60 ms each take 1 ms, one after the other, never queueing.
+TEST(NodeGraph, ACachingSubscriptionCostsItsOwnCost) {
+  Rig rig(FreeTransportProfile());
+  auto topic = rig.graph.AddTopic<int>({.name = "/frames", .type = {"Frame", 64, true}});
+  int next = 0;
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, topic, kZeroTime, milliseconds(30),
+                [&next](Time) { return next++; });
+  const NodeId slow = rig.graph.AddNode(NodeSpec{.name = "slow"});
+  std::vector<Time> taken_at;
+  rig.graph.AddSubscription<int>(
+      slow, topic, [&](const int&, Time, Outbox&) { taken_at.push_back(rig.kernel.Now()); },
+      SubscriptionOptions{.cost = SwCost{.work_s = 0.001}});
+  rig.kernel.RunUntil(milliseconds(70));
+  EXPECT_THAT(taken_at, ElementsAre(milliseconds(0), milliseconds(30), milliseconds(60)));
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(70));
+  const NodeReport* n = report.FindNode("slow");
+  ASSERT_NE(n, nullptr);
+  EXPECT_EQ(n->drops, 0u);
+  EXPECT_EQ(n->jobs, 3u);
+}
+
+TEST(NodeGraph, ACachingSubscriptionNeedsASoftwareNode) {
+  PlatformProfile profile = FreeTransportProfile();
+  profile.components["hw_node"] = ComponentCost{.hw = HwCost{.compute_s = 0.001}};
+  Rig rig(profile);
+  auto topic = rig.graph.AddTopic<int>({.name = "/frames", .type = {"Frame", 64, true}});
+  const NodeId node = rig.graph.AddNode(
+      NodeSpec{.name = "hw_node", .mapping = NodeMappingConfig{.target = "hw", .slot = 0}});
+  EXPECT_THROW(rig.graph.AddSubscription<int>(
+                   node, topic, [](const int&, Time, Outbox&) {},
+                   SubscriptionOptions{.cost = SwCost{.work_s = 0.001}}),
+               ConfigError);
+}
+
+// A background load stands in for the nodes it names: a graph that runs one of them gets no load.
+TEST(NodeGraph, ABackgroundLoadIsLeftOutWhereItsNodesRun) {
+  PlatformProfile profile = FreeTransportProfile();
+  profile.background = {{.name = "planning", .cpu_percent = 10.0, .replaced_by = {"slow"}},
+                        {.name = "drivers", .cpu_percent = 5.0, .replaced_by = {"other"}}};
+  Rig rig(profile);
+  rig.graph.AddNode(NodeSpec{.name = "slow"});
+  AddBackgroundLoads(rig.graph, rig.platform.profile(), kZeroTime);
+  EXPECT_FALSE(rig.graph.HasNode("planning"));
+  EXPECT_TRUE(rig.graph.HasNode("drivers"));
+}
+
+}  // namespace
+}  // namespace autonomsim::sim

@@ -1,0 +1,25 @@
+// The result folder of a run: summary.json, trajectory.csv, events.jsonl, track.png and the
+// resolved scenario. Written under a temporary name and renamed when complete, so a killed run
+// never leaves a folder that looks complete.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "sim/results/expectations.h"
+#include "sim/scenario/run_record.h"
+#include "sim/scenario/scenario.h"
+
+namespace autonomsim::sim {
+
+nlohmann::json Summary(const LoadedScenario& scenario, const RunRecord& record,
+                       const std::vector<ExpectationResult>& expectations, double wall_seconds);
+
+// Writes every file of the folder to `out_dir`, replacing a previous result there.
+void WriteRunFolder(const LoadedScenario& scenario, const RunRecord& record,
+                    const std::vector<ExpectationResult>& expectations, double wall_seconds,
+                    const std::filesystem::path& out_dir);
+
+}  // namespace autonomsim::sim

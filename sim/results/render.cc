@@ -1,0 +1,187 @@
+#include "sim/results/render.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <numbers>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "sim/core/files.h"
+#include "sim/loop/simulation.h"
+#include "world/floor_raster.h"
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+void WritePng(const fs::path& file, const cv::Mat& image) {
+  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+}
+
+template <std::size_t N>
+nlohmann::json Array(const std::array<double, N>& values) {
+  return nlohmann::json(std::vector<double>(values.begin(), values.end()));
+}
+
+bool Present(const ObstacleConfig& o, Time t) {
+  return FromSeconds(o.appear_s) <= t && !(o.disappear_s && FromSeconds(*o.disappear_s) <= t);
+}
+
+}  // namespace
+
+WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
+  if (t < kZeroTime || t > scenario.scenario.duration) {
+    throw std::invalid_argument("the instant " + std::to_string(ToSeconds(t)) +
+                                " s is outside the scenario's [0, " +
+                                std::to_string(ToSeconds(scenario.scenario.duration)) + "] s");
+  }
+  WorldSnapshot snapshot;
+  snapshot.t = t;
+  for (const ObstacleConfig& o : scenario.scenario.obstacles) {
+    if (!Present(o, t)) continue;
+    snapshot.obstacles.push_back(vehicle::ObstacleBox{
+        o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0}, o.length_m,
+        o.width_m, o.height_m});
+  }
+  std::vector<world::Pose2> poses = scenario.start_poses;
+  if (t > kZeroTime) {
+    LoadedScenario cut = scenario;
+    cut.scenario.duration = t;
+    cut.scenario.output.trajectory_period = t;  // samples at 0 and t
+    Simulation simulation(cut);
+    simulation.Run();
+    for (std::size_t i = 0; i < cut.scenario.cars.size(); ++i) {
+      const int id = cut.scenario.cars[i].id;
+      const auto sample = std::find_if(
+          simulation.record().trajectory.rbegin(), simulation.record().trajectory.rend(),
+          [&](const TrajectorySample& s) { return s.car == id && s.t == t; });
+      if (sample == simulation.record().trajectory.rend()) {
+        throw std::logic_error("SnapshotAt: no trajectory sample of car " + std::to_string(id) +
+                               " at the instant");
+      }
+      poses[i] = world::Pose2{sample->x_m, sample->y_m, sample->yaw_rad};
+    }
+  }
+  for (std::size_t i = 0; i < scenario.scenario.cars.size(); ++i) {
+    const CarConfig& car = scenario.scenario.cars[i];
+    snapshot.cars.push_back(
+        CarBody{car.id, poses[i], car.vehicle.length_m, car.vehicle.width_m, car.vehicle.height_m});
+  }
+  return snapshot;
+}
+
+std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
+                                          int car_id, const SensorSuiteParams& sensors,
+                                          const vehicle::SceneAppearance& appearance,
+                                          const RngStreams& streams) {
+  sensors.Validate();
+  appearance.Validate();
+  const auto self = std::find_if(snapshot.cars.begin(), snapshot.cars.end(),
+                                 [&](const CarBody& c) { return c.id == car_id; });
+  if (self == snapshot.cars.end()) {
+    throw std::invalid_argument("no car " + std::to_string(car_id) + " in the scenario");
+  }
+  const std::vector<vehicle::Prism> prisms =
+      ScenePrisms(snapshot.cars, snapshot.obstacles, appearance, car_id);
+  const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
+
+  std::vector<RenderedCamera> out;
+  for (const CameraStreamParams* stream : {&sensors.color_camera, &sensors.depth_camera}) {
+    const vehicle::CameraModel model(stream->camera);
+    vehicle::CameraRenderer renderer(std::make_shared<const vehicle::CameraRays>(model), floor,
+                                     appearance.surround());
+    RenderedCamera camera;
+    camera.name = stream->camera.name;
+    camera.topic = stream->topic;
+    camera.params = stream->camera;
+    camera.info = model.Info();
+    camera.X_map_camera = model.X_map_camera(self->pose);
+    renderer.Render(self->pose, prisms, &camera.color, &camera.depth);
+    const std::uint64_t seed =
+        streams.Stream("car" + std::to_string(car_id) + "/" + camera.name + "/render_noise")
+            .NextU64();
+    vehicle::AddCameraNoise(stream->noise, stream->camera, seed, &camera.color, &camera.depth);
+    out.push_back(std::move(camera));
+  }
+  return out;
+}
+
+nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) {
+  nlohmann::json X = nlohmann::json::array();
+  const Eigen::Matrix4d m = camera.X_map_camera.matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) X.push_back(m(r, c));
+  }
+  return {
+      {"camera", camera.name},
+      {"car", car_id},
+      {"t_s", ToSeconds(t)},
+      {"topic", camera.topic},
+      {"width", camera.info.width},
+      {"height", camera.info.height},
+      {"distortion_model", camera.info.distortion_model},
+      {"K", Array(camera.info.K)},
+      {"D", Array(camera.info.D)},
+      {"R", Array(camera.info.R)},
+      {"P", Array(camera.info.P)},
+      {"X_map_camera", X},
+      {"frames",
+       "map: x east, y north, z up; camera: optical, z forward, x right, y down; matrices "
+       "row-major"},
+      {"lens_distortion", camera.params.lens_distortion},
+      {"depth", "depth.png: uint16 millimetres of optical z (not ray length), 0 = no return"},
+      {"clip_near_m", camera.params.clip_near_m},
+      {"clip_far_m", camera.params.clip_far_m},
+  };
+}
+
+std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double near_m,
+                                       double far_m) {
+  cv::Mat grey(depth.height, depth.width, CV_8UC1);
+  const double near_mm = 1000.0 * near_m;
+  const double span_mm = 1000.0 * (far_m - near_m);
+  for (int v = 0; v < depth.height; ++v) {
+    for (int u = 0; u < depth.width; ++u) {
+      const std::uint16_t mm = depth.mm[static_cast<std::size_t>(v) * depth.width + u];
+      // TURBO runs blue (0) to red (255): near is red
+      const double f = std::clamp((mm - near_mm) / span_mm, 0.0, 1.0);
+      grey.at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - f)));
+    }
+  }
+  cv::Mat colour;
+  cv::applyColorMap(grey, colour, cv::COLORMAP_TURBO);
+  std::vector<std::uint8_t> bgr(colour.data, colour.data + colour.total() * 3);
+  for (std::size_t i = 0; i < depth.mm.size(); ++i) {
+    if (depth.mm[i] == 0) std::fill_n(bgr.begin() + static_cast<std::ptrdiff_t>(3 * i), 3, 0);
+  }
+  return bgr;
+}
+
+void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
+                       const fs::path& out_dir) {
+  WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
+    for (const RenderedCamera& camera : cameras) {
+      const fs::path dir = partial / camera.name;
+      fs::create_directory(dir);
+      // OpenCV only reads through the Mats: the const_casts lend it our buffers
+      WritePng(dir / "color.png", cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
+                                          const_cast<std::uint8_t*>(camera.color.bgr.data())));
+      WritePng(dir / "depth.png", cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
+                                          const_cast<std::uint16_t*>(camera.depth.mm.data())));
+      std::vector<std::uint8_t> preview =
+          DepthPreview(camera.depth, camera.params.clip_near_m, camera.params.clip_far_m);
+      WritePng(dir / "depth_preview.png",
+               cv::Mat(camera.depth.height, camera.depth.width, CV_8UC3, preview.data()));
+      WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
+    }
+  });
+}
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,73 @@
+// `autonomsim render SCENARIO --car ID --at T --out DIR`: what one car's cameras see at one
+// instant of a scenario, written as DIR/<camera name>/{color.png, depth.png, depth_preview.png,
+// camera_info.json}.
+//
+// The world at T comes from running the scenario's closed loop up to T. The seam is WorldSnapshot,
+// a plain struct: anything that can say where the cars are and which obstacles stand at T can
+// feed the renderer (today SnapshotAt below; later a Simulation accessor).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "sim/car/sensors.h"
+#include "sim/core/random.h"
+#include "sim/scenario/scenario.h"
+#include "vehicle/camera_model.h"
+#include "vehicle/ray_caster.h"
+#include "world/time.h"
+#include "world/track.h"
+
+namespace autonomsim::sim {
+
+// The world at one instant, as the cameras need it.
+struct WorldSnapshot {
+  Time t{};
+  std::vector<CarBody> cars;                    // every car: id, pose, body size
+  std::vector<vehicle::ObstacleBox> obstacles;  // those present at t
+};
+
+// Runs `scenario` from 0 to t (0 <= t <= its duration; std::invalid_argument otherwise) and
+// returns the world at t, exactly as the full run has it then. Until Simulation offers RunUntil
+// and a read-only view of its world, this runs the scenario with its duration cut to t and one
+// trajectory sample at t: the sample is taken at t before the (skipped) physics step of t, and
+// nothing before t depends on the duration or the sampling period.
+WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t);
+
+// One camera's picture.
+struct RenderedCamera {
+  std::string name;
+  std::string topic;
+  vehicle::CameraParams params;
+  vehicle::CameraInfo info;
+  Eigen::Isometry3d X_map_camera{Eigen::Isometry3d::Identity()};  // optical frame
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+};
+
+// Renders every camera of `sensors` on car `car_id` in the snapshot (the car's own body is left
+// out). Noise follows each camera's noise params, seeded from the stream
+// "car<id>/<camera name>/render_noise". std::invalid_argument if the car is not in the snapshot.
+std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
+                                          int car_id, const SensorSuiteParams& sensors,
+                                          const vehicle::SceneAppearance& appearance,
+                                          const RngStreams& streams);
+
+// camera_info.json: width, height, distortion_model, K, D, R, P (row-major) as the camera
+// publishes them, and X_map_camera (4×4 row-major, optical frame: z forward, x right, y down).
+nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id);
+
+// The depth image in false colour over the camera's clip range (near: red, far: blue); no return
+// is black. BGR8, row-major.
+std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double near_m,
+                                       double far_m);
+
+// Writes the folder (under a temporary name, renamed when complete; a previous folder there is
+// replaced). std::runtime_error if a file cannot be written.
+void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
+                       const std::filesystem::path& out_dir);
+
+}  // namespace autonomsim::sim

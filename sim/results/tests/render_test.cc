@@ -1,0 +1,138 @@
+// The render command's logic: the world at T is the full run's world at T, and the folder holds
+// what the cameras saw, as files that read back exactly.
+#include "sim/results/render.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "sim/loop/simulation.h"
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kObstacleScenario = "scenarios/static_obstacle.yaml";
+
+bool BitIdentical(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(RenderTest, TheSnapshotIsTheFullRunsWorldAtThatInstant) {
+  const LoadedScenario scenario = LoadScenario(kObstacleScenario);
+  const RunRecord full = RunScenario(scenario);
+  for (const double t_s : {3.0, 12.0, 13.35}) {
+    const Time t = FromSeconds(t_s);
+    const WorldSnapshot snapshot = SnapshotAt(scenario, t);
+    ASSERT_EQ(snapshot.cars.size(), 2u);
+    for (const CarBody& car : snapshot.cars) {
+      const auto sample =
+          std::find_if(full.trajectory.begin(), full.trajectory.end(),
+                       [&](const TrajectorySample& s) { return s.t == t && s.car == car.id; });
+      ASSERT_NE(sample, full.trajectory.end());
+      EXPECT_TRUE(BitIdentical(car.pose.x_m, sample->x_m)) << t_s << " s, car " << car.id;
+      EXPECT_TRUE(BitIdentical(car.pose.y_m, sample->y_m)) << t_s << " s, car " << car.id;
+      EXPECT_TRUE(BitIdentical(car.pose.yaw_rad, sample->yaw_rad)) << t_s << " s, car " << car.id;
+    }
+    // the box stands from 5 s to 25 s
+    EXPECT_EQ(snapshot.obstacles.size(), t_s >= 5.0 ? 1u : 0u) << t_s;
+  }
+  EXPECT_EQ(SnapshotAt(scenario, FromSeconds(25.0)).obstacles.size(), 0u);
+  // at 0: the start poses, no simulation needed
+  const WorldSnapshot start = SnapshotAt(scenario, kZeroTime);
+  EXPECT_EQ(start.cars[0].pose.x_m, scenario.start_poses[0].x_m);
+  EXPECT_THROW(SnapshotAt(scenario, FromSeconds(91.0)), std::invalid_argument);
+  EXPECT_THROW(SnapshotAt(scenario, FromSeconds(-1.0)), std::invalid_argument);
+}
+
+TEST(RenderTest, TheObstacleAheadShowsInBothCameras) {
+  // at 13 s car 1 slows for the box ahead of it on the inner lane
+  const LoadedScenario scenario = LoadScenario(kObstacleScenario);
+  const WorldSnapshot snapshot = SnapshotAt(scenario, FromSeconds(13.0));
+  WorldSnapshot without = snapshot;
+  without.obstacles.clear();
+  const RngStreams streams(scenario.scenario.seed);
+  const SensorSuiteParams sensors;
+  const vehicle::SceneAppearance appearance;
+  const auto with_box = RenderCameras(scenario.track, snapshot, 1, sensors, appearance, streams);
+  const auto no_box = RenderCameras(scenario.track, without, 1, sensors, appearance, streams);
+  ASSERT_EQ(with_box.size(), 2u);
+  EXPECT_EQ(with_box[0].name, "color_camera");
+  EXPECT_EQ(with_box[1].name, "depth_camera");
+  for (std::size_t c = 0; c < 2; ++c) {
+    int nearer = 0;
+    for (std::size_t i = 0; i < with_box[c].depth.mm.size(); ++i) {
+      const std::uint16_t a = with_box[c].depth.mm[i];
+      const std::uint16_t b = no_box[c].depth.mm[i];
+      if (a != b) {
+        EXPECT_TRUE(b == 0 || (a != 0 && a < b)) << with_box[c].name << " pixel " << i;
+        ++nearer;
+      }
+    }
+    EXPECT_GT(nearer, 2000) << with_box[c].name;
+  }
+  EXPECT_THROW(RenderCameras(scenario.track, snapshot, 5, sensors, appearance, streams),
+               std::invalid_argument);
+}
+
+TEST(RenderTest, TheFolderHoldsEachCamerasFilesAndTheyReadBack) {
+  const LoadedScenario scenario = LoadScenario(kObstacleScenario);
+  const Time t = FromSeconds(12.0);
+  const WorldSnapshot snapshot = SnapshotAt(scenario, t);
+  const auto cameras = RenderCameras(scenario.track, snapshot, 1, SensorSuiteParams{},
+                                     vehicle::SceneAppearance{}, RngStreams(1));
+  const fs::path out = fs::temp_directory_path() / ("render_test_" + std::to_string(::getpid()));
+  WriteRenderFolder(cameras, t, 1, out);
+  for (const RenderedCamera& camera : cameras) {
+    const fs::path dir = out / camera.name;
+    for (const char* file : {"color.png", "depth.png", "depth_preview.png", "camera_info.json"}) {
+      EXPECT_TRUE(fs::exists(dir / file)) << dir / file;
+    }
+    const cv::Mat depth = cv::imread((dir / "depth.png").string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(depth.type(), CV_16UC1);
+    ASSERT_EQ(depth.cols, 640);
+    ASSERT_EQ(depth.rows, 480);
+    EXPECT_EQ(std::memcmp(depth.data, camera.depth.mm.data(), camera.depth.mm.size() * 2), 0);
+    const cv::Mat color = cv::imread((dir / "color.png").string(), cv::IMREAD_COLOR);
+    ASSERT_EQ(color.type(), CV_8UC3);
+    EXPECT_EQ(std::memcmp(color.data, camera.color.bgr.data(), camera.color.bgr.size()), 0);
+
+    std::ifstream in(dir / "camera_info.json");
+    const nlohmann::json info = nlohmann::json::parse(in);
+    EXPECT_EQ(info["width"], 640);
+    EXPECT_EQ(info["height"], 480);
+    EXPECT_EQ(info["K"].size(), 9u);
+    EXPECT_EQ(info["D"].size(), 5u);
+    EXPECT_EQ(info["P"].size(), 12u);
+    EXPECT_EQ(info["P"].get<std::vector<double>>(),
+              std::vector<double>(camera.info.P.begin(), camera.info.P.end()));
+    ASSERT_EQ(info["X_map_camera"].size(), 16u);
+    const auto car = std::find_if(snapshot.cars.begin(), snapshot.cars.end(),
+                                  [](const CarBody& c) { return c.id == 1; });
+    const Eigen::Matrix4d expected =
+        vehicle::CameraModel(camera.params).X_map_camera(car->pose).matrix();
+    for (int k = 0; k < 16; ++k) {
+      EXPECT_EQ(info["X_map_camera"][static_cast<std::size_t>(k)].get<double>(),
+                expected(k / 4, k % 4));
+    }
+  }
+  fs::remove_all(out);
+}
+
+TEST(RenderTest, TheDepthPreviewIsBlackWithoutReturnAndRedNear) {
+  vehicle::DepthImage depth;
+  depth.width = 3;
+  depth.height = 1;
+  depth.mm = {0, 600, 8000};
+  const std::vector<std::uint8_t> bgr = DepthPreview(depth, 0.6, 8.0);
+  ASSERT_EQ(bgr.size(), 9u);
+  EXPECT_EQ(bgr[0] + bgr[1] + bgr[2], 0);
+  EXPECT_GT(bgr[5], bgr[3]);  // near: more red than blue
+  EXPECT_GT(bgr[6], bgr[8]);  // far: more blue than red
+}
+
+}  // namespace
+}  // namespace autonomsim::sim

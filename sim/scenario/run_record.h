@@ -1,0 +1,120 @@
+// What a run leaves behind, in memory: the events, the trajectory samples and the per-car
+// metrics, and their canonical text and hash. Outputs (sim/results/outputs.h) and expectations
+// (sim/results/expectations.h) read only this.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/platform/node_metrics.h"
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// One line of events.jsonl. Types: request, free (a car sent them), grant, denied (a car received
+// the server's answer), enter, exit (ground truth: the car's chassis centre entered or left an
+// intersection area; `granted` says whether the server held the intersection for it then),
+// collision, lap, parked, obstacle_appear, obstacle_disappear, v2i_lost, v2i_malformed.
+struct Event {
+  Time t{0};
+  std::string type;
+  int car{-1};
+  int intersection{-1};
+  int other_car{-1};
+  std::string obstacle;
+  std::optional<bool> granted;
+  int lap{0};
+  std::string detail;
+};
+
+struct TrajectorySample {
+  Time t{0};
+  int car{0};
+  double x_m{0.0};
+  double y_m{0.0};
+  double yaw_rad{0.0};
+  double speed_mps{0.0};
+  double steering_rad{0.0};
+  double throttle{0.0};
+  double curvature_cmd_per_m{0.0};
+  double lateral_error_m{0.0};
+  double route_progress_m{0.0};
+};
+
+// What a car's perception saw, against ground truth (cars with perception only).
+struct PerceptionMetrics {
+  std::uint64_t lane_frames{0};        // lane detection results
+  std::uint64_t lane_valid_frames{0};  // of them, valid
+  // The detected lane centre 0.5 m ahead against the route's lane centre: its distance from it,
+  // over the valid results that reach 0.5 m.
+  std::uint64_t lane_error_samples{0};
+  double lane_error_max_m{0.0};
+  double lane_error_rms_m{0.0};
+  std::uint64_t grid_frames{0};           // obstacle grids
+  std::uint64_t grid_obstacle_frames{0};  // of them, with a cell the costmap layer marks lethal
+};
+
+// What the stack did (driver: stack).
+struct StackMetrics {
+  std::uint64_t control_cycles{0};      // controller server cycles that drove (not held)
+  std::uint64_t follow_path_cycles{0};  // of which FollowPath (inside stop boxes/intersections)
+  std::uint64_t collision_cycles{0};    // of which saw a collision ahead and stopped
+  int recoveries{0};                    // clear costmaps, wait, retry
+  bool navigation_failed{false};        // retries exhausted
+  // The EKF's map-frame position against the true chassis centre, at each estimate.
+  double max_localization_error_m{0.0};
+  double final_localization_error_m{0.0};
+};
+
+struct CarMetrics {
+  int id{0};
+  std::string route;
+  double route_length_m{0.0};
+  int laps{0};
+  std::vector<double> lap_times_s;  // sim time at which each lap completed
+  int collisions{0};
+  double max_lateral_error_m{0.0};
+  double rms_lateral_error_m{0.0};
+  double distance_m{0.0};
+  double mean_speed_mps{0.0};
+  int intersection_entries{0};  // times the chassis centre entered an intersection area
+  int waits{0};                 // times the car stopped in a stop zone until granted
+  double total_wait_s{0.0};
+  double max_wait_s{0.0};
+  // Ground truth: the least free distance between the car's footprint and a present obstacle,
+  // over the run (only obstacles within kObstacleGapHorizon_m count; nullopt if none came near).
+  std::optional<double> min_obstacle_gap_m;
+  std::optional<PerceptionMetrics> perception;
+  std::optional<StackMetrics> stack;
+};
+
+inline constexpr double kObstacleGapHorizon_m = 2.0;
+
+struct RunRecord {
+  Duration sim_duration{0};
+  std::uint64_t kernel_events{0};
+  std::vector<Event> events;
+  std::vector<TrajectorySample> trajectory;
+  std::vector<CarMetrics> cars;
+  struct ServerCounters {
+    std::uint64_t requests{0}, grants{0}, denials{0}, frees{0}, lease_expiries{0}, malformed{0};
+  } server;
+  struct LinkCounters {
+    std::uint64_t sent{0}, delivered{0}, lost{0};
+  } v2i;
+  // The cars' compute boards (those that have one): per-node and platform metrics, and the
+  // Chrome trace of their jobs (empty when no board records one).
+  std::vector<BoardReport> boards;
+  std::string trace_json;
+};
+
+// The record's canonical text: the run folder's trajectory.csv and events.jsonl.
+std::string TrajectoryCsv(const RunRecord& record);
+std::string EventsJsonl(const RunRecord& record);
+// SHA-256 over trajectory.csv, events.jsonl and (with boards) nodes.csv: equal hashes mean
+// bit-identical results (summary.json's result_sha256).
+std::string ResultSha256(const RunRecord& record);
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,263 @@
+#include "sim/scenario/scenario.h"
+
+#include <cmath>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <variant>
+
+#include "sim/core/hash.h"
+#include "sim/core/track_loader.h"
+#include "world/validation.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// A ConfigError located at `path` of the scenario file (line and column when the key is there).
+[[noreturn]] void FailAt(const YAML::Node& root, const ConfigSource& source,
+                         const std::vector<std::variant<std::string, std::size_t>>& keys,
+                         const std::string& message) {
+  YAML::Node node;
+  node.reset(root);
+  std::string path;
+  for (const auto& key : keys) {
+    YAML::Node child;
+    if (std::holds_alternative<std::string>(key)) {
+      path = detail::JoinPath(path, std::get<std::string>(key));
+      if (node.IsMap() && node[std::get<std::string>(key)])
+        child = node[std::get<std::string>(key)];
+    } else {
+      path = detail::JoinIndex(path, std::get<std::size_t>(key));
+      if (node.IsSequence() && std::get<std::size_t>(key) < node.size()) {
+        child = node[std::get<std::size_t>(key)];
+      }
+    }
+    if (!child.IsDefined() || child.IsNull()) break;
+    node.reset(child);
+  }
+  detail::Fail(node, path, source, message);
+}
+
+}  // namespace
+
+void CarConfig::Validate() const {
+  Require(id >= 0 && id <= 9,
+          "id must be a single digit 0..9 (the /vtl/ protocol sends one character), got " +
+              std::to_string(id));
+  Require(route.has_value() != lanes.has_value(), "give exactly one of route or lanes");
+  Require(!(start.has_value() && start_s_m.has_value()), "give at most one of start or start_s_m");
+  Require(!laps || *laps >= 1, "laps must be >= 1, got " + std::to_string(laps.value_or(0)));
+  Require(driver == "oracle" || driver == "stack",
+          "driver must be 'oracle' (ground-truth lane following) or 'stack' (the AutonomROS "
+          "stack on the car's board), got '" +
+              driver + "'");
+  Require(driver != "stack" || perception.enabled,
+          "driver 'stack' drives on the perception nodes' lanes and obstacles: set "
+          "perception.enabled: true");
+}
+
+void ObstacleConfig::Validate() const {
+  Require(!name.empty(), "obstacle needs a name");
+  Require(length_m > 0 && width_m > 0 && height_m > 0,
+          "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " + Num(width_m) +
+              ", " + Num(height_m));
+  Require(appear_s >= 0.0, "appear_s must be >= 0, got " + Num(appear_s));
+  Require(!disappear_s || *disappear_s > appear_s,
+          "disappear_s must be after appear_s, got " + Num(disappear_s.value_or(0.0)));
+}
+
+void V2IConfig::Validate() const {
+  Require(link == "embedded" || link == "mqtt",
+          "link must be 'embedded' or 'mqtt', got '" + link + "'");
+  Require(latency >= kZeroTime, "latency_s must be >= 0");
+  Require(jitter >= kZeroTime, "jitter_s must be >= 0");
+  Require(loss >= 0.0 && loss < 1.0, "loss must be in [0, 1), got " + Num(loss));
+}
+
+void OutputConfig::Validate() const {
+  Require(trajectory_period > kZeroTime, "trajectory_period_s must be > 0");
+}
+
+std::string ExpectClause::kind() const {
+  if (no_collision) return "no_collision";
+  if (intersection_mutex) return "intersection_mutex";
+  if (no_entry_without_grant) return "no_entry_without_grant";
+  if (completes) return "completes";
+  if (max_lateral_error) return "max_lateral_error";
+  if (node_rate) return "node_rate";
+  if (cpu_demand) return "cpu_demand";
+  return "min_obstacle_gap";
+}
+
+const ExpectArgs& ExpectClause::args() const {
+  for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
+                           &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand}) {
+    if (args->has_value()) return **args;
+  }
+  throw std::logic_error("ExpectClause::args on an empty clause");
+}
+
+void ExpectClause::Validate() const {
+  const int count = no_collision.has_value() + intersection_mutex.has_value() +
+                    no_entry_without_grant.has_value() + completes.has_value() +
+                    max_lateral_error.has_value() + min_obstacle_gap.has_value() +
+                    node_rate.has_value() + cpu_demand.has_value();
+  Require(count == 1,
+          "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
+          "got " +
+              std::to_string(count));
+  const std::string k = kind();
+  const ExpectArgs& a = args();
+  auto forbid = [&](bool present, const char* key) {
+    Require(!present, "'" + k + "' takes no key '" + key + "'");
+  };
+  forbid(k == "intersection_mutex" && a.car.has_value(), "car");
+  forbid(k != "completes" && a.laps.has_value(), "laps");
+  forbid(k != "completes" && a.within_s.has_value(), "within_s");
+  forbid(k != "max_lateral_error" && a.max_m.has_value(), "max_m");
+  forbid(k != "min_obstacle_gap" && a.min_m.has_value(), "min_m");
+  forbid(k != "node_rate" && a.node.has_value(), "node");
+  forbid(k != "node_rate" && a.min_hz.has_value(), "min_hz");
+  forbid(k != "node_rate" && a.max_hz.has_value(), "max_hz");
+  forbid(k != "cpu_demand" && a.min_percent.has_value(), "min_percent");
+  forbid(k != "cpu_demand" && a.max_percent.has_value(), "max_percent");
+  if (k == "node_rate") {
+    Require(a.car.has_value() && a.node.has_value(), "node_rate needs car and node");
+    Require(a.min_hz.has_value() || a.max_hz.has_value(), "node_rate needs min_hz or max_hz");
+  }
+  if (k == "cpu_demand") {
+    Require(a.car.has_value(), "cpu_demand needs car");
+    Require(a.min_percent.has_value() || a.max_percent.has_value(),
+            "cpu_demand needs min_percent or max_percent");
+  }
+  if (k == "completes") {
+    Require(a.laps.has_value() && *a.laps >= 1, "completes needs laps >= 1");
+    Require(!a.within_s || *a.within_s > 0.0, "within_s must be > 0");
+  }
+  if (k == "max_lateral_error") {
+    Require(a.max_m.has_value() && *a.max_m > 0.0, "max_lateral_error needs max_m > 0");
+  }
+  if (k == "min_obstacle_gap") {
+    Require(a.min_m.has_value() && *a.min_m >= 0.0, "min_obstacle_gap needs min_m >= 0");
+  }
+}
+
+void Scenario::Validate() const {
+  Require(duration > kZeroTime && duration <= std::chrono::hours(24),
+          "duration_s must be in (0, 86400] s, got " + Num(ToSeconds(duration)));
+  Require(!cars.empty(), "cars must not be empty");
+  std::set<int> ids;
+  for (const CarConfig& car : cars) {
+    Require(ids.insert(car.id).second, "duplicate car id " + std::to_string(car.id));
+  }
+  std::set<std::string> names;
+  for (const ObstacleConfig& obstacle : obstacles) {
+    Require(names.insert(obstacle.name).second, "duplicate obstacle name '" + obstacle.name + "'");
+  }
+}
+
+LoadedScenario LoadScenario(const std::filesystem::path& file,
+                            const std::vector<std::string>& overrides,
+                            std::optional<std::uint64_t> seed) {
+  YAML::Node root = LoadYamlFile(file);
+  ConfigSource source{file.string(), {}};
+  for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
+  if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
+
+  Scenario scenario = ReadConfig<Scenario>(root, source);
+  if (scenario.name.empty()) scenario.name = file.stem().string();
+
+  const std::filesystem::path track_file = file.parent_path() / scenario.track;
+  world::Track track = LoadTrack(track_file);
+
+  std::vector<world::Route> routes;
+  std::vector<double> start_s;
+  std::vector<world::Pose2> start_poses;
+  std::vector<std::optional<PlatformProfile>> profiles;
+  std::set<int> car_ids;
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const CarConfig& car = scenario.cars[i];
+    car_ids.insert(car.id);
+    world::Route route;
+    try {
+      route = car.route ? track.RouteByName(*car.route)
+                        : world::MakeRoute(track.road_graph(), "car" + std::to_string(car.id),
+                                           *car.lanes);
+    } catch (const std::invalid_argument& e) {
+      FailAt(root, source, {"cars", i, car.route ? "route" : "lanes"}, e.what());
+    }
+    const world::Polyline& path = route.path;
+    double s = 0.0;
+    world::Pose2 pose;
+    if (car.start) {
+      const std::optional<world::Pose2> named = track.StartPose(*car.start);
+      if (!named)
+        FailAt(root, source, {"cars", i, "start"}, "unknown start pose '" + *car.start + "'");
+      const world::Polyline::Projection on = path.Project(named->position());
+      const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
+      if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
+        FailAt(root, source, {"cars", i, "start"},
+               "start pose '" + *car.start + "' is not on route (" + Num(on.distance_m) +
+                   " m away, heading off by " + Num(heading_error * 180 / std::numbers::pi) +
+                   " deg)");
+      }
+      s = on.s_m;
+      pose = *named;
+    } else {
+      s = car.start_s_m.value_or(0.0);
+      if (s < 0.0 || s >= path.length_m()) {
+        FailAt(root, source, {"cars", i, "start_s_m"},
+               "start_s_m must be in [0, " + Num(path.length_m()) +
+                   ") m (the route's length), got " + Num(s));
+      }
+      const world::Vec2 p = path.PointAt(s);
+      pose = world::Pose2{p.x(), p.y(), path.HeadingAt(s)};
+    }
+    try {
+      stack::ValidateAgainstLease(car.intersection_client, scenario.traffic_lights.lease);
+    } catch (const std::invalid_argument& e) {
+      FailAt(root, source, {"cars", i, "intersection_client"}, e.what());
+    }
+    if (car.laps && !route.cyclic) {
+      FailAt(root, source, {"cars", i, "laps"}, "laps needs a route that is a loop");
+    }
+    if (car.has_board()) {
+      const std::filesystem::path profile_file = file.parent_path() / car.platform.profile;
+      try {
+        profiles.push_back(LoadPlatformProfile(profile_file));
+      } catch (const ConfigError& e) {
+        FailAt(root, source, {"cars", i, "platform", "profile"}, e.what());
+      }
+    } else {
+      profiles.emplace_back();
+    }
+    routes.push_back(std::move(route));
+    start_s.push_back(s);
+    start_poses.push_back(pose);
+  }
+  for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
+    const ExpectArgs& args = scenario.expect[i].args();
+    if (args.car && car_ids.count(*args.car) == 0) {
+      FailAt(root, source, {"expect", i}, "no car with id " + std::to_string(*args.car));
+    }
+  }
+
+  nlohmann::json resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(track.spec())}};
+  for (std::size_t i = 0; i < profiles.size(); ++i) {  // a board's profile is part of the run
+    if (profiles[i]) {
+      resolved["platforms"]["car" + std::to_string(scenario.cars[i].id)] = ToJson(*profiles[i]);
+    }
+  }
+  const std::string sha = Sha256Hex(resolved.dump());
+  return LoadedScenario{file,
+                        std::move(scenario),
+                        std::move(track),
+                        std::move(routes),
+                        std::move(start_s),
+                        std::move(start_poses),
+                        std::move(profiles),
+                        sha,
+                        std::move(resolved)};
+}
+
+}  // namespace autonomsim::sim

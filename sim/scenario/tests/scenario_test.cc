@@ -1,0 +1,232 @@
+// The scenario loader: a valid file resolves; broken files and overrides fail with messages that
+// name the file, the line and the key.
+#include "sim/scenario/scenario.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// Scenario files written into scenarios/ (so that `track: tracks/lab.yaml` resolves as it does for
+// users), removed again when the test ends.
+class ScenarioFile {
+ public:
+  ScenarioFile(const std::string& name, const std::string& text)
+      : path_(fs::path("scenarios") / (".test_" + name + ".yaml")) {
+    std::ofstream(path_) << text;
+  }
+  ~ScenarioFile() { fs::remove(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+const char* kValid = R"(name: valid
+seed: 3
+duration_s: 10
+track: tracks/lab.yaml
+cars:
+  - id: 0
+    route: south_loop
+    start: real_car
+  - id: 1
+    route: inner_loop
+    start_s_m: 2.0
+expect:
+  - no_collision:
+  - completes: {car: 0, laps: 1}
+)";
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) throw std::logic_error("test fixture: '" + from + "' not found");
+  return text.replace(at, from.size(), to);
+}
+
+TEST(ScenarioTest, AValidFileResolvesRoutesStartsAndHash) {
+  ScenarioFile file("valid", kValid);
+  const LoadedScenario loaded = LoadScenario(file.path());
+  EXPECT_EQ(loaded.scenario.name, "valid");
+  EXPECT_EQ(loaded.scenario.seed, 3u);
+  ASSERT_EQ(loaded.routes.size(), 2u);
+  EXPECT_EQ(loaded.routes[0].name, "south_loop");
+  EXPECT_TRUE(loaded.routes[1].cyclic);
+  EXPECT_NEAR(loaded.start_poses[0].x_m, 0.96, 1e-12);  // the named pose, reference §1
+  EXPECT_NEAR(loaded.start_s_m[1], 2.0, 1e-12);
+  EXPECT_EQ(loaded.sha256.size(), 64u);
+  // every default is in the resolved form
+  EXPECT_TRUE(loaded.resolved["scenario"]["cars"][0]["vehicle"].contains("mass_kg"));
+  EXPECT_DOUBLE_EQ(loaded.resolved["scenario"]["v2i"]["latency_s"].get<double>(), 0.02);
+}
+
+TEST(ScenarioTest, TheHashFollowsTheResolvedScenarioNotTheText) {
+  ScenarioFile a("hash_a", kValid);
+  // the same scenario with a comment and a default spelled out
+  ScenarioFile b("hash_b", std::string("# a comment\n") +
+                               Replace(kValid, "seed: 3", "seed: 3\nphysics: {step_s: 0.002}"));
+  ScenarioFile c("hash_c", Replace(kValid, "seed: 3", "seed: 4"));
+  EXPECT_EQ(LoadScenario(a.path()).sha256, LoadScenario(b.path()).sha256);
+  EXPECT_NE(LoadScenario(a.path()).sha256, LoadScenario(c.path()).sha256);
+  EXPECT_EQ(LoadScenario(a.path(), {}, 4).sha256, LoadScenario(c.path()).sha256);
+}
+
+TEST(ScenarioTest, OverridesReachAnyField) {
+  ScenarioFile file("overrides", kValid);
+  const LoadedScenario loaded = LoadScenario(
+      file.path(),
+      {"cars[1].oracle.speed_mps=0.3", "cars.0.laps=2", "v2i.loss=0.1", "duration_s=20"});
+  EXPECT_DOUBLE_EQ(loaded.scenario.cars[1].oracle.speed_mps, 0.3);
+  EXPECT_EQ(loaded.scenario.cars[0].laps, 2);
+  EXPECT_DOUBLE_EQ(loaded.scenario.v2i.loss, 0.1);
+  EXPECT_EQ(loaded.scenario.duration, std::chrono::seconds(20));
+}
+
+struct BrokenCase {
+  std::string name;
+  std::string text;
+  std::vector<std::string> overrides;
+  std::vector<std::string> expected;  // substrings of the error message
+};
+
+class BrokenScenarioTest : public ::testing::TestWithParam<BrokenCase> {};
+
+TEST_P(BrokenScenarioTest, FailsNamingFileLineAndKey) {
+  const BrokenCase& c = GetParam();
+  ScenarioFile file(c.name, c.text);
+  try {
+    LoadScenario(file.path(), c.overrides);
+    FAIL() << "loaded a broken scenario";
+  } catch (const ConfigError& e) {
+    for (const std::string& part : c.expected) {
+      EXPECT_THAT(e.what(), HasSubstr(part));
+    }
+  }
+}
+
+std::string F(const std::string& name) { return "scenarios/.test_" + name + ".yaml"; }
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenario, BrokenScenarioTest,
+    ::testing::Values(
+        BrokenCase{"unknown_key",
+                   Replace(kValid, "duration_s: 10", "durration_s: 10"),
+                   {},
+                   {F("unknown_key") + ":3:1: durration_s: unknown key 'durration_s'",
+                    "did you mean 'duration_s'?"}},
+        BrokenCase{"wrong_type",
+                   Replace(kValid, "duration_s: 10", "duration_s: fast"),
+                   {},
+                   {F("wrong_type") + ":3:13: duration_s: expected a number, got 'fast'"}},
+        BrokenCase{"negative_duration",
+                   Replace(kValid, "duration_s: 10", "duration_s: -5"),
+                   {},
+                   {F("negative_duration") + ":1:1:", "duration_s must be in (0, 86400]"}},
+        BrokenCase{"car_id",
+                   Replace(kValid, "id: 1", "id: 12"),
+                   {},
+                   {F("car_id") + ":9:5: cars[1]: id must be a single digit"}},
+        BrokenCase{"duplicate_car", Replace(kValid, "id: 1", "id: 0"), {}, {"duplicate car id 0"}},
+        BrokenCase{"unknown_route",
+                   Replace(kValid, "route: inner_loop", "route: figure_nine"),
+                   {},
+                   {F("unknown_route") + ":10:12: cars[1].route:", "figure_nine", "south_loop"}},
+        BrokenCase{"lanes_disconnected",
+                   Replace(kValid, "route: inner_loop", "lanes: [outer_south, middle_west]"),
+                   {},
+                   {"cars[1].lanes:", "outer_south", "middle_west"}},
+        BrokenCase{"start_off_route",
+                   Replace(kValid, "start: real_car", "start: inner_north"),
+                   {},
+                   {F("start_off_route") + ":8:12: cars[0].start:", "is not on route"}},
+        BrokenCase{"start_beyond_route",
+                   Replace(kValid, "start_s_m: 2.0", "start_s_m: 99"),
+                   {},
+                   {"cars[1].start_s_m: start_s_m must be in [0, "}},
+        BrokenCase{"route_and_lanes",
+                   Replace(kValid, "route: inner_loop", "route: inner_loop\n    lanes: [inner]"),
+                   {},
+                   {"cars[1]: give exactly one of route or lanes"}},
+        BrokenCase{"loss",
+                   Replace(kValid, "seed: 3", "seed: 3\nv2i: {loss: 1.5}"),
+                   {},
+                   {F("loss") + ":3:6: v2i: loss must be in [0, 1), got 1.5"}},
+        BrokenCase{"expect_kind",
+                   Replace(kValid, "- no_collision:", "- no_colision:"),
+                   {},
+                   {F("expect_kind") + ":13:5: expect[0].no_colision: unknown key",
+                    "did you mean 'no_collision'?"}},
+        BrokenCase{"expect_argument",
+                   Replace(kValid, "- no_collision:", "- no_collision: {laps: 3}"),
+                   {},
+                   {"expect[0]: 'no_collision' takes no key 'laps'"}},
+        BrokenCase{"expect_two_kinds",
+                   Replace(kValid, "- no_collision:", "- {no_collision: , intersection_mutex: }"),
+                   {},
+                   {"expect[0]: an expect entry names exactly one expectation"}},
+        BrokenCase{"expect_unknown_car",
+                   Replace(kValid, "{car: 0, laps: 1}", "{car: 5, laps: 1}"),
+                   {},
+                   {"expect[1]: no car with id 5"}},
+        BrokenCase{"obstacle_times",
+                   std::string(kValid) + "obstacles:\n  - {name: b, appear_s: 5, disappear_s: 2}\n",
+                   {},
+                   {"obstacles[0]: disappear_s must be after appear_s"}},
+        BrokenCase{"no_cars", "name: empty\ncars: []\n", {}, {"cars must not be empty"}},
+        BrokenCase{"yaml_syntax",
+                   Replace(kValid, "seed: 3", "seed: [3"),
+                   {},
+                   {F("yaml_syntax") + ":", "YAML syntax error"}},
+        BrokenCase{"missing_track",
+                   Replace(kValid, "tracks/lab.yaml", "tracks/nope.yaml"),
+                   {},
+                   {"scenarios/tracks/nope.yaml: cannot open file"}},
+        BrokenCase{
+            "set_unknown_key",
+            kValid,
+            {"cars[0].oracle.sped_mps=1"},
+            {"--set cars[0].oracle.sped_mps: unknown key 'sped_mps'", "did you mean 'speed_mps'?"}},
+        BrokenCase{"set_bad_value",
+                   kValid,
+                   {"cars[0].laps=many"},
+                   {"--set cars[0].laps: expected an integer"}},
+        BrokenCase{"set_index",
+                   kValid,
+                   {"cars[7].laps=1"},
+                   {"--set cars[7].laps: index 7 is out of range"}},
+        BrokenCase{"set_syntax", kValid, {"cars[0].laps"}, {"expected key=value"}},
+        BrokenCase{"driver_unknown",
+                   kValid,
+                   {"cars[0].driver=autopilot"},
+                   {"--set cars[0].driver", "driver must be 'oracle'", "or 'stack'"}},
+        BrokenCase{"stack_without_perception",
+                   kValid,
+                   {"cars[0].driver=stack"},
+                   {"cars[0]", "set perception.enabled: true"}}),
+    [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
+
+TEST(ScenarioTest, AMissingFileIsAnError) {
+  EXPECT_THROW(LoadScenario("scenarios/does_not_exist.yaml"), ConfigError);
+}
+
+TEST(ScenarioTest, EveryShippedScenarioLoads) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator("scenarios")) {
+    if (entry.path().extension() != ".yaml" || entry.path().filename().string()[0] == '.') {
+      continue;
+    }
+    EXPECT_NO_THROW(LoadScenario(entry.path())) << entry.path();
+    ++count;
+  }
+  EXPECT_GE(count, 3);
+}
+
+}  // namespace
+}  // namespace autonomsim::sim

@@ -1,0 +1,342 @@
+// Sweeps: --vary parsing, grid order, shards, the results table, study files, plots, and small
+// real sweeps (resume, --jobs and sharding do not change results.csv).
+#include "sim/study/sweep.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "sim/core/config.h"
+#include "sim/core/parallel.h"
+#include "sim/study/sweep_plots.h"
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+std::vector<std::string> Labels(const VaryAxis& axis) {
+  std::vector<std::string> out;
+  for (const VaryValue& v : axis.values) out.push_back(v.label);
+  return out;
+}
+
+std::string ReadText(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A fresh folder under the build's temporary directory, removed at the end of the test.
+struct TempDir {
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("autonomsim_sweep_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  fs::path path;
+};
+
+TEST(Sweep, VaryTakesAListOrARange) {
+  EXPECT_THAT(Labels(ParseVary("cars[0].sensors.color_camera.rate_hz=10,15,30")),
+              ElementsAre("10", "15", "30"));
+  const VaryAxis range = ParseVary("v2i.latency_s=0:2:5");
+  EXPECT_EQ(range.key, "v2i.latency_s");
+  EXPECT_THAT(Labels(range), ElementsAre("0", "0.5", "1", "1.5", "2"));
+  EXPECT_THAT(Labels(ParseVary("x=0.1:0.3:3")), ElementsAre("0.1", "0.2", "0.3"));
+  EXPECT_THAT(Labels(ParseVary("x=3:3:1")), ElementsAre("3"));
+  // YAML flow values stay whole: commas inside {} and [] do not split
+  const VaryAxis maps = ParseVary("cars[0].platform.mapping={lane_detection: {target: sw}}, {}");
+  EXPECT_THAT(Labels(maps), ElementsAre("{lane_detection: {target: sw}}", "{}"));
+  EXPECT_THAT(Labels(ParseVary("k=[1, 2],[3]")), ElementsAre("[1, 2]", "[3]"));
+
+  for (const std::string bad :
+       {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2", "x=a:1:3"}) {
+    try {
+      ParseVary(bad);
+      FAIL() << "expected a ConfigError for " << bad;
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(bad)) << "the message names the spec";
+    }
+  }
+}
+
+TEST(Sweep, TheGridIsTheProductWithTheLastAxisFastestAndRepeatsInnermost) {
+  SweepSpec spec;
+  spec.axes = {ParseVary("a=1,2"), ParseVary("b=x,y,z")};
+  spec.repeat = 2;
+  const std::vector<SweepPoint> grid = ExpandGrid(spec);
+  ASSERT_EQ(grid.size(), 12u);
+  std::size_t index = 0;
+  for (std::size_t a = 0; a < 2; ++a) {
+    for (std::size_t b = 0; b < 3; ++b) {
+      for (int r = 0; r < 2; ++r, ++index) {
+        EXPECT_EQ(grid[index].index, index);
+        EXPECT_THAT(grid[index].value_index, ElementsAre(a, b));
+        EXPECT_EQ(grid[index].repeat, r);
+      }
+    }
+  }
+  spec.overrides = {"duration_s=5"};
+  EXPECT_THAT(PointOverrides(spec, grid[7]), ElementsAre("duration_s=5", "a=2", "b=x"));
+
+  SweepSpec empty;  // no --vary: one run
+  EXPECT_EQ(ExpandGrid(empty).size(), 1u);
+}
+
+TEST(Sweep, ShardsPartitionTheGrid) {
+  for (int n = 1; n <= 5; ++n) {
+    std::multiset<std::size_t> seen;
+    for (int k = 1; k <= n; ++k) {
+      for (std::size_t i = 0; i < 23; ++i) {
+        if (InShard(i, Shard{k, n})) seen.insert(i);
+      }
+    }
+    ASSERT_EQ(seen.size(), 23u) << n;
+    for (std::size_t i = 0; i < 23; ++i) EXPECT_EQ(seen.count(i), 1u);
+  }
+  const Shard s = ParseShard("3/4");
+  EXPECT_EQ(s.k, 3);
+  EXPECT_EQ(s.n, 4);
+  for (const std::string bad : {"0/4", "5/4", "1", "a/b", "1/0", "2/3x"}) {
+    EXPECT_THROW(ParseShard(bad), ConfigError) << bad;
+  }
+}
+
+nlohmann::json FakeSummary(double error_m, int laps, bool with_board) {
+  nlohmann::json car = {{"id", 0},
+                        {"laps", laps},
+                        {"lap_times_s", std::vector<double>(static_cast<std::size_t>(laps), 0.0)},
+                        {"collisions", 0},
+                        {"max_lateral_error_m", error_m},
+                        {"rms_lateral_error_m", error_m / 2},
+                        {"min_obstacle_gap_m", nullptr}};
+  if (laps > 0) car["lap_times_s"].back() = 30.0 * laps;
+  nlohmann::json s = {{"passed", true}, {"cars", {car}}};
+  if (with_board) {
+    s["platform"]["car0"] = {
+        {"cpu_percent", 150.0},
+        {"cpu_demand_percent", 160.0},
+        {"topics",
+         {{{"name", "/carcontrol/command"}, {"latency_ms", {{"p50", 40.0}, {"p99", 90.0}}}}}},
+        {"nodes",
+         {{{"name", "poly_fit"},
+           {"rate_hz", 30.0},
+           {"turnaround_ms", {{"p50", 9.5}}},
+           {"cpu_percent", 2.0}}}}};
+  }
+  return s;
+}
+
+TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
+  const std::vector<PointRecord> points = {
+      {.index = 2, .run_id = "cc", .labels = {"2", "a,b"}, .repeat = 0, .seed = 42},
+      {.index = 0, .run_id = "aa", .labels = {"0", "plain"}, .repeat = 0, .seed = 42},
+      {.index = 1, .run_id = "bb", .labels = {"1", "say \"hi\""}, .repeat = 1, .seed = 43}};
+  const std::vector<nlohmann::json> summaries = {
+      FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false), FakeSummary(0.2, 0, false)};
+  const ResultsTable table = BuildResultsTable({"v2i.latency_s", "label"}, points, summaries);
+  ASSERT_EQ(table.rows.size(), 3u);
+  EXPECT_THAT(std::vector<std::string>(table.columns.begin(), table.columns.begin() + 6),
+              ElementsAre("index", "run_id", "v2i.latency_s", "label", "repeat", "seed"));
+  const auto col = [&](const std::string& name) { return *table.Column(name); };
+  EXPECT_EQ(table.rows[0][col("run_id")], "aa");
+  EXPECT_EQ(table.rows[1][col("run_id")], "bb");
+  EXPECT_EQ(table.rows[2][col("run_id")], "cc");
+  EXPECT_EQ(table.rows[1][col("seed")], "43");
+  EXPECT_EQ(table.rows[0][col("car0.max_lateral_error_m")], "0.1");
+  EXPECT_EQ(table.rows[2][col("car0.rms_lateral_error_m")], "0.15");
+  EXPECT_EQ(table.rows[0][col("car0.mean_lap_time_s")], "30");   // 90 s for 3 laps
+  EXPECT_EQ(table.rows[1][col("car0.mean_lap_time_s")], "");     // no lap
+  EXPECT_EQ(table.rows[0][col("car0.min_obstacle_gap_m")], "");  // none came near
+  // board columns exist for the run that has a board, and are empty for the others
+  EXPECT_EQ(table.rows[2][col("car0.e2e_latency_p99_ms")], "90");
+  EXPECT_EQ(table.rows[2][col("car0.poly_fit.turnaround_p50_ms")], "9.5");
+  EXPECT_EQ(table.rows[0][col("car0.poly_fit.rate_hz")], "");
+  // CSV: fields with commas or quotes are quoted
+  const std::string csv = table.Csv();
+  EXPECT_THAT(csv, HasSubstr(",\"a,b\","));
+  EXPECT_THAT(csv, HasSubstr(",\"say \"\"hi\"\"\","));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
+}
+
+TEST(Sweep, AStudyFileGivesTheScenarioSetRepeatAndVary) {
+  TempDir dir;
+  std::ofstream(dir.path / "study.yaml") << R"(
+scenario: ../scenarios/x.yaml
+description: test
+set: [duration_s=5]
+repeat: 2
+vary:
+  - key: cars[0].platform.mapping
+    values:
+      all_hw: {}
+      lane_sw: {lane_detection: {target: sw}}
+  - key: v2i.latency_s
+    range: [0, 1, 3]
+  - v2i.loss=0,0.1
+)";
+  EXPECT_TRUE(IsStudyFile(dir.path / "study.yaml"));
+  EXPECT_FALSE(IsStudyFile("scenarios/lab_two_cars.yaml"));
+  const SweepSpec spec = LoadStudy(dir.path / "study.yaml");
+  EXPECT_EQ(spec.scenario, (dir.path / "../scenarios/x.yaml").lexically_normal());
+  EXPECT_THAT(spec.overrides, ElementsAre("duration_s=5"));
+  EXPECT_EQ(spec.repeat, 2);
+  ASSERT_EQ(spec.axes.size(), 3u);
+  EXPECT_THAT(Labels(spec.axes[0]), ElementsAre("all_hw", "lane_sw"));
+  EXPECT_EQ(spec.axes[0].values[1].yaml, "{lane_detection: {target: sw}}");
+  EXPECT_THAT(Labels(spec.axes[1]), ElementsAre("0", "0.5", "1"));
+  EXPECT_THAT(Labels(spec.axes[2]), ElementsAre("0", "0.1"));
+  EXPECT_EQ(SweepSpec::FromJson(spec.ToJson()).ToJson(), spec.ToJson());
+
+  // without vary: one point, `repeat` seeds of it
+  std::ofstream(dir.path / "seeds.yaml") << "scenario: x.yaml\nrepeat: 5\n";
+  EXPECT_TRUE(IsStudyFile(dir.path / "seeds.yaml"));
+  const SweepSpec seeds = LoadStudy(dir.path / "seeds.yaml");
+  EXPECT_TRUE(seeds.axes.empty());
+  EXPECT_EQ(seeds.repeat, 5);
+  EXPECT_EQ(ExpandGrid(seeds).size(), 5u);
+
+  std::ofstream(dir.path / "bad.yaml") << "scenario: x.yaml\nvary: []\nrepat: 2\n";
+  try {
+    LoadStudy(dir.path / "bad.yaml");
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bad.yaml:3:1: unknown key 'repat'"));
+  }
+}
+
+TEST(Sweep, ParallelForRunsEveryIndexOnce) {
+  std::vector<int> hits(1000, 0);
+  ParallelFor(hits.size(), 4, [&](std::size_t i) { ++hits[i]; });
+  EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), 1000);
+  ParallelFor(0, 4, [&](std::size_t) { FAIL(); });
+}
+
+TEST(SweepPlots, TicksAreNiceAndCoverTheRange) {
+  EXPECT_THAT(NiceTicks(0.0, 1.0, 5), ElementsAre(0.0, 0.2, 0.4, 0.6000000000000001, 0.8, 1.0));
+  const std::vector<double> t = NiceTicks(3.0, 97.0);
+  EXPECT_LE(t.front(), 3.0);
+  EXPECT_GE(t.back(), 97.0);
+  EXPECT_EQ(t[1] - t[0], 20.0);
+}
+
+TEST(SweepPlots, APlotHasDataAxesAndTextOnAWhiteBackground) {
+  PlotSpec spec{.title = "lateral error vs latency",
+                .x_label = "v2i.latency_s",
+                .y_label = "max_lateral_error_m",
+                .series = {PlotSeries{.label = "car0", .x = {0, 1, 2}, .y = {0.1, 0.3, 0.2}}},
+                .categories = {},
+                .log_x = false};
+  const cv::Mat image = DrawPlot(spec);
+  ASSERT_EQ(image.type(), CV_8UC3);
+  int coloured = 0, dark = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+      if (p[0] > 150 && p[2] < 80) ++coloured;          // the first palette colour (blue)
+      if (p[0] < 90 && p[1] < 90 && p[2] < 90) ++dark;  // text and the frame
+    }
+  }
+  EXPECT_GT(coloured, 200);
+  EXPECT_GT(dark, 2000);
+}
+
+// ---- Real sweeps on the oracle scenario (no board: fast) ----
+
+SweepSpec TinySweep() {
+  SweepSpec spec;
+  spec.scenario = "scenarios/lab_two_cars_oracle.yaml";
+  spec.overrides = {"duration_s=3"};
+  spec.axes = {ParseVary("cars[0].oracle.speed_mps=0.3,0.5"), ParseVary("v2i.latency_s=0,1")};
+  return spec;
+}
+
+TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
+  TempDir dir;
+  const SweepSpec spec = TinySweep();
+  SweepOptions one{
+      .out_dir = dir.path / "one", .jobs = 1, .shard = {}, .plots = true, .progress = {}};
+  const SweepSummary first = RunSweep(spec, one);
+  EXPECT_EQ(first.grid_points, 4u);
+  EXPECT_EQ(first.ran, 4u);
+  EXPECT_TRUE(first.failures.empty());
+  const std::string table = ReadText(dir.path / "one" / "results.csv");
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);
+  EXPECT_TRUE(fs::exists(dir.path / "one" / "plots" / "max_lateral_error_m_vs_v2i_latency_s.png"));
+
+  // resumed: nothing is redone, the table is the same
+  const SweepSummary again = RunSweep(spec, one);
+  EXPECT_EQ(again.ran, 0u);
+  EXPECT_EQ(again.already_done, 4u);
+  EXPECT_EQ(ReadText(dir.path / "one" / "results.csv"), table);
+
+  // a run folder removed is run again
+  std::string some_id;
+  for (const auto& e : fs::directory_iterator(dir.path / "one" / "runs")) {
+    some_id = e.path().filename().string();
+  }
+  fs::remove_all(dir.path / "one" / "runs" / some_id);
+  EXPECT_EQ(RunSweep(spec, one).ran, 1u);
+  EXPECT_EQ(ReadText(dir.path / "one" / "results.csv"), table);
+
+  // two threads; two shards merged
+  SweepOptions two = one;
+  two.out_dir = dir.path / "two";
+  two.jobs = 2;
+  two.plots = false;
+  RunSweep(spec, two);
+  EXPECT_EQ(ReadText(dir.path / "two" / "results.csv"), table);
+  SweepOptions shard1 = two, shard2 = two;
+  shard1.out_dir = dir.path / "s1";
+  shard1.shard = {1, 2};
+  shard2.out_dir = dir.path / "s2";
+  shard2.shard = {2, 2};
+  EXPECT_EQ(RunSweep(spec, shard1).selected, 2u);
+  EXPECT_EQ(RunSweep(spec, shard2).selected, 2u);
+  EXPECT_EQ(MergeSweeps({dir.path / "s1", dir.path / "s2"}, dir.path / "merged", false), 0u);
+  EXPECT_EQ(ReadText(dir.path / "merged" / "results.csv"), table);
+  // one shard alone is incomplete, and says so
+  EXPECT_EQ(MergeSweeps({dir.path / "s1"}, dir.path / "half", false), 2u);
+}
+
+TEST(SweepRun, UnusableInputStopsTheSweepBeforeAnyRunNamingTheKey) {
+  TempDir dir;
+  SweepSpec spec = TinySweep();
+  spec.axes.push_back(ParseVary("v2i.latnecy_s=0,1"));
+  try {
+    RunSweep(
+        spec,
+        SweepOptions{.out_dir = dir.path, .jobs = 2, .shard = {}, .plots = false, .progress = {}});
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("latnecy_s"));
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "runs"));
+
+  // a different sweep's folder cannot be merged in
+  SweepSpec a = TinySweep(), b = TinySweep();
+  b.axes.pop_back();
+  RunSweep(
+      a,
+      SweepOptions{
+          .out_dir = dir.path / "a", .jobs = 2, .shard = {1, 4}, .plots = false, .progress = {}});
+  RunSweep(
+      b,
+      SweepOptions{
+          .out_dir = dir.path / "b", .jobs = 2, .shard = {1, 4}, .plots = false, .progress = {}});
+  EXPECT_THROW(MergeSweeps({dir.path / "a", dir.path / "b"}, dir.path / "m", false), ConfigError);
+}
+
+}  // namespace
+}  // namespace autonomsim::sim

@@ -1,0 +1,74 @@
+#include "sim/v2i/traffic_light_node.h"
+
+#include <stdexcept>
+#include <type_traits>
+
+#include "sim/core/priorities.h"
+
+namespace autonomsim::sim {
+
+TrafficLightNode::TrafficLightNode(Kernel* kernel, std::unique_ptr<TrafficLightEndpoint> endpoint,
+                                   EventSink sink)
+    : kernel_(kernel), endpoint_(std::move(endpoint)), sink_(std::move(sink)) {
+  if (endpoint_ == nullptr) throw std::logic_error("TrafficLightNode: no endpoint");
+}
+
+TrafficLightNode::TrafficLightNode(Kernel* kernel, const world::TrafficLightServerParams& params,
+                                   std::vector<int> intersection_ids, EventSink sink)
+    : TrafficLightNode(
+          kernel,
+          std::make_unique<EmbeddedTrafficLightEndpoint>(params, std::move(intersection_ids)),
+          std::move(sink)) {}
+
+void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message) {
+  const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
+  if (!decoded) {
+    ++malformed_;
+    sink_(Event{.t = kernel_->Now(),
+                .type = "v2i_malformed",
+                .car = from_car,
+                .detail = message.topic + " '" + message.payload + "': " + decoded.error()});
+    return;
+  }
+  const Time now = kernel_->Now();
+  std::vector<world::Response> responses;
+  std::visit(
+      [&](const auto& payload) {
+        using T = std::decay_t<decltype(payload)>;
+        if constexpr (std::is_same_v<T, world::Request>) {
+          responses = endpoint_->OnRequest(now, payload);
+        } else if constexpr (std::is_same_v<T, world::Free>) {
+          responses = endpoint_->OnFree(now, payload);
+        } else {
+          // A response sent to the server is not for it: count it as malformed traffic.
+          ++malformed_;
+          sink_(Event{.t = now,
+                      .type = "v2i_malformed",
+                      .car = from_car,
+                      .detail = "a response was sent to the server"});
+        }
+      },
+      decoded.value());
+  Publish(responses);
+  RescheduleTick();
+}
+
+void TrafficLightNode::Publish(const std::vector<world::Response>& responses) {
+  if (link_ == nullptr) throw std::logic_error("TrafficLightNode: no V2I link set");
+  for (const world::Response& response : responses) link_->Broadcast(world::ToMessage(response));
+}
+
+void TrafficLightNode::RescheduleTick() {
+  kernel_->Cancel(tick_);
+  const std::optional<Time> deadline = endpoint_->NextDeadline();
+  if (!deadline) return;
+  tick_ = kernel_->ScheduleAt(
+      std::max(*deadline, kernel_->Now()),
+      [this] {
+        Publish(endpoint_->OnTick(kernel_->Now()));
+        RescheduleTick();
+      },
+      kPriorityServer);
+}
+
+}  // namespace autonomsim::sim
