@@ -1,0 +1,145 @@
+#include <algorithm>
+
+#include "sim/loop/simulation_impl.h"
+
+namespace autonomsim::sim {
+
+using detail::CarAgent;
+using detail::kRecentFrames;
+
+std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const PlatformProfile& profile,
+                                                   SensorSuite* suite) {
+  const CarConfig& config = *agent->config;
+  const std::string name = "car" + std::to_string(config.id);
+  auto board = std::make_unique<Board>(kernel, name, config.platform, profile, &streams);
+  NodeGraph& graph = board->graph();
+  // The camera drivers: each publishes its frames, captured at its stream's instants.
+  const auto camera_topic = [&](const SensorStream& stream) {
+    return graph.AddTopic<CameraFrame>(
+        {.name = stream.topic, .type = MessageType{stream.type.name, stream.type.bytes, true}});
+  };
+  const NodeMappingConfig camera_cost{.cost = "camera_publisher"};
+  const SensorStream& color = suite->color_stream();
+  const SensorStream& depth = suite->depth_stream();
+  const TopicId<CameraFrame> image = camera_topic(color);
+  const TopicId<CameraFrame> depth_image = camera_topic(depth);
+  AddSourceNode(
+      graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
+      image, color.first, color.period, [suite, agent](Time) {
+        CameraFrame frame = suite->CaptureColorFrame();
+        agent->color_frames.emplace_back(frame.stamp, frame.X_map_car);
+        if (agent->color_frames.size() > kRecentFrames) agent->color_frames.pop_front();
+        return frame;
+      });
+  AddSourceNode(
+      graph, NodeSpec{.name = suite->depth_camera().params().camera.name, .mapping = camera_cost},
+      depth_image, depth.first, depth.period, [suite](Time) { return suite->CaptureDepthFrame(); });
+
+  if (config.perception.enabled) {
+    agent->metrics.perception.emplace();
+    PerceptionHooks hooks{
+        .on_grid = [this, agent](const stack::Grid234& grid, Time) { JudgeGrid(agent, grid); },
+        .on_lanes = [this, agent](const stack::LanePoints& lanes,
+                                  Time stamp) { JudgeLanes(agent, lanes, stamp); }};
+    const PerceptionTopics topics =
+        AddPerceptionNodes(graph, config.perception, config.platform.mapping, *suite, image,
+                           depth_image, std::move(hooks));
+    if (config.drives_by_stack()) AddStack(agent, suite, topics, &graph);
+  }
+  board->Finish(kZeroTime);
+  return board;
+}
+
+void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
+                                const PerceptionTopics& perception, NodeGraph* graph) {
+  const CarConfig& config = *agent->config;
+  const int id = config.id;
+  agent->metrics.stack.emplace();
+  // the map the car is given (its planner's), built once per resolution for all cars
+  std::unique_ptr<world::OccupancyMap>& static_map =
+      static_maps[config.stack.global_costmap.resolution_m];
+  if (!static_map) {
+    static_map = std::make_unique<world::OccupancyMap>(
+        world::BuildStaticMap(loaded.track, config.stack.global_costmap.resolution_m));
+  }
+  const StackContext context{
+      .route = &agent->route->path,
+      .intersections = &loaded.track.spec().intersections,
+      .static_map = static_map.get(),
+      .obstacle_grid = &config.perception.obstacle_grid,
+      .X_map_odom = agent->car->pose(),  // the start pose
+      .intersection_client_period = config.intersection_client.tick_period,
+      .true_pose = [agent] { return agent->car->pose(); },
+      .pose_fix_noise = streams.Stream("car" + std::to_string(id) + "/pose_fix/noise")};
+  StackHooks hooks{
+      .intersection_client = [this, agent](const world::Vec2& p) { return StepClient(agent, p); },
+      .actuate =
+          [agent](const vehicle::ActuatorCommand& command) {
+            agent->command = command;
+            agent->car->SetCommand(command);
+          },
+      .mission_done = [agent] { return agent->parked; },
+      .on_behavior =
+          [this, agent, id](const stack::BehaviorOutput& out) {
+            StackMetrics& m = *agent->metrics.stack;
+            if (out.clear_costmaps) ++m.recoveries;
+            if (out.mode == stack::BehaviorMode::kFailed) m.navigation_failed = true;
+            if (out.mode != agent->behavior_mode) {
+              agent->behavior_mode = out.mode;
+              Emit(Event{.t = kernel.Now(),
+                         .type = "behavior",
+                         .car = id,
+                         .detail = std::string(stack::ToString(out.mode)) +
+                                   (out.mode == stack::BehaviorMode::kRecovery
+                                        ? " (retry " + std::to_string(out.retries) + ")"
+                                        : "")});
+            }
+          },
+      .on_estimate =
+          [agent](const stack::LocalizationEkfOutput& estimate) {
+            StackMetrics& m = *agent->metrics.stack;
+            const double error =
+                (estimate.X_map_base.position() - agent->car->pose().position()).norm();
+            m.max_localization_error_m = std::max(m.max_localization_error_m, error);
+            m.final_localization_error_m = error;
+          },
+      .on_control =
+          [agent](bool follow_path, bool collision) {
+            StackMetrics& m = *agent->metrics.stack;
+            ++m.control_cycles;
+            if (follow_path) ++m.follow_path_cycles;
+            if (collision) ++m.collision_cycles;
+          }};
+  AddStackNodes(*graph, kernel, config.stack, *suite, perception, context, std::move(hooks));
+}
+
+void Simulation::Impl::JudgeGrid(CarAgent* agent, const stack::Grid234& grid) {
+  PerceptionMetrics& m = *agent->metrics.perception;
+  ++m.grid_frames;
+  const int lethal_above = stack::ObstacleLayerParams{}.lethal_above_count;
+  for (int i = 0; i < stack::Grid234::kCells; ++i) {
+    if (grid.data[static_cast<std::size_t>(i)] > lethal_above) {
+      ++m.grid_obstacle_frames;
+      break;
+    }
+  }
+}
+
+void Simulation::Impl::JudgeLanes(CarAgent* agent, const stack::LanePoints& lanes, Time stamp) {
+  PerceptionMetrics& m = *agent->metrics.perception;
+  ++m.lane_frames;
+  if (lanes.valid == 0) return;
+  ++m.lane_valid_frames;
+  // the car's pose when the frame was taken
+  const auto frame = std::find_if(agent->color_frames.rbegin(), agent->color_frames.rend(),
+                                  [stamp](const auto& f) { return f.first == stamp; });
+  if (frame == agent->color_frames.rend()) return;
+  const std::optional<double> error =
+      LaneDetectionError(lane_judge, loaded.track, agent->route->path, frame->second, lanes);
+  if (!error) return;
+  m.lane_error_max_m = std::max(m.lane_error_max_m, *error);
+  agent->lane_error_sq_sum += *error * *error;
+  ++m.lane_error_samples;
+}
+
+}  // namespace autonomsim::sim
