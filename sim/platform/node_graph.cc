@@ -260,55 +260,72 @@ void NodeGraph::Kick(int node) {
 
 void NodeGraph::StartJob(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
+  const NextWork work = OldestWork(n);
+  if (work.timer < 0 && work.subscription < 0) return;
+  // the functional result, now; then the loans its outputs take, then what the job costs
+  n.job.emplace(this);
+  Job& job = *n.job;
+  job.start = kernel_.Now();
+  const TakenInput in = TakeInput(work, &job);
+  const std::int64_t out_bytes = LoanOutputs(n, &job);
+  CostJob(n, in, out_bytes, &job);
+  if (job.take_core_s > 0.0) {
+    platform_.cpu().Start(Owner(node), job.take_core_s, 1.0, [this, node] { RunCompute(node); });
+  } else {
+    RunCompute(node);
+  }
+}
+
+NodeGraph::NextWork NodeGraph::OldestWork(const Node& n) const {
   // The oldest pending work first; at equal times timers before subscriptions, each in the order
   // they were added.
-  int timer = -1;
-  int subscription = -1;
+  NextWork work;
   Time oldest = Time::max();
   for (int t : n.timers) {
     const Timer& tm = timers_[static_cast<std::size_t>(t)];
     if (tm.pending && tm.fired_at < oldest) {
       oldest = tm.fired_at;
-      timer = t;
+      work.timer = t;
     }
   }
   for (int s : n.subscriptions) {
     const Subscription& sub = subscriptions_[static_cast<std::size_t>(s)];
     if (!sub.queue.empty() && sub.queue.front().arrival < oldest) {
       oldest = sub.queue.front().arrival;
-      subscription = s;
-      timer = -1;
+      work.subscription = s;
+      work.timer = -1;
     }
   }
-  if (timer < 0 && subscription < 0) return;
+  return work;
+}
 
-  n.job.emplace(this);
-  Job& job = *n.job;
-  job.start = kernel_.Now();
-  std::int64_t in_bytes = 0;
-  const SwCost* callback_cost = nullptr;
-  if (subscription >= 0) {
-    Subscription& sub = subscriptions_[static_cast<std::size_t>(subscription)];
+NodeGraph::TakenInput NodeGraph::TakeInput(const NextWork& work, Job* job) {
+  TakenInput in;
+  if (work.subscription >= 0) {
+    Subscription& sub = subscriptions_[static_cast<std::size_t>(work.subscription)];
     if (sub.cost) {
-      callback_cost = &*sub.cost;
-      job.own_cost = true;
+      in.callback_cost = &*sub.cost;
+      job->own_cost = true;
     }
-    job.input = std::move(sub.queue.front().message);
+    job->input = std::move(sub.queue.front().message);
     sub.queue.pop_front();
-    in_bytes = job.input->bytes;
+    in.bytes = job->input->bytes;
     const Topic& topic = topics_[static_cast<std::size_t>(sub.topic)];
-    job.take_core_s = CostOf(topic, in_bytes, sub.loaned).take_core_s;
-    sub.handler(*job.input, job.out);  // the functional result, now
+    job->take_core_s = CostOf(topic, in.bytes, sub.loaned).take_core_s;
+    sub.handler(*job->input, job->out);
   } else {
-    Timer& tm = timers_[static_cast<std::size_t>(timer)];
+    Timer& tm = timers_[static_cast<std::size_t>(work.timer)];
     tm.pending = false;
-    tm.handler(tm.fired_at, job.out);
+    tm.handler(tm.fired_at, job->out);
   }
+  return in;
+}
 
+std::int64_t NodeGraph::LoanOutputs(const Node& n, Job* job) {
   // Zero-copy outputs are loaned now (as the real nodes borrow before they compute); a loan that
   // fails (the publisher's loan limit, or no free chunk) is counted and its message is not sent.
   std::int64_t out_bytes = 0;
-  for (Outbox::Pending& p : job.out.pending_) {
+  for (Outbox::Pending& p : job->out.pending_) {
     Publisher& pub = publishers_[static_cast<std::size_t>(p.publisher)];
     const Topic& topic = topics_[static_cast<std::size_t>(pub.topic)];
     if (topic.spec.transport == Transport::kZeroCopy) {
@@ -323,35 +340,32 @@ void NodeGraph::StartJob(int node) {
       p.message->chunk = std::make_shared<ChunkLease>(platform_.chunk_pools(), *topic.pool);
     }
     out_bytes += p.message->bytes;
-    job.publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
+    job->publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
   }
+  return out_bytes;
+}
 
+void NodeGraph::CostJob(Node& n, const TakenInput& in, std::int64_t out_bytes, Job* job) {
   if (n.hw) {
     const HwCost& hw = *n.cost.hw;
     const double factor = Jitter(n, hw.jitter);
     const double compute_s = n.cost_override ? DrawCostSeconds(*n.cost_override, *n.override_rng)
                                              : hw.compute_s * factor;
     const Duration fabric =
-        FromSeconds(compute_s) + platform_.fpga().TransferTime(in_bytes + out_bytes);
-    job.fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
-    job.compute_core_s = hw.delegate_cpu_s * factor;
-  } else if (callback_cost) {  // a subscription's own cost: no what-if knob applies
-    job.compute_core_s =
-        SwWorkSeconds(*callback_cost, in_bytes, out_bytes) * Jitter(n, callback_cost->jitter);
-    job.max_parallelism = callback_cost->max_parallelism;
+        FromSeconds(compute_s) + platform_.fpga().TransferTime(in.bytes + out_bytes);
+    job->fabric = n.cost_scale == 1.0 ? fabric : FromSeconds(ToSeconds(fabric) * n.cost_scale);
+    job->compute_core_s = hw.delegate_cpu_s * factor;
+  } else if (in.callback_cost) {  // a subscription's own cost: no what-if knob applies
+    job->compute_core_s =
+        SwWorkSeconds(*in.callback_cost, in.bytes, out_bytes) * Jitter(n, in.callback_cost->jitter);
+    job->max_parallelism = in.callback_cost->max_parallelism;
   } else {
     const SwCost& sw = *n.cost.sw;
     const double work = n.cost_override
                             ? DrawCostSeconds(*n.cost_override, *n.override_rng)
-                            : SwWorkSeconds(sw, in_bytes, out_bytes) * Jitter(n, sw.jitter);
-    job.compute_core_s = work * n.cost_scale;
-    job.max_parallelism = sw.max_parallelism;
-  }
-
-  if (job.take_core_s > 0.0) {
-    platform_.cpu().Start(Owner(node), job.take_core_s, 1.0, [this, node] { RunCompute(node); });
-  } else {
-    RunCompute(node);
+                            : SwWorkSeconds(sw, in.bytes, out_bytes) * Jitter(n, sw.jitter);
+    job->compute_core_s = work * n.cost_scale;
+    job->max_parallelism = sw.max_parallelism;
   }
 }
 

@@ -253,7 +253,21 @@ class NodeGraph {
 
   void OnTimer(int timer);
   void Kick(int node);
+  // A job's start: the oldest pending work, its input taken and handled (the functional result),
+  // its zero-copy outputs loaned, and its cost set from the node's mapping.
+  struct NextWork {
+    int timer{-1};
+    int subscription{-1};
+  };
+  struct TakenInput {
+    std::int64_t bytes{0};
+    const SwCost* callback_cost{nullptr};  // a subscription's own cost, if it has one
+  };
   void StartJob(int node);
+  NextWork OldestWork(const Node& n) const;
+  TakenInput TakeInput(const NextWork& work, Job* job);
+  std::int64_t LoanOutputs(const Node& n, Job* job);
+  void CostJob(Node& n, const TakenInput& in, std::int64_t out_bytes, Job* job);
   void RunCompute(int node);
   void RunPublish(int node);
   void FinishJob(int node);

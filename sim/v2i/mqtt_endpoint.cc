@@ -20,6 +20,26 @@ constexpr std::chrono::milliseconds kMaxRetryGap{1000};
 
 std::string Ms(std::chrono::milliseconds d) { return std::to_string(d.count()) + " ms"; }
 
+// The responses of one step, in order, once each matches the acknowledgement's copy; `what` names
+// the step for the error.
+std::vector<world::Response> CheckedResponses(const std::map<std::uint64_t, std::string>& responses,
+                                              const SimAck& ack, const std::string& what) {
+  std::vector<world::Response> out;
+  std::uint64_t index = 0;
+  for (const auto& [i, payload] : responses) {
+    if (i != index || index >= ack.responses.size() || payload != ack.responses[index]) {
+      throw MqttError("mqtt link: the /vtl/response messages of " + what +
+                      " differ from tlserver's acknowledgement (another publisher on "
+                      "/vtl/response?)");
+    }
+    const world::Decoded<world::Response> response = world::DecodeResponse(payload);
+    if (!response) throw MqttError("mqtt link: tlserver sent " + response.error());
+    out.push_back(response.value());
+    ++index;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string DefaultAcl() {
@@ -224,19 +244,7 @@ std::vector<world::Response> MqttTrafficLightEndpoint::Exchange(const MqttMessag
   stats_.wait_total += waited;
   stats_.wait_max = std::max<std::chrono::nanoseconds>(stats_.wait_max, waited);
 
-  std::vector<world::Response> out;
-  std::uint64_t index = 0;
-  for (const auto& [i, payload] : responses) {
-    if (i != index || index >= ack->responses.size() || payload != ack->responses[index]) {
-      throw MqttError("mqtt link: the /vtl/response messages of " + what() +
-                      " differ from tlserver's acknowledgement (another publisher on "
-                      "/vtl/response?)");
-    }
-    const world::Decoded<world::Response> response = world::DecodeResponse(payload);
-    if (!response) throw MqttError("mqtt link: tlserver sent " + response.error());
-    out.push_back(response.value());
-    ++index;
-  }
+  std::vector<world::Response> out = CheckedResponses(responses, *ack, what());
   deadline_ = ack->deadline;
   holders_.clear();
   for (const auto& [intersection, holder] : ack->holders) holders_[intersection] = holder;
