@@ -4,6 +4,8 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <tuple>
+#include <utility>
 #include <variant>
 
 #include "sim/core/hash.h"
@@ -156,6 +158,86 @@ void Scenario::Validate() const {
   }
 }
 
+namespace {
+
+// Where a scenario's errors are reported: the file's YAML and its source (file, overrides).
+struct ScenarioSite {
+  const YAML::Node& root;
+  const ConfigSource& source;
+};
+
+// Where car `i` starts on its route: its named start pose (which must lie on the route, heading
+// along it) or its distance along the route.
+std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i,
+                                             const world::Track& track, const world::Route& route,
+                                             const ScenarioSite& site) {
+  const world::Polyline& path = route.path;
+  if (car.start) {
+    const std::optional<world::Pose2> named = track.StartPose(*car.start);
+    if (!named) {
+      FailAt(site.root, site.source, {"cars", i, "start"},
+             "unknown start pose '" + *car.start + "'");
+    }
+    const world::Polyline::Projection on = path.Project(named->position());
+    const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
+    if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
+      FailAt(site.root, site.source, {"cars", i, "start"},
+             "start pose '" + *car.start + "' is not on route (" + Num(on.distance_m) +
+                 " m away, heading off by " + Num(heading_error * 180 / std::numbers::pi) +
+                 " deg)");
+    }
+    return {on.s_m, *named};
+  }
+  const double s = car.start_s_m.value_or(0.0);
+  if (s < 0.0 || s >= path.length_m()) {
+    FailAt(site.root, site.source, {"cars", i, "start_s_m"},
+           "start_s_m must be in [0, " + Num(path.length_m()) + ") m (the route's length), got " +
+               Num(s));
+  }
+  const world::Vec2 p = path.PointAt(s);
+  return {s, world::Pose2{p.x(), p.y(), path.HeadingAt(s)}};
+}
+
+// Car `i`'s route, start and board profile, checked against the track and the server's lease.
+struct ResolvedCar {
+  world::Route route;
+  double start_s_m{0.0};
+  world::Pose2 start_pose;
+  std::optional<PlatformProfile> profile;
+};
+ResolvedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track& track,
+                       const std::filesystem::path& folder, const ScenarioSite& site) {
+  const CarConfig& car = scenario.cars[i];
+  ResolvedCar resolved;
+  try {
+    resolved.route = car.route ? track.RouteByName(*car.route)
+                               : world::MakeRoute(track.road_graph(),
+                                                  "car" + std::to_string(car.id), *car.lanes);
+  } catch (const std::invalid_argument& e) {
+    FailAt(site.root, site.source, {"cars", i, car.route ? "route" : "lanes"}, e.what());
+  }
+  std::tie(resolved.start_s_m, resolved.start_pose) =
+      ResolveStart(car, i, track, resolved.route, site);
+  try {
+    stack::ValidateAgainstLease(car.intersection_client, scenario.traffic_lights.lease);
+  } catch (const std::invalid_argument& e) {
+    FailAt(site.root, site.source, {"cars", i, "intersection_client"}, e.what());
+  }
+  if (car.laps && !resolved.route.cyclic) {
+    FailAt(site.root, site.source, {"cars", i, "laps"}, "laps needs a route that is a loop");
+  }
+  if (car.has_board()) {
+    try {
+      resolved.profile = LoadPlatformProfile(folder / car.platform.profile);
+    } catch (const ConfigError& e) {
+      FailAt(site.root, site.source, {"cars", i, "platform", "profile"}, e.what());
+    }
+  }
+  return resolved;
+}
+
+}  // namespace
+
 LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides,
                             std::optional<std::uint64_t> seed) {
@@ -163,77 +245,22 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   ConfigSource source{file.string(), {}};
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
+  const ScenarioSite site{root, source};
 
-  Scenario scenario = ReadConfig<Scenario>(root, source);
-  if (scenario.name.empty()) scenario.name = file.stem().string();
+  Scenario read = ReadConfig<Scenario>(root, source);
+  if (read.name.empty()) read.name = file.stem().string();
+  world::Track track = LoadTrack(file.parent_path() / read.track);
+  LoadedScenario loaded{.file = file, .scenario = std::move(read), .track = std::move(track)};
+  const Scenario& scenario = loaded.scenario;
 
-  const std::filesystem::path track_file = file.parent_path() / scenario.track;
-  world::Track track = LoadTrack(track_file);
-
-  std::vector<world::Route> routes;
-  std::vector<double> start_s;
-  std::vector<world::Pose2> start_poses;
-  std::vector<std::optional<PlatformProfile>> profiles;
   std::set<int> car_ids;
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
-    const CarConfig& car = scenario.cars[i];
-    car_ids.insert(car.id);
-    world::Route route;
-    try {
-      route = car.route ? track.RouteByName(*car.route)
-                        : world::MakeRoute(track.road_graph(), "car" + std::to_string(car.id),
-                                           *car.lanes);
-    } catch (const std::invalid_argument& e) {
-      FailAt(root, source, {"cars", i, car.route ? "route" : "lanes"}, e.what());
-    }
-    const world::Polyline& path = route.path;
-    double s = 0.0;
-    world::Pose2 pose;
-    if (car.start) {
-      const std::optional<world::Pose2> named = track.StartPose(*car.start);
-      if (!named)
-        FailAt(root, source, {"cars", i, "start"}, "unknown start pose '" + *car.start + "'");
-      const world::Polyline::Projection on = path.Project(named->position());
-      const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
-      if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
-        FailAt(root, source, {"cars", i, "start"},
-               "start pose '" + *car.start + "' is not on route (" + Num(on.distance_m) +
-                   " m away, heading off by " + Num(heading_error * 180 / std::numbers::pi) +
-                   " deg)");
-      }
-      s = on.s_m;
-      pose = *named;
-    } else {
-      s = car.start_s_m.value_or(0.0);
-      if (s < 0.0 || s >= path.length_m()) {
-        FailAt(root, source, {"cars", i, "start_s_m"},
-               "start_s_m must be in [0, " + Num(path.length_m()) +
-                   ") m (the route's length), got " + Num(s));
-      }
-      const world::Vec2 p = path.PointAt(s);
-      pose = world::Pose2{p.x(), p.y(), path.HeadingAt(s)};
-    }
-    try {
-      stack::ValidateAgainstLease(car.intersection_client, scenario.traffic_lights.lease);
-    } catch (const std::invalid_argument& e) {
-      FailAt(root, source, {"cars", i, "intersection_client"}, e.what());
-    }
-    if (car.laps && !route.cyclic) {
-      FailAt(root, source, {"cars", i, "laps"}, "laps needs a route that is a loop");
-    }
-    if (car.has_board()) {
-      const std::filesystem::path profile_file = file.parent_path() / car.platform.profile;
-      try {
-        profiles.push_back(LoadPlatformProfile(profile_file));
-      } catch (const ConfigError& e) {
-        FailAt(root, source, {"cars", i, "platform", "profile"}, e.what());
-      }
-    } else {
-      profiles.emplace_back();
-    }
-    routes.push_back(std::move(route));
-    start_s.push_back(s);
-    start_poses.push_back(pose);
+    car_ids.insert(scenario.cars[i].id);
+    ResolvedCar car = ResolveCar(scenario, i, loaded.track, file.parent_path(), site);
+    loaded.routes.push_back(std::move(car.route));
+    loaded.start_s_m.push_back(car.start_s_m);
+    loaded.start_poses.push_back(car.start_pose);
+    loaded.profiles.push_back(std::move(car.profile));
   }
   for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
     const ExpectArgs& args = scenario.expect[i].args();
@@ -242,22 +269,15 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     }
   }
 
-  nlohmann::json resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(track.spec())}};
-  for (std::size_t i = 0; i < profiles.size(); ++i) {  // a board's profile is part of the run
-    if (profiles[i]) {
-      resolved["platforms"]["car" + std::to_string(scenario.cars[i].id)] = ToJson(*profiles[i]);
+  loaded.resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(loaded.track.spec())}};
+  for (std::size_t i = 0; i < loaded.profiles.size(); ++i) {  // a board's profile is in the run
+    if (loaded.profiles[i]) {
+      loaded.resolved["platforms"]["car" + std::to_string(scenario.cars[i].id)] =
+          ToJson(*loaded.profiles[i]);
     }
   }
-  const std::string sha = Sha256Hex(resolved.dump());
-  return LoadedScenario{file,
-                        std::move(scenario),
-                        std::move(track),
-                        std::move(routes),
-                        std::move(start_s),
-                        std::move(start_poses),
-                        std::move(profiles),
-                        sha,
-                        std::move(resolved)};
+  loaded.sha256 = Sha256Hex(loaded.resolved.dump());
+  return loaded;
 }
 
 }  // namespace autonomsim::sim
