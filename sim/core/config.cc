@@ -1,5 +1,7 @@
 #include "sim/core/config.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <fstream>
 #include <limits>
@@ -58,7 +60,8 @@ std::string Where(const YAML::Node& node, const std::string& path, const ConfigS
   const YAML::Mark mark = node.Mark();
   std::string where = source.file;
   if (!mark.is_null()) {
-    where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+    // fmt, not ":" + std::to_string(...): GCC 12 warns falsely (-Wrestrict) on that at -O2
+    where += fmt::format(":{}:{}", mark.line + 1, mark.column + 1);
   }
   return where + ": " + key + ": ";
 }
