@@ -201,7 +201,8 @@ int main(int argc, char** argv) {
                  "vtl.py")
       ->capture_default_str()
       ->check(CLI::IsMember({"fifo", "original"}));
-  app.add_option("--lease-s", o.lease_s, "A holder silent this long loses its grant (fifo)")
+  app.add_option("--lease-s", o.lease_s,
+                 "A holder that sends no request for its intersection this long loses it (fifo)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--intersections", o.intersections, "Intersection ids served, e.g. 0,1")

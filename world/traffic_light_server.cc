@@ -49,9 +49,9 @@ void TrafficLightServer::AdvanceTo(Time now) {
   last_now_ = now;
 }
 
-bool TrafficLightServer::IsDead(int car, Time now) const {
-  const auto& heard = last_heard_[static_cast<std::size_t>(car)];
-  return !heard || now >= *heard + params_.lease;
+bool TrafficLightServer::IsDead(const Slot& slot, int car, Time now) const {
+  const auto heard = slot.last_request.find(car);
+  return heard == slot.last_request.end() || now >= heard->second + params_.lease;
 }
 
 void TrafficLightServer::GrantHeadIfFree(Slot* slot, std::vector<Response>* out) {
@@ -67,11 +67,16 @@ void TrafficLightServer::Expire(Time now, std::vector<Response>* out) {
   // Drop every dead queued car first, so that an expiry never grants a car that is itself dead.
   for (auto& [id, slot] : slots_) {
     const auto before = slot.queue.size();
-    std::erase_if(slot.queue, [&](int car) { return IsDead(car, now); });
+    std::erase_if(slot.queue, [&](int car) {
+      if (!IsDead(slot, car, now)) return false;
+      slot.last_request.erase(car);
+      return true;
+    });
     counters_.queue_drops += before - slot.queue.size();
   }
   for (auto& [id, slot] : slots_) {
-    if (slot.holder && IsDead(*slot.holder, now)) {
+    if (slot.holder && IsDead(slot, *slot.holder, now)) {
+      slot.last_request.erase(*slot.holder);
       slot.holder.reset();
       ++counters_.lease_expiries;
     }
@@ -86,7 +91,6 @@ std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& req
   std::vector<Response> out;
   Expire(now, &out);
   ++counters_.requests;
-  last_heard_[static_cast<std::size_t>(request.car)] = now;
 
   auto it = slots_.find(request.intersection);
   if (it == slots_.end()) {
@@ -96,6 +100,7 @@ std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& req
     return out;
   }
   Slot& slot = it->second;
+  if (fifo_) slot.last_request[request.car] = now;
   if (!slot.holder) {
     // Invariant: a free slot has an empty queue (every release grants the head at once).
     slot.holder = request.car;
@@ -119,9 +124,9 @@ std::vector<Response> TrafficLightServer::OnFree(Time now, const Free& free) {
   std::vector<Response> out;
   Expire(now, &out);
   ++counters_.frees;
-  last_heard_[static_cast<std::size_t>(free.car)] = now;
   for (auto& [id, slot] : slots_) {
     std::erase(slot.queue, free.car);
+    slot.last_request.erase(free.car);
     if (slot.holder == free.car) {
       slot.holder.reset();
       GrantHeadIfFree(&slot, &out);
@@ -140,14 +145,11 @@ std::vector<Response> TrafficLightServer::OnTick(Time now) {
 std::optional<Time> TrafficLightServer::NextDeadline() const {
   if (!fifo_) return std::nullopt;
   std::optional<Time> earliest;
-  auto consider = [&](int car) {
-    const auto& heard = last_heard_[static_cast<std::size_t>(car)];
-    const Time deadline = heard ? *heard + params_.lease : kZeroTime;
-    if (!earliest || deadline < *earliest) earliest = deadline;
-  };
   for (const auto& [id, slot] : slots_) {
-    if (slot.holder) consider(*slot.holder);
-    for (int car : slot.queue) consider(car);
+    for (const auto& [car, heard] : slot.last_request) {
+      const Time deadline = heard + params_.lease;
+      if (!earliest || deadline < *earliest) earliest = deadline;
+    }
   }
   return earliest;
 }

@@ -9,9 +9,12 @@
 //   - otherwise the car joins the queue once (a repeated request keeps its place) and is answered
 //     "<car>0"; when the holder frees or its lease expires, the queue head is granted by a later
 //     broadcast "<car>1";
-//   - liveness is per car: any message from a car (request or free, for any intersection) renews
-//     it. A car is dead from last_heard + lease on (inclusive): it loses what it holds
-//     (lease_expiries) and leaves every queue; the next live car in the queue is granted;
+//   - liveness is per car and intersection: only a request for an intersection renews the car's
+//     grant of it (or its place in its queue). A car silent about an intersection from its last
+//     request for it + lease on (inclusive) loses it (lease_expiries) or leaves its queue; the next
+//     live car in the queue is granted. A car that keeps talking about another intersection (it
+//     moved on, or it holds one and waits for another) therefore never keeps a stale grant: within
+//     one lease of its last request for an intersection, that intersection is served again;
 //   - Free("<car>") releases every intersection that car holds and withdraws it from every queue
 //     (the protocol's free names no intersection; it never touches another car's grant);
 //   - a request for an unknown intersection is counted and answered "<car>0".
@@ -93,17 +96,18 @@ class TrafficLightServer {
   struct Slot {
     std::optional<int> holder;
     std::deque<int> queue;  // waiting cars, head first; never holds the holder or a duplicate
+    // per car (holder and queued): its last request for this intersection
+    std::map<int, Time> last_request;
   };
 
   void AdvanceTo(Time now);
-  bool IsDead(int car, Time now) const;
+  bool IsDead(const Slot& slot, int car, Time now) const;
   void Expire(Time now, std::vector<Response>* out);
   void GrantHeadIfFree(Slot* slot, std::vector<Response>* out);
 
   TrafficLightServerParams params_;
   bool fifo_{true};
   std::map<int, Slot> slots_;  // ordered by id: iteration order is output order
-  std::array<std::optional<Time>, kMaxV2IId + 1> last_heard_{};  // per car id
   std::optional<Time> last_now_;
   Counters counters_;
 };

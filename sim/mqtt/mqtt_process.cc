@@ -357,6 +357,14 @@ void LocalBroker::Stop() {
   process_.reset();
 }
 
+void LocalBroker::Kill() {
+  if (process_) {
+    process_->Signal(SIGKILL);
+    process_->Stop();  // reaps it
+  }
+  process_.reset();
+}
+
 void LocalBroker::Start() {
   if (process_ && process_->Running()) return;
   if (!Launch())

@@ -104,6 +104,8 @@ class LocalBroker {
 
   // SIGTERM (mosquitto saves its persistence file then), wait, and start again on the same port.
   void Stop();
+  // SIGKILL, as a crash: mosquitto saves nothing, and what it queued is lost.
+  void Kill();
   void Start();
   void Restart() {
     Stop();

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <csignal>
+#include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "sim/mqtt/tests/mqtt_fixture.h"
@@ -395,6 +396,42 @@ TEST_F(TlserverProcessTest, ABrokerRestartLosesNoRequestGrantOrFree) {
     return s.find("\"frees\":1") != std::string::npos &&
            s.find("\"requests\":2") != std::string::npos;
   })) << Status();
+  EXPECT_TRUE(server->Running());
+}
+
+// Issue 15: the broker crashes (SIGKILL) and the cars' frees are lost with it; each car still holds
+// one intersection and keeps asking for the other's. The lease ends each stale grant one lease
+// after its holder's last request for it (under per-car liveness they waited as long as they
+// talked).
+TEST_F(TlserverProcessTest, AfterABrokerCrashLosesTheFreesEveryIntersectionIsGrantedAgain) {
+  auto server = Start({"--lease-s", "2"});
+  auto car1 = t::Connect(*broker_, "car1", "car1-session", {"/vtl/response"});
+  auto car2 = t::Connect(*broker_, "car2", "car2-session", {"/vtl/response"});
+  car1->Publish({.topic = "/vtl/request/car1", .payload = "10"});
+  car2->Publish({.topic = "/vtl/request/car2", .payload = "21"});
+  EXPECT_TRUE(t::WaitUntil([&] {
+    const std::string s = Status();
+    return s.find("\"grants\":2") != std::string::npos;
+  })) << Status();
+
+  broker_->Kill();  // the frees the cars would send now are lost
+  broker_->Start();
+  const auto restarted = std::chrono::steady_clock::now();
+  bool car1_granted = false, car2_granted = false;
+  t::WaitUntil([&] {
+    car1->Publish({.topic = "/vtl/request/car1", .payload = "11"});  // the other's intersection
+    car2->Publish({.topic = "/vtl/request/car2", .payload = "20"});
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+    while (std::optional<MqttMessage> m = car1->Receive(until)) {
+      if (m->topic == "/vtl/response" && m->payload == "11") car1_granted = true;
+      if (m->topic == "/vtl/response" && m->payload == "21") car2_granted = true;
+    }
+    return car1_granted && car2_granted;
+  });
+  EXPECT_TRUE(car1_granted && car2_granted) << Status() << server->LogTail();
+  std::cout << "both intersections granted again "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - restarted).count()
+            << " s after the broker's restart (lease 2 s)\n";
   EXPECT_TRUE(server->Running());
 }
 

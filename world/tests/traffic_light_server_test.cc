@@ -219,13 +219,40 @@ TEST(TrafficLightServerTest, RenewalsPostponeExpiry) {
   EXPECT_THAT(server.OnFree(At(20.0), {0}), ElementsAre(Granted(1)));
 }
 
-TEST(TrafficLightServerTest, AnyMessageFromACarRenewsItsLiveness) {
+TEST(TrafficLightServerTest, OnlyRequestsForAnIntersectionRenewItsGrant) {
   auto server = MakeServer("fifo", 5.0);
   server.OnRequest(At(0.0), {0, kI0});
-  server.OnRequest(At(4.0), {0, kI1});  // about the other intersection
+  server.OnRequest(At(4.0), {0, kI1});  // about the other intersection: renews that one only
+  EXPECT_EQ(server.NextDeadline(), At(5.0));
+  EXPECT_THAT(server.OnTick(At(5.0)), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), std::nullopt);
+  EXPECT_EQ(server.Holder(kI1), 0);
+  EXPECT_EQ(server.counters().lease_expiries, 1u);
   EXPECT_EQ(server.NextDeadline(), At(9.0));
-  EXPECT_THAT(server.OnTick(At(8.0)), IsEmpty());
-  EXPECT_EQ(server.Holder(kI0), 0);
+}
+
+// Issue 15's repro (after a broker crash lost both frees): each car holds one intersection and
+// keeps asking for the other's. Under per-car liveness both were told "occupied" for as long as
+// they talked; now each grant ends one lease after its holder's last request for it.
+TEST(TrafficLightServerTest, TwoCarsEachHoldingWhatTheOtherWantsAreServedWithinOneLease) {
+  auto server = MakeServer("fifo", 3.0);
+  EXPECT_THAT(server.OnRequest(At(0.0), {1, kI0}), ElementsAre(Granted(1)));
+  EXPECT_THAT(server.OnRequest(At(0.0), {2, kI1}), ElementsAre(Granted(2)));
+  std::vector<Response> grants;
+  for (double t = 1.0; t <= 10.0; t += 1.0) {
+    for (const Response& r : server.OnRequest(At(t), {1, kI1})) {
+      if (r.granted) grants.push_back(r);
+    }
+    for (const Response& r : server.OnRequest(At(t), {2, kI0})) {
+      if (r.granted) grants.push_back(r);
+    }
+    if (t >= 3.0) {  // one lease after the holders' last requests for what they hold
+      EXPECT_EQ(server.Holder(kI0), 2) << "at " << t << " s";
+      EXPECT_EQ(server.Holder(kI1), 1) << "at " << t << " s";
+    }
+  }
+  EXPECT_EQ(server.counters().lease_expiries, 2u);
+  EXPECT_THAT(grants, ::testing::IsSupersetOf({Granted(1), Granted(2)}));
 }
 
 TEST(TrafficLightServerTest, UnknownIntersectionIsCountedAndDenied) {
