@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "sim/core/files.h"
 #include "sim/loop/simulation.h"
 #include "sim/mqtt/mqtt_client.h"
 #include "sim/results/outputs.h"
@@ -58,7 +59,7 @@ bool Outcome::passed() const {
 }
 
 Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::path>& out_dir,
-                  Progress* progress) {
+                  Progress* progress, bool force) {
   Outcome outcome;
   outcome.file = loaded.file.string();
   outcome.scenario_name = loaded.scenario.name;
@@ -75,15 +76,16 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
   if (out_dir) {
     sim::WriteRunFolder(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds,
-                        *out_dir);
+                        *out_dir, force);
   }
   return outcome;
 }
 
 Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
-                const std::optional<fs::path>& out_dir) {
+                const std::optional<fs::path>& out_dir, bool force) {
   try {
-    return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr);
+    if (out_dir) sim::CheckOutputFolder(out_dir->string(), force);  // before the run
+    return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr, force);
   } catch (const sim::ConfigError& e) {
     Outcome outcome;
     outcome.file = file.string();

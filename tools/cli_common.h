@@ -65,11 +65,14 @@ struct Outcome {
 };
 
 // Runs and judges one loaded scenario; writes its folder when out_dir is given.
+// `force`: replace out_dir even if this program did not write it (--force; see
+// sim/core/files.h CheckOutputFolder).
 Outcome RunLoaded(const sim::LoadedScenario& loaded,
-                  const std::optional<std::filesystem::path>& out_dir, Progress* progress);
+                  const std::optional<std::filesystem::path>& out_dir, Progress* progress,
+                  bool force = false);
 // Loads, runs and judges one scenario file; unusable input becomes the outcome's input_error.
 Outcome RunFile(const std::filesystem::path& file, const std::vector<std::string>& overrides,
-                const std::optional<std::filesystem::path>& out_dir);
+                const std::optional<std::filesystem::path>& out_dir, bool force = false);
 void PrintVerdicts(const Outcome& outcome);
 
 }  // namespace autonomsim::cli

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/core/parallel.h"
 #include "tools/cli_common.h"
 
@@ -107,13 +108,23 @@ std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
 
 int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
                  const std::optional<std::string>& out, const std::vector<std::string>& overrides,
-                 int jobs) {
+                 int jobs, bool force) {
   std::vector<fs::path> files;
   try {
     files = ExpandScenarioArgs(args);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
+  }
+  if (out) {  // every result folder is refused before anything runs
+    try {
+      for (const fs::path& file : files) {
+        sim::CheckOutputFolder((fs::path(*out) / file.stem()).string(), force);
+      }
+    } catch (const sim::ConfigError& e) {
+      fmt::print(stderr, "error: {}\n", e.what());
+      return kExitUnusableInput;
+    }
   }
   // Each scenario is an independent run: spread them over `jobs` threads; the verdicts do not
   // depend on the order or the thread a run lands on.
@@ -122,7 +133,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
     std::optional<fs::path> dir;
     if (out) dir = fs::path(*out) / files[i].stem();
     try {
-      outcomes[i] = RunFile(files[i], overrides, dir);
+      outcomes[i] = RunFile(files[i], overrides, dir, force);
     } catch (const std::exception& e) {
       outcomes[i].file = files[i].string();
       outcomes[i].scenario_name = files[i].stem().string();
@@ -163,6 +174,7 @@ Command AddCheckCommand(CLI::App& parent) {
     std::optional<std::string> out;
     std::vector<std::string> overrides;
     int jobs = DefaultJobs();
+    bool force{false};
   };
   auto o = std::make_shared<Options>();
   CLI::App* check = parent.add_subcommand(
@@ -172,12 +184,18 @@ Command AddCheckCommand(CLI::App& parent) {
                    "Scenario files, or folders whose *.yaml files are scenarios")
       ->required();
   check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML")->type_name("FILE");
-  check->add_option("--out", o->out, "Keep each run's result folder under DIR/<scenario>")
+  check
+      ->add_option("--out", o->out,
+                   "Keep each run's result folder under DIR/<scenario> (each replaced only if "
+                   "this program wrote it, else refused: see --force)")
       ->type_name("DIR");
+  check->add_flag("--force", o->force,
+                  "Replace DIR/<scenario> even if this program did not write it (never a device)");
   check->add_option("--jobs,-j", o->jobs, "Scenarios run in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
   AddSetOption(check, &o->overrides);
-  return {check, [o] { return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs); }};
+  return {check,
+          [o] { return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs, o->force); }};
 }
 
 }  // namespace autonomsim::cli

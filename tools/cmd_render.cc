@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/results/render.h"
 #include "tools/cli_common.h"
 
@@ -15,7 +16,14 @@ namespace {
 namespace fs = std::filesystem;
 
 int RenderCommand(const std::string& scenario_file, int car_id, double at_s, const std::string& out,
-                  std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides) {
+                  std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
+                  bool force) {
+  try {  // refused before anything runs
+    sim::CheckOutputFolder(out, force);
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
   std::optional<sim::LoadedScenario> loaded;
   try {
     loaded.emplace(sim::LoadScenario(scenario_file, overrides, seed));
@@ -49,7 +57,7 @@ int RenderCommand(const std::string& scenario_file, int car_id, double at_s, con
   const vehicle::SceneAppearance appearance;
   const std::vector<sim::RenderedCamera> cameras = sim::RenderCameras(
       loaded->track, snapshot, car_id, sensors, appearance, sim::RngStreams(scenario.seed));
-  sim::WriteRenderFolder(cameras, at, car_id, out);
+  sim::WriteRenderFolder(cameras, at, car_id, out, force);
   for (const sim::RenderedCamera& camera : cameras) {
     fmt::print("{}: {}\n", camera.name, (fs::path(out) / camera.name).string());
   }
@@ -68,6 +76,7 @@ Command AddRenderCommand(CLI::App& parent) {
     std::string out;
     std::optional<std::uint64_t> seed;
     std::vector<std::string> overrides;
+    bool force{false};
   };
   auto o = std::make_shared<Options>();
   CLI::App* render = parent.add_subcommand(
@@ -79,11 +88,19 @@ Command AddRenderCommand(CLI::App& parent) {
   render->add_option("--at", o->at_s, "The instant, seconds of simulated time")
       ->required()
       ->type_name("T");
-  render->add_option("--out", o->out, "Output folder (replaced)")->required()->type_name("DIR");
+  render
+      ->add_option("--out", o->out,
+                   "Output folder; replaced if an earlier run, render, check or sweep wrote it "
+                   "(else refused: see --force)")
+      ->required()
+      ->type_name("DIR");
+  render->add_flag("--force", o->force,
+                   "Replace --out even if this program did not write it (never a device)");
   render->add_option("--seed", o->seed, "Override the scenario's seed")->type_name("N");
   AddSetOption(render, &o->overrides);
   return {render, [o] {
-            return RenderCommand(o->scenario, o->car, o->at_s, o->out, o->seed, o->overrides);
+            return RenderCommand(o->scenario, o->car, o->at_s, o->out, o->seed, o->overrides,
+                                 o->force);
           }};
 }
 

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/mqtt/mqtt_client.h"
 #include "tools/cli_common.h"
 
@@ -12,7 +13,7 @@ namespace fs = std::filesystem;
 
 int RunCommand(const std::string& scenario_file, const std::optional<std::string>& out,
                std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
-               bool quiet) {
+               bool quiet, bool force) {
   std::optional<sim::LoadedScenario> loaded;
   try {
     loaded.emplace(sim::LoadScenario(scenario_file, overrides, seed));
@@ -20,7 +21,14 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
-  const fs::path out_dir = out ? fs::path(*out) : fs::path("runs") / loaded->scenario.name;
+  fs::path out_dir;
+  try {  // refused before anything runs
+    out_dir = sim::CheckOutputFolder(
+        out ? *out : (fs::path("runs") / loaded->scenario.name).string(), force);
+  } catch (const sim::ConfigError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
   const double duration_s = ToSeconds(loaded->scenario.duration);
   if (!quiet) {
     fmt::print(stderr, "autonomsim: running {} ({} cars, {:.0f} s simulated, seed {})\n",
@@ -29,7 +37,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
   Progress progress(duration_s, quiet);
   Outcome outcome;
   try {
-    outcome = RunLoaded(*loaded, out_dir, &progress);
+    outcome = RunLoaded(*loaded, out_dir, &progress, force);
   } catch (const sim::MqttError& e) {  // the broker or tlserver of v2i.link: mqtt failed us
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -52,6 +60,7 @@ Command AddRunCommand(CLI::App& parent) {
     std::vector<std::string> overrides;
     std::optional<std::string> broker;
     bool quiet{false};
+    bool force{false};
   };
   auto o = std::make_shared<Options>();
   CLI::App* run = parent.add_subcommand(
@@ -61,8 +70,12 @@ Command AddRunCommand(CLI::App& parent) {
   run->add_option("SCENARIO", o->scenario, "Scenario file (YAML), e.g. scenarios/lab_two_cars.yaml")
       ->required();
   run->add_option("--out", o->out,
-                  "Result folder (default: runs/<scenario name>); replaced when the run completes")
+                  "Result folder (default: runs/<scenario name>); replaced when the run completes "
+                  "if an earlier run, render, check or sweep wrote it (else refused: see --force)")
       ->type_name("DIR");
+  run->add_flag("--force", o->force,
+                "Replace --out even if this program did not write it (a folder and all it holds, "
+                "or a file; never a device)");
   run->add_option("--seed", o->seed, "Override the scenario's seed")->type_name("N");
   AddSetOption(run, &o->overrides);
   run->add_option("--broker", o->broker,
@@ -77,7 +90,7 @@ Command AddRunCommand(CLI::App& parent) {
               overrides.push_back("v2i.link=mqtt");
               overrides.push_back("v2i.mqtt.broker=" + *o->broker);
             }
-            return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet);
+            return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet, o->force);
           }};
 }
 

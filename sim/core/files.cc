@@ -2,8 +2,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
+
+#include "sim/core/config.h"
 
 namespace autonomsim::sim {
 
@@ -16,9 +19,76 @@ void WriteFile(const fs::path& file, const std::string& content) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
+namespace {
+
+// What stands at `path` (not following a final symbolic link), for messages; empty if nothing.
+std::string KindOf(const fs::file_status& status) {
+  switch (status.type()) {
+    case fs::file_type::not_found:
+      return "";
+    case fs::file_type::directory:
+      return "a folder";
+    case fs::file_type::regular:
+      return "a file";
+    case fs::file_type::symlink:
+      return "a symbolic link";
+    case fs::file_type::block:
+    case fs::file_type::character:
+      return "a device node";
+    case fs::file_type::fifo:
+      return "a FIFO";
+    case fs::file_type::socket:
+      return "a socket";
+    default:
+      return "not a folder";
+  }
+}
+
+}  // namespace
+
+fs::path CheckOutputFolder(const std::string& given, bool force) {
+  const auto refuse = [&](const std::string& why) -> ConfigError {
+    return ConfigError("--out " + given + ": " + why);
+  };
+  if (given.empty()) throw refuse("empty path");
+  std::string trimmed = given;
+  while (trimmed.size() > 1 && trimmed.back() == '/') trimmed.pop_back();
+  const fs::path target = fs::absolute(trimmed).lexically_normal();
+  const fs::path cwd = fs::current_path();
+  if (target == target.root_path() || target.filename().empty()) {
+    throw refuse("the filesystem root is never replaced");
+  }
+  const auto [first_difference, unused] =
+      std::mismatch(target.begin(), target.end(), cwd.begin(), cwd.end());
+  if (first_difference == target.end()) {
+    throw refuse("holds the working folder (" + cwd.string() + "): never replaced");
+  }
+  for (fs::path ancestor = target.parent_path(); !ancestor.empty();
+       ancestor = ancestor.parent_path()) {
+    const fs::file_status status = fs::status(ancestor);
+    if (fs::is_directory(status)) break;
+    if (fs::exists(status)) throw refuse(ancestor.string() + " is " + KindOf(status));
+    if (ancestor == ancestor.root_path()) break;
+  }
+  const fs::file_status status = fs::symlink_status(target);
+  const std::string kind = KindOf(status);
+  if (kind.empty()) return target;
+  if (fs::is_directory(status) && fs::exists(target / kOutputMarker)) return target;
+  if (fs::is_block_file(status) || fs::is_character_file(status) || fs::is_fifo(status) ||
+      fs::is_socket(status)) {
+    throw refuse("is " + kind + ", never replaced");
+  }
+  if (force) return target;
+  const std::string what = fs::is_directory(status)
+                               ? "is a folder this program did not write (it has no " +
+                                     std::string(kOutputMarker) + " marker)"
+                               : "is " + kind;
+  throw refuse(what + "; choose another --out, or add --force to replace it and all it holds");
+}
+
 void WriteFolderAtomically(const fs::path& target_dir,
-                           const std::function<void(const fs::path& partial)>& fill) {
-  const fs::path target = fs::absolute(target_dir).lexically_normal();
+                           const std::function<void(const fs::path& partial)>& fill, bool force) {
+  const fs::path target = CheckOutputFolder(target_dir.string(), force);
   const std::string suffix = std::to_string(::getpid());
   const fs::path partial = target.string() + ".partial-" + suffix;
   fs::create_directories(target.parent_path());
@@ -26,7 +96,9 @@ void WriteFolderAtomically(const fs::path& target_dir,
   fs::create_directory(partial);
   try {
     fill(partial);
-    if (fs::exists(target)) {
+    WriteFile(partial / kOutputMarker,
+              "Written by autonomsim. The next output written here may replace this folder.\n");
+    if (fs::exists(fs::symlink_status(target))) {
       const fs::path old = target.string() + ".old-" + suffix;
       fs::rename(target, old);
       fs::rename(partial, target);

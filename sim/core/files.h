@@ -11,10 +11,24 @@ namespace autonomsim::sim {
 // Writes `content` to `file`; throws std::runtime_error naming the file on failure.
 void WriteFile(const std::filesystem::path& file, const std::string& content);
 
+// Output folders. Every folder this program writes (a run, a render, a sweep) carries this marker
+// file; only a folder that has it is ever replaced, unless the user says --force.
+inline constexpr const char* kOutputMarker = ".autonomsim";
+
+// The folder `given` (as the user wrote it; a trailing slash is allowed) checked as the target of
+// an output that replaces it: it may be absent (its parent is created; every existing ancestor
+// must be a folder), or a folder this program wrote. Throws ConfigError (exit 2), before anything
+// runs, for the filesystem root or a folder holding the working folder (never replaced), a device
+// node, FIFO or socket (never replaced), and — unless `force` — a folder without the marker, a
+// file or a symbolic link. Returns the path to use.
+std::filesystem::path CheckOutputFolder(const std::string& given, bool force);
+
 // Creates `target` by letting `fill` write into a sibling "<target>.partial-<pid>" folder and
-// renaming it to `target` when `fill` returns; a previous `target` is replaced only then. If
-// `fill` throws, the partial folder is removed and the exception propagates.
+// renaming it to `target` when `fill` returns; a previous `target` is replaced only then, and only
+// if CheckOutputFolder(target, force) allows it (checked first, before `fill` runs). The folder
+// gets the marker. If `fill` throws, the partial folder is removed and the exception propagates.
 void WriteFolderAtomically(const std::filesystem::path& target,
-                           const std::function<void(const std::filesystem::path& partial)>& fill);
+                           const std::function<void(const std::filesystem::path& partial)>& fill,
+                           bool force = false);
 
 }  // namespace autonomsim::sim

@@ -160,21 +160,24 @@ nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
 
 void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
                     const std::vector<ExpectationResult>& expectations, double wall_seconds,
-                    const std::filesystem::path& out_dir) {
+                    const std::filesystem::path& out_dir, bool force) {
   namespace fs = std::filesystem;
-  WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
-    WriteFile(partial / "trajectory.csv", TrajectoryCsv(record));
-    WriteFile(partial / "events.jsonl", EventsJsonl(record));
-    if (!record.boards.empty()) WriteFile(partial / "nodes.csv", NodesCsv(record.boards));
-    if (!record.trace_json.empty()) WriteFile(partial / "trace.json", record.trace_json);
-    WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
-    if (!cv::imwrite((partial / "track.png").string(), DrawTrack(loaded, record))) {
-      throw std::runtime_error("cannot write track.png");
-    }
-    // summary.json last: its presence marks a complete folder
-    WriteFile(partial / "summary.json",
-              Summary(loaded, record, expectations, wall_seconds).dump(2) + "\n");
-  });
+  WriteFolderAtomically(
+      out_dir,
+      [&](const fs::path& partial) {
+        WriteFile(partial / "trajectory.csv", TrajectoryCsv(record));
+        WriteFile(partial / "events.jsonl", EventsJsonl(record));
+        if (!record.boards.empty()) WriteFile(partial / "nodes.csv", NodesCsv(record.boards));
+        if (!record.trace_json.empty()) WriteFile(partial / "trace.json", record.trace_json);
+        WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
+        if (!cv::imwrite((partial / "track.png").string(), DrawTrack(loaded, record))) {
+          throw std::runtime_error("cannot write track.png");
+        }
+        // summary.json last: its presence marks a complete folder
+        WriteFile(partial / "summary.json",
+                  Summary(loaded, record, expectations, wall_seconds).dump(2) + "\n");
+      },
+      force);
 }
 
 }  // namespace autonomsim::sim

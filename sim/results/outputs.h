@@ -17,9 +17,10 @@ namespace autonomsim::sim {
 nlohmann::json Summary(const LoadedScenario& scenario, const RunRecord& record,
                        const std::vector<ExpectationResult>& expectations, double wall_seconds);
 
-// Writes every file of the folder to `out_dir`, replacing a previous result there.
+// Writes every file of the folder to `out_dir`, replacing a previous result there (a folder this
+// program wrote, or with `force` anything but a device: sim/core/files.h CheckOutputFolder).
 void WriteRunFolder(const LoadedScenario& scenario, const RunRecord& record,
                     const std::vector<ExpectationResult>& expectations, double wall_seconds,
-                    const std::filesystem::path& out_dir);
+                    const std::filesystem::path& out_dir, bool force = false);
 
 }  // namespace autonomsim::sim

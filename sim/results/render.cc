@@ -165,23 +165,26 @@ std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double 
 }
 
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
-                       const fs::path& out_dir) {
-  WriteFolderAtomically(out_dir, [&](const fs::path& partial) {
-    for (const RenderedCamera& camera : cameras) {
-      const fs::path dir = partial / camera.name;
-      fs::create_directory(dir);
-      // OpenCV only reads through the Mats: the const_casts lend it our buffers
-      WritePng(dir / "color.png", cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
-                                          const_cast<std::uint8_t*>(camera.color.bgr.data())));
-      WritePng(dir / "depth.png", cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
-                                          const_cast<std::uint16_t*>(camera.depth.mm.data())));
-      std::vector<std::uint8_t> preview =
-          DepthPreview(camera.depth, camera.params.clip_near_m, camera.params.clip_far_m);
-      WritePng(dir / "depth_preview.png",
-               cv::Mat(camera.depth.height, camera.depth.width, CV_8UC3, preview.data()));
-      WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
-    }
-  });
+                       const fs::path& out_dir, bool force) {
+  WriteFolderAtomically(
+      out_dir,
+      [&](const fs::path& partial) {
+        for (const RenderedCamera& camera : cameras) {
+          const fs::path dir = partial / camera.name;
+          fs::create_directory(dir);
+          // OpenCV only reads through the Mats: the const_casts lend it our buffers
+          WritePng(dir / "color.png", cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
+                                              const_cast<std::uint8_t*>(camera.color.bgr.data())));
+          WritePng(dir / "depth.png", cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
+                                              const_cast<std::uint16_t*>(camera.depth.mm.data())));
+          std::vector<std::uint8_t> preview =
+              DepthPreview(camera.depth, camera.params.clip_near_m, camera.params.clip_far_m);
+          WritePng(dir / "depth_preview.png",
+                   cv::Mat(camera.depth.height, camera.depth.width, CV_8UC3, preview.data()));
+          WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
+        }
+      },
+      force);
 }
 
 }  // namespace autonomsim::sim

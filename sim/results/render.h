@@ -68,6 +68,6 @@ std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double 
 // Writes the folder (under a temporary name, renamed when complete; a previous folder there is
 // replaced). std::runtime_error if a file cannot be written.
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
-                       const std::filesystem::path& out_dir);
+                       const std::filesystem::path& out_dir, bool force = false);
 
 }  // namespace autonomsim::sim

@@ -1,0 +1,116 @@
+// --out never destroys what this program did not write (issue 15): a folder of someone's notes, a
+// file, a device node, the working folder. Each refusal comes before the simulation runs.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "tools/tests/cli_testing.h"
+
+namespace autonomsim::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+constexpr const char* kQuick = "scenarios/intersection_conflict.yaml -q";
+
+fs::path Scratch() { return testing::Scratch("output_safety"); }
+
+void WriteText(const fs::path& file, const std::string& text) { std::ofstream(file) << text; }
+
+TEST(OutputSafety, AFolderItDidNotWriteIsRefusedUnlessForced) {
+  const fs::path notes = Scratch() / "notes";
+  fs::create_directories(notes);
+  WriteText(notes / "ideas.txt", "precious");
+  const Result refused = Cli(std::string("run ") + kQuick + " --out " + notes.string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr("did not write"));
+  EXPECT_THAT(refused.output, HasSubstr("--force"));
+  EXPECT_THAT(refused.output, Not(HasSubstr("simulated in")));  // refused before the run
+  EXPECT_EQ(Read(notes / "ideas.txt"), "precious");
+  EXPECT_EQ(std::distance(fs::directory_iterator(notes.parent_path()), fs::directory_iterator()),
+            1);  // nothing half-written beside it
+
+  const Result forced = Cli(std::string("run ") + kQuick + " --force --out " + notes.string());
+  EXPECT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_FALSE(fs::exists(notes / "ideas.txt"));
+  EXPECT_TRUE(fs::exists(notes / "summary.json"));
+  // now it is ours: replaced without --force
+  EXPECT_EQ(Cli(std::string("run ") + kQuick + " --out " + notes.string()).exit_code, 0);
+}
+
+TEST(OutputSafety, AFileIsRefusedUnlessForced) {
+  const fs::path file = Scratch() / "thesis.tex";
+  WriteText(file, "chapter 1");
+  const Result refused = Cli(std::string("run ") + kQuick + " --out " + file.string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr("is a file"));
+  EXPECT_EQ(Read(file), "chapter 1");
+  EXPECT_EQ(Cli(std::string("run ") + kQuick + " --force --out " + file.string()).exit_code, 0);
+  EXPECT_TRUE(fs::is_directory(file));
+}
+
+TEST(OutputSafety, ADeviceNodeIsNeverReplaced) {
+  const fs::path device = Scratch() / "null";
+  // the same device as /dev/null, made in the scratch folder (never touch /dev itself)
+  if (::mknod(device.c_str(), S_IFCHR | 0666, ::makedev(1, 3)) != 0) {
+    GTEST_SKIP() << "mknod needs root here";
+  }
+  for (const char* force : {"", " --force"}) {
+    const Result r = Cli(std::string("run ") + kQuick + force + " --out " + device.string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("device node"));
+    EXPECT_TRUE(fs::is_character_file(device));
+  }
+}
+
+TEST(OutputSafety, TheWorkingFolderAndTheRootAreRefusedAtOnce) {
+  for (const char* out : {".", "./", "..", "/"}) {
+    const Result r = Cli(std::string("run ") + kQuick + " --force --out " + out);
+    EXPECT_EQ(r.exit_code, 2) << out << ": " << r.output;
+    EXPECT_THAT(r.output, Not(HasSubstr("simulated in"))) << out;
+  }
+  EXPECT_TRUE(fs::exists("CMakeLists.txt"));  // still here
+}
+
+TEST(OutputSafety, ATrailingSlashNamesTheSameFolder) {
+  const fs::path out = Scratch() / "results";
+  const Result r = Cli(std::string("run ") + kQuick + " --out " + out.string() + "/");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(out.parent_path()), fs::directory_iterator()), 1);
+}
+
+TEST(OutputSafety, APathThroughAFileIsRefusedBeforeTheRun) {
+  const fs::path file = Scratch() / "a_file";
+  WriteText(file, "x");
+  const Result r = Cli(std::string("run ") + kQuick + " --out " + (file / "sub").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("is a file"));
+  EXPECT_THAT(r.output, Not(HasSubstr("simulated in")));
+}
+
+TEST(OutputSafety, RenderAndCheckRefuseToo) {
+  const fs::path notes = Scratch() / "notes";
+  fs::create_directories(notes / "intersection_conflict");
+  WriteText(notes / "intersection_conflict" / "keep.txt", "mine");
+  const Result check = Cli("check scenarios/intersection_conflict.yaml --out " + notes.string());
+  EXPECT_EQ(check.exit_code, 2) << check.output;
+  EXPECT_EQ(Read(notes / "intersection_conflict" / "keep.txt"), "mine");
+  const Result render = Cli("render scenarios/intersection_conflict.yaml --car 0 --at 1 --out " +
+                            (notes / "intersection_conflict").string());
+  EXPECT_EQ(render.exit_code, 2) << render.output;
+  EXPECT_EQ(Read(notes / "intersection_conflict" / "keep.txt"), "mine");
+  // check's folders are its own afterwards
+  const fs::path ours = Scratch() / "ours";
+  ASSERT_EQ(Cli("check scenarios/intersection_conflict.yaml --out " + ours.string()).exit_code, 0);
+  EXPECT_EQ(Cli("check scenarios/intersection_conflict.yaml --out " + ours.string()).exit_code, 0);
+}
+
+}  // namespace
+}  // namespace autonomsim::testing
