@@ -24,6 +24,21 @@ void AddSetOption(CLI::App* command, std::vector<std::string>* overrides) {
       ->type_name("KEY=VALUE");
 }
 
+void AddSeedOption(CLI::App* command, std::optional<std::uint64_t>* seed) {
+  // CLI11 would read "-1" as 2^64 - 1: only digits are a seed
+  const CLI::Validator digits(
+      [](std::string& text) -> std::string {
+        if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
+          return "a seed is a whole number >= 0, got '" + text + "'";
+        }
+        return "";
+      },
+      "N");
+  command->add_option("--seed", *seed, "Override the scenario's seed (a whole number >= 0)")
+      ->check(digits)
+      ->type_name("N");
+}
+
 int DefaultJobs() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 double WallSecondsSince(std::chrono::steady_clock::time_point start) {

@@ -33,6 +33,7 @@ Command AddSweepCommand(CLI::App& parent);
 
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);
+void AddSeedOption(CLI::App* command, std::optional<std::uint64_t>* seed);
 
 double WallSecondsSince(std::chrono::steady_clock::time_point start);
 

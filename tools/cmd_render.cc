@@ -96,7 +96,7 @@ Command AddRenderCommand(CLI::App& parent) {
       ->type_name("DIR");
   render->add_flag("--force", o->force,
                    "Replace --out even if this program did not write it (never a device)");
-  render->add_option("--seed", o->seed, "Override the scenario's seed")->type_name("N");
+  AddSeedOption(render, &o->seed);
   AddSetOption(render, &o->overrides);
   return {render, [o] {
             return RenderCommand(o->scenario, o->car, o->at_s, o->out, o->seed, o->overrides,

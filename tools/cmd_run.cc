@@ -76,7 +76,7 @@ Command AddRunCommand(CLI::App& parent) {
   run->add_flag("--force", o->force,
                 "Replace --out even if this program did not write it (a folder and all it holds, "
                 "or a file; never a device)");
-  run->add_option("--seed", o->seed, "Override the scenario's seed")->type_name("N");
+  AddSeedOption(run, &o->seed);
   AddSetOption(run, &o->overrides);
   run->add_option("--broker", o->broker,
                   "Send the cars' V2I traffic through this MQTT broker to the `tlserver "

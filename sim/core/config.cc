@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace autonomsim::sim {
@@ -176,17 +178,129 @@ void ReadScalar(const YAML::Node& node, Duration& out, const std::string& path,
 
 }  // namespace detail
 
+namespace {
+
+// The first byte of `text` that does not belong to valid UTF-8, or npos.
+std::size_t FirstInvalidUtf8(const std::string& text) {
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    const std::size_t length = byte < 0x80           ? 1
+                               : (byte >> 5) == 0x06 ? 2
+                               : (byte >> 4) == 0x0E ? 3
+                               : (byte >> 3) == 0x1E ? 4
+                                                     : 0;
+    if (length == 0 || i + length > text.size()) return i;
+    for (std::size_t k = 1; k < length; ++k) {
+      if ((static_cast<unsigned char>(text[i + k]) >> 6) != 0x02) return i;
+    }
+    i += length;
+  }
+  return std::string::npos;
+}
+
+// A ConfigError at `file`:line:column for the byte at `offset` of `text`.
+ConfigError ErrorAtOffset(const std::filesystem::path& file, const std::string& text,
+                          std::size_t offset, const std::string& message) {
+  const std::size_t line =
+      1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + offset, '\n'));
+  const std::size_t line_start = text.rfind('\n', offset == 0 ? 0 : offset - 1);
+  const std::size_t column = offset - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
+  return ConfigError(fmt::format("{}:{}:{}: {}", file.string(), line, column, message));
+}
+
+// Every mapping below `node` has each key once: yaml-cpp keeps a repeated key's entries and
+// reads the first, so `duration_s: 3` then `duration_s: 5` would run 3 s without a word.
+void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& file) {
+  if (node.IsMap()) {
+    std::map<std::string, YAML::Mark> seen;
+    for (const auto& entry : node) {
+      const std::string key = entry.first.Scalar();
+      const auto [first, inserted] = seen.emplace(key, entry.first.Mark());
+      if (!inserted) {
+        const YAML::Mark mark = entry.first.Mark();
+        throw ConfigError(fmt::format("{}:{}:{}: {}: duplicate key (first at line {})",
+                                      file.string(), mark.line + 1, mark.column + 1, key,
+                                      first->second.line + 1));
+      }
+      CheckUniqueKeys(entry.second, file);
+    }
+  } else if (node.IsSequence()) {
+    for (const auto& child : node) CheckUniqueKeys(child, file);
+  }
+}
+
+}  // namespace
+
 YAML::Node LoadYamlFile(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::error_code error;
+  if (std::filesystem::is_directory(file, error)) {
+    throw ConfigError(file.string() + ": is a folder, not a YAML file");
+  }
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(file.string() + ": cannot open file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (const std::size_t bad = FirstInvalidUtf8(text); bad != std::string::npos) {
+    throw ErrorAtOffset(file, text, bad,
+                        fmt::format("not UTF-8 text (byte 0x{:02X}); save the file as UTF-8",
+                                    static_cast<unsigned char>(text[bad])));
+  }
   try {
-    YAML::Node root = YAML::Load(in);
+    YAML::Node root = YAML::Load(text);
     if (!root || root.IsNull()) throw ConfigError(file.string() + ": the file is empty");
+    CheckUniqueKeys(root, file);
     return root;
   } catch (const YAML::ParserException& e) {
     throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
                       std::to_string(e.mark.column + 1) + ": YAML syntax error: " + e.msg);
   }
+}
+
+std::vector<std::string> ParseOverridePath(const std::string& key) {
+  // key := name ( "." name | "[" index "]" )*, name := [A-Za-z_][A-Za-z0-9_]*, index := [0-9]+
+  const auto bad = [&](const std::string& why) {
+    return ConfigError("--set " + key + ": " + why +
+                       " (a key path is names joined by '.' and list indices in [], e.g. "
+                       "cars[0].oracle.speed_mps)");
+  };
+  const auto is_name_char = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+  };
+  std::vector<std::string> tokens;
+  std::size_t i = 0;
+  bool expect_name = true;  // at the start and after '.'
+  while (i < key.size()) {
+    if (expect_name) {
+      const std::size_t start = i;
+      while (i < key.size() && is_name_char(key[i])) ++i;
+      if (i == start) throw bad("expected a name at position " + std::to_string(start + 1));
+      if (std::isdigit(static_cast<unsigned char>(key[start])) != 0) {
+        throw bad("'" + key.substr(start, i - start) + "' is not a name; index lists as [N]");
+      }
+      tokens.push_back(key.substr(start, i - start));
+      expect_name = false;
+    } else if (key[i] == '.') {
+      ++i;
+      expect_name = true;
+    } else if (key[i] == '[') {
+      const std::size_t close = key.find(']', i);
+      if (close == std::string::npos) throw bad("'[' without ']'");
+      const std::string index = key.substr(i + 1, close - i - 1);
+      if (index.empty() || index.find_first_not_of("0123456789") != std::string::npos) {
+        throw bad("list index '" + index + "' is not a whole number >= 0");
+      }
+      if (index.size() > 9) throw bad("list index " + index + " is out of range");
+      tokens.push_back(index);
+      i = close + 1;
+    } else {
+      throw bad(std::string("unexpected '") + key[i] + "' at position " + std::to_string(i + 1));
+    }
+  }
+  if (tokens.empty()) throw bad("empty key");
+  if (expect_name) throw bad("the path ends with '.'");
+  return tokens;
 }
 
 void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source) {
@@ -197,19 +311,10 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
   const std::string key = assignment.substr(0, equals);
   const std::string text = assignment.substr(equals + 1);
 
-  // Split "a.b[2].c" / "a.b.2.c" into tokens; numeric tokens index lists.
-  std::vector<std::string> tokens;
-  std::string token;
-  for (char c : key) {
-    if (c == '.' || c == '[' || c == ']') {
-      if (!token.empty()) tokens.push_back(token);
-      token.clear();
-    } else {
-      token += c;
-    }
+  const std::vector<std::string> tokens = ParseOverridePath(key);
+  if (FirstInvalidUtf8(assignment) != std::string::npos) {
+    throw ConfigError("--set " + key + ": the value is not UTF-8 text");
   }
-  if (!token.empty()) tokens.push_back(token);
-  if (tokens.empty()) throw ConfigError("--set " + assignment + ": empty key");
 
   YAML::Node value;
   try {
@@ -230,7 +335,7 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
         throw ConfigError("--set " + key + ": '" + (canonical.empty() ? "(top level)" : canonical) +
                           "' is not a list");
       }
-      const std::size_t index = std::stoul(t);
+      const std::size_t index = std::stoul(t);  // ParseOverridePath bounded it
       if (index >= node.size()) {
         throw ConfigError("--set " + key + ": index " + t + " is out of range ('" + canonical +
                           "' has " + std::to_string(node.size()) + " entries)");
@@ -244,7 +349,8 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
       }
     } else {
       if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
-        throw ConfigError("--set " + key + ": '" + canonical + "' is not a mapping");
+        throw ConfigError("--set " + key + ": '" + (canonical.empty() ? "(top level)" : canonical) +
+                          "' is not a mapping");
       }
       canonical = detail::JoinPath(canonical, t);
       if (last) {

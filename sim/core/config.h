@@ -36,14 +36,19 @@ struct ConfigSource {
   std::set<std::string> overridden_paths;
 };
 
-// Parses a YAML file; a syntax error is a ConfigError naming the file and line.
+// Parses a YAML file. A ConfigError naming the file (and line where there is one) for a folder,
+// an unreadable file, bytes that are not UTF-8, a syntax error, and a key repeated in a mapping.
 YAML::Node LoadYamlFile(const std::filesystem::path& file);
 
-// Applies `--set path=value`: the path is dot-separated keys with [i] or .i for list elements
-// (e.g. cars[0].oracle.speed_mps, or cars.0.oracle.speed_mps); the value is parsed as YAML (so
-// 0.3, true, [1, 2] and {a: 1} all work). Missing map keys are created (the strict reader then
-// rejects those the schema does not know); list indices must exist. Records the path in source.
+// Applies `--set path=value`: the path is dot-separated keys with [i] for list elements (e.g.
+// cars[0].oracle.speed_mps; anything else is refused, see ParseOverridePath); the value is parsed
+// as YAML (so 0.3, true, [1, 2] and {a: 1} all work). Missing map keys are created (the strict
+// reader then rejects those the schema does not know); list indices must exist. Records the path in
+// source.
 void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source);
+// The tokens of a --set key path: names, and list indices (as digits). ConfigError naming the key
+// for anything but `name(.name|[N])*`.
+std::vector<std::string> ParseOverridePath(const std::string& key);
 
 namespace detail {
 

@@ -151,5 +151,17 @@ TEST(CliTest, UnusableInputExitsTwo) {
   EXPECT_EQ(Cli("frobnicate").exit_code, 2);
 }
 
+TEST(CliTest, ANegativeSeedOrAFolderAsScenarioIsUnusableInput) {
+  Result r = Cli("run scenarios/lab_two_cars_oracle.yaml --seed -1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("a seed is a whole number >= 0, got '-1'"));
+  r = Cli("run scenarios/tracks");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("scenarios/tracks: is a folder, not a YAML file"));
+  r = Cli("run scenarios/lab_two_cars_oracle.yaml --set 'cars.0.route=south_loop'");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("index lists as [N]"));
+}
+
 }  // namespace
 }  // namespace autonomsim

@@ -4,6 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 namespace autonomsim::sim {
 namespace {
 
@@ -110,10 +113,53 @@ TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
   EXPECT_THAT(ErrorOf("{}", {"inner.gian=1"}), HasSubstr("--set inner.gian: unknown key 'gian'"));
   EXPECT_THAT(ErrorOf("{}", {"inner.gain=-2"}),
               HasSubstr("test.yaml: inner (with --set inner.gain): gain must be >= 0"));
-  EXPECT_THAT(ErrorOf("items: []\n", {"items.0.gain=1"}), HasSubstr("index 0 is out of range"));
+  EXPECT_THAT(ErrorOf("items: []\n", {"items[0].gain=1"}), HasSubstr("index 0 is out of range"));
   EXPECT_THAT(ErrorOf("{}", {"flag.x=1"}),
               HasSubstr("flag (with --set flag.x): expected true or false"));
   EXPECT_THAT(ErrorOf("flag: true\n", {"flag.x=1"}), HasSubstr("'flag' is not a mapping"));
+}
+
+// Issue 15: paths the override parser once let through, or answered with a library's message.
+TEST(ConfigTest, MalformedOverridePathsAreRefusedNamingTheKey) {
+  for (const char* key : {"items[0.gain", "items[0]]gain", "items.0.gain", ".seed", "seed.",
+                          "items[-1].gain", "items[x].gain", "a..b", "items[]", "se ed"}) {
+    const std::string error = ErrorOf("items: [{gain: 2}]\n", {std::string(key) + "=1"});
+    EXPECT_THAT(error, HasSubstr(std::string("--set ") + key + ": ")) << key;
+    EXPECT_THAT(error, HasSubstr("e.g. cars[0].oracle.speed_mps")) << key;
+  }
+  EXPECT_THAT(ErrorOf("items: []\n", {"items[99999999999999999999].gain=1"}),
+              HasSubstr("list index 99999999999999999999 is out of range"));
+  EXPECT_THAT(ErrorOf("- 1\n- 2\n", {"seed=1"}), HasSubstr("'(top level)' is not a mapping"));
+  EXPECT_THAT(ErrorOf("{}", {"items[0]=1"}), HasSubstr("is not a list"));
+}
+
+TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "config_test_load_yaml";
+  std::filesystem::create_directories(dir);
+  const auto error_of_file = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    try {
+      LoadYamlFile(dir / name);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_THAT(error_of_file("dup.yaml", "seed: 1\nduration_s: 3\nduration_s: 5\n"),
+              HasSubstr("dup.yaml:3:1: duration_s: duplicate key (first at line 2)"));
+  EXPECT_THAT(error_of_file("nested.yaml", "a:\n  b: 1\n  b: 2\n"),
+              HasSubstr("nested.yaml:3:3: b: duplicate key"));
+  EXPECT_THAT(error_of_file("latin1.yaml", "seed: 1\nname: caf\xE9\n"),
+              HasSubstr("latin1.yaml:2:10: not UTF-8 text (byte 0xE9)"));
+  EXPECT_EQ(error_of_file("utf8.yaml", "name: caf\xC3\xA9\n"), "(no error)");
+  std::filesystem::create_directories(dir / "folder.yaml");
+  try {
+    LoadYamlFile(dir / "folder.yaml");
+    ADD_FAILURE() << "a folder was read as YAML";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("folder.yaml: is a folder, not a YAML file"));
+  }
 }
 
 TEST(ConfigTest, JsonHasEveryKeyAndRoundTripsThroughTheReader) {

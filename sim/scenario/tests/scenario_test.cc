@@ -82,7 +82,7 @@ TEST(ScenarioTest, OverridesReachAnyField) {
   ScenarioFile file("overrides", kValid);
   const LoadedScenario loaded = LoadScenario(
       file.path(),
-      {"cars[1].oracle.speed_mps=0.3", "cars.0.laps=2", "v2i.loss=0.1", "duration_s=20"});
+      {"cars[1].oracle.speed_mps=0.3", "cars[0].laps=2", "v2i.loss=0.1", "duration_s=20"});
   EXPECT_DOUBLE_EQ(loaded.scenario.cars[1].oracle.speed_mps, 0.3);
   EXPECT_EQ(loaded.scenario.cars[0].laps, 2);
   EXPECT_DOUBLE_EQ(loaded.scenario.v2i.loss, 0.1);
