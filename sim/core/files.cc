@@ -16,6 +16,18 @@ void WriteFile(const fs::path& file, const std::string& content) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
+void WriteFileAtomically(const fs::path& file, const std::string& content) {
+  const fs::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
+  try {
+    WriteFile(tmp, content);
+    fs::rename(tmp, file);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
 void WriteFolderAtomically(const fs::path& target_dir,
                            const std::function<void(const fs::path& partial)>& fill) {
   const fs::path target = fs::absolute(target_dir).lexically_normal();

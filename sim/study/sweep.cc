@@ -1,7 +1,6 @@
 #include "sim/study/sweep.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -42,13 +41,6 @@ double ParseNumber(const std::string& text, const std::string& spec) {
 
 // The shortest text that reads back as `value` (fmt's default for doubles).
 std::string NumberText(double value) { return fmt::format("{}", value); }
-
-// Writes `content` to `file` through a temporary sibling, so a reader never sees half of it.
-void WriteFileAtomically(const fs::path& file, const std::string& content) {
-  const fs::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
-  WriteFile(tmp, content);
-  fs::rename(tmp, file);
-}
 
 nlohmann::json ReadJsonFile(const fs::path& file) {
   std::ifstream in(file);
