@@ -8,12 +8,12 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/core/version.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/platform/node_metrics.h"
+#include "sim/results/png.h"
 #include "world/floor_raster.h"
 
 #ifndef AUTONOMSIM_VERSION
@@ -168,9 +168,7 @@ void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
     if (!record.boards.empty()) WriteFile(partial / "nodes.csv", NodesCsv(record.boards));
     if (!record.trace_json.empty()) WriteFile(partial / "trace.json", record.trace_json);
     WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
-    if (!cv::imwrite((partial / "track.png").string(), DrawTrack(loaded, record))) {
-      throw std::runtime_error("cannot write track.png");
-    }
+    WritePng(partial / "track.png", DrawTrack(loaded, record));
     // summary.json last: its presence marks a complete folder
     WriteFile(partial / "summary.json",
               Summary(loaded, record, expectations, wall_seconds).dump(2) + "\n");

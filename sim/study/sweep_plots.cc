@@ -6,9 +6,10 @@
 #include <array>
 #include <cmath>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
+
+#include "sim/results/png.h"
 
 namespace autonomsim::sim {
 
@@ -77,10 +78,6 @@ std::string FileSafe(const std::string& text) {
   }
   while (out.size() > 1 && out.front() == '_') out.erase(out.begin());
   return out;
-}
-
-void Save(const cv::Mat& image, const fs::path& file) {
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
 }
 
 // A run's label in legends: its varied values.
@@ -311,7 +308,7 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
         }
       }
       if (plot.series.empty()) continue;
-      Save(DrawPlot(plot), dir / (FileSafe(metric) + "_vs_" + FileSafe(axis.key) + ".png"));
+      WritePng(dir / (FileSafe(metric) + "_vs_" + FileSafe(axis.key) + ".png"), DrawPlot(plot));
     }
   }
 
@@ -377,10 +374,10 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
     }
   }
   for (const auto& [board, plot] : loads) {
-    Save(DrawPlot(plot), dir / ("cpu_load_" + FileSafe(board) + ".png"));
+    WritePng(dir / ("cpu_load_" + FileSafe(board) + ".png"), DrawPlot(plot));
   }
   for (const auto& [name, plot] : histograms) {
-    Save(DrawPlot(plot), dir / ("turnaround_" + FileSafe(name) + ".png"));
+    WritePng(dir / ("turnaround_" + FileSafe(name) + ".png"), DrawPlot(plot));
   }
 }
 
