@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include "sim/core/config.h"
@@ -69,6 +70,17 @@ PointRecord PointFromJson(const nlohmann::json& j) {
                      .seed = j.at("seed").get<std::uint64_t>()};
 }
 
+// A manifest (sweep.json): the spec, the grid's size, the shard ("k/n") and its points.
+nlohmann::json ManifestJson(const SweepSpec& spec, std::size_t grid_points,
+                            const std::string& shard, const std::vector<PointRecord>& records) {
+  nlohmann::json manifest = {{"spec", spec.ToJson()},
+                             {"grid_points", grid_points},
+                             {"shard", shard},
+                             {"points", nlohmann::json::array()}};
+  for (const PointRecord& r : records) manifest["points"].push_back(PointJson(r));
+  return manifest;
+}
+
 std::vector<std::string> AxisKeys(const SweepSpec& spec) {
   std::vector<std::string> keys;
   for (const VaryAxis& axis : spec.axes) keys.push_back(axis.key);
@@ -109,6 +121,140 @@ std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRec
 
 // ---- Running ----
 
+namespace {
+
+// "key=label ..." of a point's varied values, for messages.
+std::string PointValues(const SweepSpec& spec, const SweepPoint& p) {
+  std::string values;
+  for (std::size_t a = 0; a < spec.axes.size(); ++a) {
+    values += (a ? " " : "") + spec.axes[a].key + "=" + spec.axes[a].values[p.value_index[a]].label;
+  }
+  return values;
+}
+
+// Resolves every point to its scenario (its repeat's seed applied), on `jobs` threads. Unusable
+// input at any point is a ConfigError naming the point and its values, before anything runs.
+std::vector<LoadedScenario> LoadPoints(const SweepSpec& spec, const std::vector<SweepPoint>& points,
+                                       int jobs) {
+  std::vector<std::optional<LoadedScenario>> loaded(points.size());
+  std::vector<std::string> errors(points.size());
+  ParallelFor(points.size(), jobs, [&](std::size_t i) {
+    const SweepPoint& p = points[i];
+    const std::vector<std::string> overrides = PointOverrides(spec, p);
+    try {
+      loaded[i].emplace(LoadScenario(spec.scenario, overrides));
+      if (p.repeat > 0) {
+        const std::uint64_t seed = loaded[i]->scenario.seed + static_cast<std::uint64_t>(p.repeat);
+        loaded[i].emplace(LoadScenario(spec.scenario, overrides, seed));
+      }
+    } catch (const ConfigError& e) {
+      errors[i] = fmt::format("point {} ({}): {}", p.index, PointValues(spec, p), e.what());
+    }
+  });
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw ConfigError(e);
+  }
+  std::vector<LoadedScenario> scenarios;
+  scenarios.reserve(points.size());
+  for (std::optional<LoadedScenario>& l : loaded) scenarios.push_back(std::move(*l));
+  return scenarios;
+}
+
+std::vector<PointRecord> RecordPoints(const SweepSpec& spec, const std::vector<SweepPoint>& points,
+                                      const std::vector<LoadedScenario>& loaded) {
+  std::vector<PointRecord> records;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    PointRecord r{.index = points[i].index,
+                  .run_id = loaded[i].sha256.substr(0, 16),
+                  .labels = {},
+                  .repeat = points[i].repeat,
+                  .seed = loaded[i].scenario.seed};
+    for (std::size_t a = 0; a < spec.axes.size(); ++a) {
+      r.labels.push_back(spec.axes[a].values[points[i].value_index[a]].label);
+    }
+    records.push_back(std::move(r));
+  }
+  return records;
+}
+
+// The runs to do, as indices into `records`: one per distinct run id whose folder in `dir` is not
+// complete yet. Counts the complete ones into *already_done.
+std::vector<std::size_t> RunsToDo(const std::vector<PointRecord>& records, const fs::path& dir,
+                                  std::size_t* already_done) {
+  std::vector<std::size_t> todo;
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (!seen.insert(records[i].run_id).second) continue;
+    if (RunComplete(dir, records[i].run_id)) {
+      ++*already_done;
+    } else {
+      todo.push_back(i);
+    }
+  }
+  return todo;
+}
+
+std::chrono::nanoseconds Now(const WallClock& clock) {
+  return clock ? clock() : std::chrono::nanoseconds(0);
+}
+
+double SecondsSince(std::chrono::nanoseconds start, const WallClock& clock) {
+  return std::chrono::duration<double>(Now(clock) - start).count();
+}
+
+// Runs one point and writes its folder. Its wall time is the simulation's alone: not loading the
+// scenario, judging it or writing the folder.
+void RunPoint(const LoadedScenario& loaded, const WallClock& clock, const fs::path& folder) {
+  const std::chrono::nanoseconds start = Now(clock);
+  Simulation simulation(loaded);
+  simulation.Run();
+  const double wall_s = SecondsSince(start, clock);
+  const auto expectations = EvaluateExpectations(loaded.scenario, simulation.record());
+  WriteRunFolder(loaded, simulation.record(), expectations, wall_s, folder);
+}
+
+// Runs the points `todo` (indices into `loaded` and `records`) on options.jobs threads, counting
+// into *summary and reporting progress before the first and after each.
+void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<PointRecord>& records,
+               const std::vector<std::size_t>& todo, const SweepOptions& options,
+               SweepSummary* summary) {
+  std::mutex mutex;
+  std::size_t done = 0;
+  const std::chrono::nanoseconds start = Now(options.wall_clock);
+  if (options.progress && !todo.empty()) {
+    options.progress(SweepProgress{.done = 0, .total = todo.size(), .wall_s = 0.0});
+  }
+  ParallelFor(todo.size(), options.jobs, [&](std::size_t t) {
+    const std::size_t i = todo[t];
+    std::string failure;
+    bool input_error = false;
+    try {
+      RunPoint(loaded[i], options.wall_clock, RunFolder(options.out_dir, records[i].run_id));
+    } catch (const ConfigError& e) {
+      failure = e.what();
+      input_error = true;
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    ++done;
+    if (!failure.empty()) {
+      summary->failures.push_back(
+          fmt::format("run {} (point {}): {}", records[i].run_id, records[i].index, failure));
+      summary->input_error = summary->input_error || input_error;
+    } else {
+      ++summary->ran;
+    }
+    if (options.progress) {
+      options.progress(SweepProgress{
+          .done = done, .total = todo.size(), .wall_s = SecondsSince(start, options.wall_clock)});
+    }
+  });
+  std::sort(summary->failures.begin(), summary->failures.end());
+}
+
+}  // namespace
+
 SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   SweepSummary summary;
   const std::vector<SweepPoint> grid = ExpandGrid(spec);
@@ -119,106 +265,18 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   }
   summary.selected = selected.size();
 
-  // Resolve every point first: unusable input stops the sweep before anything runs.
-  std::vector<std::optional<LoadedScenario>> loaded(selected.size());
-  std::vector<std::string> errors(selected.size());
-  ParallelFor(selected.size(), options.jobs, [&](std::size_t i) {
-    const SweepPoint& p = selected[i];
-    const std::vector<std::string> overrides = PointOverrides(spec, p);
-    try {
-      loaded[i].emplace(LoadScenario(spec.scenario, overrides));
-      if (p.repeat > 0) {
-        const std::uint64_t seed = loaded[i]->scenario.seed + static_cast<std::uint64_t>(p.repeat);
-        loaded[i].emplace(LoadScenario(spec.scenario, overrides, seed));
-      }
-    } catch (const ConfigError& e) {
-      std::string values;
-      for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-        values +=
-            (a ? " " : "") + spec.axes[a].key + "=" + spec.axes[a].values[p.value_index[a]].label;
-      }
-      errors[i] = fmt::format("point {} ({}): {}", p.index, values, e.what());
-    }
-  });
-  for (const std::string& e : errors) {
-    if (!e.empty()) throw ConfigError(e);
-  }
-
-  std::vector<PointRecord> records;
-  for (std::size_t i = 0; i < selected.size(); ++i) {
-    PointRecord r{.index = selected[i].index,
-                  .run_id = loaded[i]->sha256.substr(0, 16),
-                  .labels = {},
-                  .repeat = selected[i].repeat,
-                  .seed = loaded[i]->scenario.seed};
-    for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-      r.labels.push_back(spec.axes[a].values[selected[i].value_index[a]].label);
-    }
-    records.push_back(std::move(r));
-  }
+  // resolve every point first: unusable input stops the sweep before anything runs
+  const std::vector<LoadedScenario> loaded = LoadPoints(spec, selected, options.jobs);
+  const std::vector<PointRecord> records = RecordPoints(spec, selected, loaded);
   fs::create_directories(options.out_dir / "runs");
-  nlohmann::json manifest = {{"spec", spec.ToJson()},
-                             {"grid_points", grid.size()},
-                             {"shard", fmt::format("{}/{}", options.shard.k, options.shard.n)},
-                             {"points", nlohmann::json::array()}};
-  for (const PointRecord& r : records) manifest["points"].push_back(PointJson(r));
-  WriteFileAtomically(options.out_dir / ManifestName(options.shard), manifest.dump(2) + "\n");
+  WriteFileAtomically(options.out_dir / ManifestName(options.shard),
+                      ManifestJson(spec, grid.size(),
+                                   fmt::format("{}/{}", options.shard.k, options.shard.n), records)
+                              .dump(2) +
+                          "\n");
 
-  // The runs to do: one per distinct id whose folder is not complete yet.
-  std::vector<std::size_t> todo;
-  std::set<std::string> seen;
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    if (!seen.insert(records[i].run_id).second) continue;
-    if (RunComplete(options.out_dir, records[i].run_id)) {
-      ++summary.already_done;
-    } else {
-      todo.push_back(i);
-    }
-  }
-  std::mutex mutex;
-  std::size_t done = 0;
-  const auto start = std::chrono::steady_clock::now();
-  if (options.progress && !todo.empty()) {
-    options.progress(SweepProgress{.done = 0, .total = todo.size(), .wall_s = 0.0});
-  }
-  ParallelFor(todo.size(), options.jobs, [&](std::size_t t) {
-    const std::size_t i = todo[t];
-    std::string failure;
-    bool input_error = false;
-    try {
-      const auto run_start = std::chrono::steady_clock::now();
-      Simulation simulation(*loaded[i]);
-      simulation.Run();
-      const double wall_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
-      const auto expectations = EvaluateExpectations(loaded[i]->scenario, simulation.record());
-      WriteRunFolder(*loaded[i], simulation.record(), expectations, wall_s,
-                     RunFolder(options.out_dir, records[i].run_id));
-    } catch (const ConfigError& e) {
-      failure = e.what();
-      input_error = true;
-    } catch (const std::exception& e) {
-      failure = e.what();
-    }
-    std::lock_guard<std::mutex> lock(mutex);
-    ++done;
-    if (!failure.empty()) {
-      summary.failures.push_back(
-          fmt::format("run {} (point {}): {}", records[i].run_id, records[i].index, failure));
-      summary.input_error = summary.input_error || input_error;
-    } else {
-      ++summary.ran;
-    }
-    if (options.progress) {
-      options.progress(SweepProgress{
-          .done = done,
-          .total = todo.size(),
-          .wall_s =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
-    }
-  });
-  std::sort(summary.failures.begin(), summary.failures.end());
-
+  const std::vector<std::size_t> todo = RunsToDo(records, options.out_dir, &summary.already_done);
+  RunPoints(loaded, records, todo, options, &summary);
   WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots);
   return summary;
 }
@@ -274,13 +332,9 @@ std::size_t MergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out_d
   std::vector<PointRecord> ordered;
   for (const auto& [index, record] : points) ordered.push_back(record);
   fs::create_directories(out_dir);
-  nlohmann::json manifest = {{"spec", spec->ToJson()},
-                             {"grid_points", grid_points},
-                             {"shard", "1/1"},
-                             {"merged_from", nlohmann::json::array()},
-                             {"points", nlohmann::json::array()}};
+  nlohmann::json manifest = ManifestJson(*spec, grid_points, "1/1", ordered);
+  manifest["merged_from"] = nlohmann::json::array();
   for (const fs::path& dir : dirs) manifest["merged_from"].push_back(dir.string());
-  for (const PointRecord& r : ordered) manifest["points"].push_back(PointJson(r));
   WriteFileAtomically(out_dir / "sweep.json", manifest.dump(2) + "\n");
   const std::size_t missing_runs = WriteTableAndPlots(*spec, ordered, dirs, out_dir, plots);
   return missing_runs + (grid_points - ordered.size());

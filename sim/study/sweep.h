@@ -14,6 +14,7 @@
 //   DIR/results.csv      one row per point in grid order; DIR/plots/*.png
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -29,8 +30,13 @@ namespace autonomsim::sim {
 struct SweepProgress {
   std::size_t done{0};   // runs finished (this call)
   std::size_t total{0};  // runs to do (this call)
-  double wall_s{0.0};
+  double wall_s{0.0};    // since the runs began, on SweepOptions::wall_clock
 };
+
+// The wall clock as a sweep reads it, for progress and each run's wall_seconds: a monotonic time
+// from any fixed origin, called from the worker threads. No module under sim/ reads the wall
+// clock itself (ARCHITECTURE): the CLI passes std::chrono::steady_clock, tests a fake.
+using WallClock = std::function<std::chrono::nanoseconds()>;
 
 struct SweepOptions {
   std::filesystem::path out_dir;
@@ -38,6 +44,9 @@ struct SweepOptions {
   Shard shard;
   bool plots{true};
   std::function<void(const SweepProgress&)> progress;  // called after each run, from any thread
+  // None: every wall time is 0 (no elapsed time in progress; summary.json: wall_seconds 0,
+  // real_time_factor null).
+  WallClock wall_clock;
 };
 
 struct SweepSummary {

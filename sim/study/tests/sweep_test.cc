@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -308,6 +310,52 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   EXPECT_EQ(ReadText(dir.path / "merged" / "results.csv"), table);
   // one shard alone is incomplete, and says so
   EXPECT_EQ(MergeSweeps({dir.path / "s1"}, dir.path / "half", false), 2u);
+}
+
+// The sweep reads the wall clock only through the one it is given: a fake clock, 1.5 s later at
+// each reading, gives every run 1.5 s (one reading before its simulation, one after) and the
+// progress its own readings; no clock, no wall time.
+TEST(SweepRun, WallTimesComeFromTheClockItIsGiven) {
+  TempDir dir;
+  SweepSpec spec = TinySweep();
+  spec.axes.pop_back();  // two runs, of 3 s simulated
+  std::atomic<int> readings{0};
+  std::vector<SweepProgress> progress;
+  SweepOptions options{.out_dir = dir.path / "fake",
+                       .jobs = 1,  // one thread: the readings come in a known order
+                       .shard = {},
+                       .plots = false,
+                       .progress = [&](const SweepProgress& p) { progress.push_back(p); },
+                       .wall_clock = [&] { return std::chrono::milliseconds(1500) * readings++; }};
+  ASSERT_EQ(RunSweep(spec, options).ran, 2u);
+  // readings: 0 the start; 1, 2 around run 1; 3 its progress; 4, 5 around run 2; 6 its progress
+  EXPECT_EQ(readings.load(), 7);
+  ASSERT_EQ(progress.size(), 3u);
+  EXPECT_EQ(progress[0].wall_s, 0.0);
+  EXPECT_EQ(progress[1].done, 1u);
+  EXPECT_EQ(progress[1].wall_s, 4.5);
+  EXPECT_EQ(progress[2].done, 2u);
+  EXPECT_EQ(progress[2].wall_s, 9.0);
+  std::size_t runs = 0;
+  for (const auto& run : fs::directory_iterator(dir.path / "fake" / "runs")) {
+    const nlohmann::json summary = nlohmann::json::parse(ReadText(run.path() / "summary.json"));
+    EXPECT_EQ(summary.at("wall_seconds"), 1.5);
+    EXPECT_EQ(summary.at("real_time_factor"), 2.0);  // 3 s simulated in 1.5 s
+    ++runs;
+  }
+  EXPECT_EQ(runs, 2u);
+
+  options.out_dir = dir.path / "none";
+  options.wall_clock = {};
+  progress.clear();
+  RunSweep(spec, options);
+  ASSERT_EQ(progress.size(), 3u);
+  EXPECT_EQ(progress[2].wall_s, 0.0);
+  for (const auto& run : fs::directory_iterator(dir.path / "none" / "runs")) {
+    const nlohmann::json summary = nlohmann::json::parse(ReadText(run.path() / "summary.json"));
+    EXPECT_EQ(summary.at("wall_seconds"), 0.0);
+    EXPECT_TRUE(summary.at("real_time_factor").is_null());
+  }
 }
 
 TEST(SweepRun, UnusableInputStopsTheSweepBeforeAnyRunNamingTheKey) {
