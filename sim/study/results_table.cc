@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <concepts>
 #include <map>
 #include <stdexcept>
 #include <utility>
@@ -24,12 +26,21 @@ std::string CsvField(const std::string& text) {
   return out + "\"";
 }
 
-std::string JsonNumberText(const nlohmann::json& value) {
+// A results.csv cell: a number as its shortest text that reads back the same (fmt's default for
+// doubles), a bool as 1 or 0, nothing for a missing value (an empty optional, NaN, JSON null).
+std::string Cell(double value) { return std::isfinite(value) ? fmt::format("{}", value) : ""; }
+std::string Cell(bool value) { return value ? "1" : "0"; }
+template <std::integral T>
+std::string Cell(T value) {
+  return std::to_string(value);
+}
+std::string Cell(const std::optional<double>& value) { return value ? Cell(*value) : ""; }
+// A value of a board's platform report (sim/platform's ReportJson, kept as JSON in the summary).
+std::string Cell(const nlohmann::json& value) {
   if (value.is_null()) return "";
-  if (value.is_boolean()) return value.get<bool>() ? "1" : "0";
+  if (value.is_boolean()) return Cell(value.get<bool>());
   if (value.is_number_integer() || value.is_number_unsigned()) return value.dump();
-  // the shortest text that reads back as the value (fmt's default for doubles)
-  if (value.is_number()) return fmt::format("{}", value.get<double>());
+  if (value.is_number()) return Cell(value.get<double>());
   return value.dump();
 }
 
@@ -56,71 +67,80 @@ std::string ResultsTable::Csv() const {
 
 namespace {
 
-// The metrics of one run, as (column, value) in a fixed order.
-std::vector<std::pair<std::string, std::string>> RunMetricsRow(const nlohmann::json& summary) {
-  std::vector<std::pair<std::string, std::string>> row;
-  auto add = [&row](const std::string& column, const nlohmann::json& value) {
-    row.emplace_back(column, JsonNumberText(value));
+using Row = std::vector<std::pair<std::string, std::string>>;  // (column, value)
+
+// One car's columns, each named car<id>.<metric>.
+void AddCarColumns(const CarMetrics& car, Row* row) {
+  const std::string c = fmt::format("car{}.", car.id);
+  auto add = [&](const std::string& metric, std::string value) {
+    row->emplace_back(c + metric, std::move(value));
+  };
+  add("max_lateral_error_m", Cell(car.max_lateral_error_m));
+  add("rms_lateral_error_m", Cell(car.rms_lateral_error_m));
+  add("min_obstacle_gap_m", Cell(car.min_obstacle_gap_m));
+  add("collisions", Cell(car.collisions));
+  add("laps", Cell(car.laps));
+  // the mean time per lap: the last lap's completion time over the laps completed
+  add("mean_lap_time_s",
+      car.lap_times_s.empty()
+          ? ""
+          : Cell(car.lap_times_s.back() / static_cast<double>(car.lap_times_s.size())));
+  add("distance_m", Cell(car.distance_m));
+  add("waits", Cell(car.waits));
+  add("total_wait_s", Cell(car.total_wait_s));
+  add("max_wait_s", Cell(car.max_wait_s));
+  if (car.perception) {
+    const PerceptionMetrics& p = *car.perception;
+    add("lane_error_max_m", Cell(p.lane_error_max_m));
+    add("lane_error_rms_m", Cell(p.lane_error_rms_m));
+    add("lane_valid_fraction", p.lane_frames > 0 ? Cell(static_cast<double>(p.lane_valid_frames) /
+                                                        static_cast<double>(p.lane_frames))
+                                                 : "");
+  }
+}
+
+// One board's columns, each named <board>.<metric> or <board>.<node>.<metric>. `report` is
+// sim/platform's ReportJson (its keys are that module's).
+void AddBoardColumns(const std::string& board, const nlohmann::json& report, Row* row) {
+  const std::string b = board + ".";
+  auto add = [&](const std::string& column, const nlohmann::json& value) {
+    row->emplace_back(b + column, Cell(value));
   };
   auto get = [](const nlohmann::json& j, const char* key) {
     return j.contains(key) ? j.at(key) : nlohmann::json();
   };
-  add("passed", get(summary, "passed"));
+  add("cpu_percent", get(report, "cpu_percent"));
+  add("cpu_demand_percent", get(report, "cpu_demand_percent"));
+  for (const auto& [name, column] : {std::pair<std::string, std::string>{kCarCommandTopic, "e2e"},
+                                     {kLanePointsTopic, "lanes"}}) {
+    for (const nlohmann::json& topic : report.at("topics")) {
+      if (topic.at("name") != name) continue;
+      add(column + "_latency_p50_ms", topic.at("latency_ms").at("p50"));
+      add(column + "_latency_p99_ms", get(topic.at("latency_ms"), "p99"));
+    }
+  }
+  for (const nlohmann::json& node : report.at("nodes")) {
+    const std::string n = node.at("name").get<std::string>() + ".";
+    add(n + "rate_hz", get(node, "rate_hz"));
+    add(n + "turnaround_p50_ms", node.at("turnaround_ms").at("p50"));
+    add(n + "cpu_percent", get(node, "cpu_percent"));
+  }
+}
+
+// The metrics of one run, as (column, value) in a fixed order.
+Row RunMetricsRow(const RunSummary& summary) {
+  Row row;
+  row.emplace_back("passed", Cell(summary.passed));
   int laps = 0, collisions = 0;
-  for (const nlohmann::json& car : summary.at("cars")) {
-    laps += car.value("laps", 0);
-    collisions += car.value("collisions", 0);
+  for (const CarMetrics& car : summary.cars) {
+    laps += car.laps;
+    collisions += car.collisions;
   }
-  add("laps_total", laps);
-  add("collisions_total", collisions);
-  for (const nlohmann::json& car : summary.at("cars")) {
-    const std::string c = fmt::format("car{}.", car.at("id").get<int>());
-    add(c + "max_lateral_error_m", get(car, "max_lateral_error_m"));
-    add(c + "rms_lateral_error_m", get(car, "rms_lateral_error_m"));
-    add(c + "min_obstacle_gap_m", get(car, "min_obstacle_gap_m"));
-    add(c + "collisions", get(car, "collisions"));
-    add(c + "laps", get(car, "laps"));
-    // the mean time per lap: the last lap's completion time over the laps completed
-    const auto lap_times = car.value("lap_times_s", std::vector<double>{});
-    add(c + "mean_lap_time_s",
-        lap_times.empty()
-            ? nlohmann::json()
-            : nlohmann::json(lap_times.back() / static_cast<double>(lap_times.size())));
-    add(c + "distance_m", get(car, "distance_m"));
-    add(c + "waits", get(car, "waits"));
-    add(c + "total_wait_s", get(car, "total_wait_s"));
-    add(c + "max_wait_s", get(car, "max_wait_s"));
-    if (car.contains("perception")) {
-      const nlohmann::json& p = car.at("perception");
-      add(c + "lane_error_max_m", get(p, "lane_error_max_m"));
-      add(c + "lane_error_rms_m", get(p, "lane_error_rms_m"));
-      const double frames = p.value("lane_frames", 0.0);
-      add(c + "lane_valid_fraction",
-          frames > 0 ? nlohmann::json(p.value("lane_valid_frames", 0.0) / frames)
-                     : nlohmann::json());
-    }
-  }
-  if (summary.contains("platform")) {
-    for (const auto& [board, report] : summary.at("platform").items()) {
-      const std::string b = board + ".";
-      add(b + "cpu_percent", get(report, "cpu_percent"));
-      add(b + "cpu_demand_percent", get(report, "cpu_demand_percent"));
-      for (const auto& [name, column] :
-           {std::pair<std::string, std::string>{kCarCommandTopic, "e2e"},
-            {kLanePointsTopic, "lanes"}}) {
-        for (const nlohmann::json& topic : report.at("topics")) {
-          if (topic.at("name") != name) continue;
-          add(b + column + "_latency_p50_ms", topic.at("latency_ms").at("p50"));
-          add(b + column + "_latency_p99_ms", get(topic.at("latency_ms"), "p99"));
-        }
-      }
-      for (const nlohmann::json& node : report.at("nodes")) {
-        const std::string n = b + node.at("name").get<std::string>() + ".";
-        add(n + "rate_hz", get(node, "rate_hz"));
-        add(n + "turnaround_p50_ms", node.at("turnaround_ms").at("p50"));
-        add(n + "cpu_percent", get(node, "cpu_percent"));
-      }
-    }
+  row.emplace_back("laps_total", Cell(laps));
+  row.emplace_back("collisions_total", Cell(collisions));
+  for (const CarMetrics& car : summary.cars) AddCarColumns(car, &row);
+  if (summary.platform) {
+    for (const auto& [board, report] : *summary.platform) AddBoardColumns(board, report, &row);
   }
   return row;
 }
@@ -129,7 +149,7 @@ std::vector<std::pair<std::string, std::string>> RunMetricsRow(const nlohmann::j
 
 ResultsTable BuildResultsTable(const std::vector<std::string>& axis_keys,
                                const std::vector<PointRecord>& points,
-                               const std::vector<nlohmann::json>& summaries) {
+                               const std::vector<RunSummary>& summaries) {
   if (points.size() != summaries.size()) {
     throw std::invalid_argument("BuildResultsTable: one summary per point");
   }
@@ -144,7 +164,7 @@ ResultsTable BuildResultsTable(const std::vector<std::string>& axis_keys,
   table.columns.insert(table.columns.end(), {"repeat", "seed"});
   const std::size_t fixed = table.columns.size();
   std::map<std::string, std::size_t> metric_column;  // metric columns in first-seen order
-  std::vector<std::vector<std::pair<std::string, std::string>>> metrics;
+  std::vector<Row> metrics;
   for (std::size_t i : order) {
     metrics.push_back(RunMetricsRow(summaries[i]));
     for (const auto& [column, unused] : metrics.back()) {

@@ -3,10 +3,11 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "sim/results/summary.h"
 
 namespace autonomsim::sim {
 
@@ -21,8 +22,9 @@ struct PointRecord {
 
 // The rows of results.csv: the points that have a summary, in grid order. Columns: index,
 // run_id, one per axis (its key), repeat, seed, then the metrics taken from each run's
-// summary.json (see README "Sweeps" for the list). Metric columns that some runs lack (another
-// mapping has other nodes) are empty for them. Pure: the same inputs give the same bytes.
+// summary (sim/results/summary.h; see README "Sweeps" for the list). Metric columns that some runs
+// lack (another mapping has other nodes) are empty for them. Pure: the same inputs give the same
+// bytes.
 struct ResultsTable {
   std::vector<std::string> columns;
   std::vector<std::vector<std::string>> rows;
@@ -33,6 +35,6 @@ struct ResultsTable {
 // `summaries[i]` belongs to `points[i]` (points in grid order).
 ResultsTable BuildResultsTable(const std::vector<std::string>& axis_keys,
                                const std::vector<PointRecord>& points,
-                               const std::vector<nlohmann::json>& summaries);
+                               const std::vector<RunSummary>& summaries);
 
 }  // namespace autonomsim::sim

@@ -16,6 +16,7 @@
 #include "sim/loop/simulation.h"
 #include "sim/results/expectations.h"
 #include "sim/results/outputs.h"
+#include "sim/results/summary.h"
 #include "sim/scenario/scenario.h"
 #include "sim/study/sweep_plots.h"
 
@@ -93,14 +94,14 @@ std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRec
                                const std::vector<fs::path>& dirs, const fs::path& out_dir,
                                bool plots) {
   std::vector<PointRecord> complete;
-  std::vector<nlohmann::json> summaries;
-  std::map<std::string, nlohmann::json> cache;  // points may share a run
+  std::vector<RunSummary> summaries;
+  std::map<std::string, RunSummary> cache;  // points may share a run
   for (const PointRecord& p : points) {
     auto it = cache.find(p.run_id);
     if (it == cache.end()) {
       for (const fs::path& dir : dirs) {
         if (RunComplete(dir, p.run_id)) {
-          it = cache.emplace(p.run_id, ReadJsonFile(RunFolder(dir, p.run_id) / "summary.json"))
+          it = cache.emplace(p.run_id, ReadSummaryFile(RunFolder(dir, p.run_id) / "summary.json"))
                    .first;
           break;
         }

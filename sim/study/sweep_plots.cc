@@ -242,7 +242,7 @@ cv::Mat DrawPlot(const PlotSpec& spec) {
 }
 
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
-                     const std::vector<nlohmann::json>& summaries, const ResultsTable& table,
+                     const std::vector<RunSummary>& summaries, const ResultsTable& table,
                      const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -323,10 +323,9 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
   std::map<std::string, PlotSpec> histograms;  // by board/node, in name order
   std::map<std::string, PlotSpec> loads;
   for (std::size_t i : runs) {
-    const nlohmann::json& summary = summaries[i];
-    if (!summary.contains("platform")) continue;
+    if (!summaries[i].platform) continue;
     const std::string label = RunLabel(points[i]);
-    for (const auto& [board, report] : summary.at("platform").items()) {
+    for (const auto& [board, report] : *summaries[i].platform) {
       PlotSpec& load = loads[board];
       load.title = fmt::format("CPU load over time, {}", board);
       load.x_label = "simulated time [s]";

@@ -115,18 +115,20 @@ TEST(Sweep, ShardsPartitionTheGrid) {
   }
 }
 
-nlohmann::json FakeSummary(double error_m, int laps, bool with_board) {
-  nlohmann::json car = {{"id", 0},
-                        {"laps", laps},
-                        {"lap_times_s", std::vector<double>(static_cast<std::size_t>(laps), 0.0)},
-                        {"collisions", 0},
-                        {"max_lateral_error_m", error_m},
-                        {"rms_lateral_error_m", error_m / 2},
-                        {"min_obstacle_gap_m", nullptr}};
-  if (laps > 0) car["lap_times_s"].back() = 30.0 * laps;
-  nlohmann::json s = {{"passed", true}, {"cars", {car}}};
+RunSummary FakeSummary(double error_m, int laps, bool with_board) {
+  CarMetrics car;
+  car.id = 0;
+  car.laps = laps;
+  car.lap_times_s = std::vector<double>(static_cast<std::size_t>(laps), 0.0);
+  if (laps > 0) car.lap_times_s.back() = 30.0 * laps;
+  car.max_lateral_error_m = error_m;
+  car.rms_lateral_error_m = error_m / 2;
+  RunSummary s;
+  s.passed = true;
+  s.cars = {car};
   if (with_board) {
-    s["platform"]["car0"] = {
+    s.platform.emplace();
+    (*s.platform)["car0"] = {
         {"cpu_percent", 150.0},
         {"cpu_demand_percent", 160.0},
         {"topics",
@@ -145,8 +147,8 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
       {.index = 2, .run_id = "cc", .labels = {"2", "a,b"}, .repeat = 0, .seed = 42},
       {.index = 0, .run_id = "aa", .labels = {"0", "plain"}, .repeat = 0, .seed = 42},
       {.index = 1, .run_id = "bb", .labels = {"1", "say \"hi\""}, .repeat = 1, .seed = 43}};
-  const std::vector<nlohmann::json> summaries = {
-      FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false), FakeSummary(0.2, 0, false)};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false),
+                                             FakeSummary(0.2, 0, false)};
   const ResultsTable table = BuildResultsTable({"v2i.latency_s", "label"}, points, summaries);
   ASSERT_EQ(table.rows.size(), 3u);
   EXPECT_THAT(std::vector<std::string>(table.columns.begin(), table.columns.begin() + 6),
