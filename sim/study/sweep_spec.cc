@@ -143,6 +143,79 @@ std::string YamlText(const YAML::Node& node) {
   return out.c_str();
 }
 
+// An error at `node` of a study file: "file:line:column: message".
+ConfigError StudyError(const fs::path& file, const YAML::Node& node, const std::string& message) {
+  const YAML::Mark mark = node.Mark();
+  return ConfigError(
+      fmt::format("{}:{}:{}: {}", file.string(), mark.line + 1, mark.column + 1, message));
+}
+
+void CheckStudyKeys(const fs::path& file, const YAML::Node& root) {
+  for (const auto& item : root) {
+    const std::string key = item.first.as<std::string>();
+    if (key != "scenario" && key != "description" && key != "set" && key != "repeat" &&
+        key != "vary") {
+      throw StudyError(
+          file, item.first,
+          "unknown key '" + key + "' (a study has scenario, description, set, repeat, vary)");
+    }
+  }
+}
+
+// A vary entry's `values`: a list of YAML values (each its own label), or a mapping label: value.
+std::vector<VaryValue> StudyValues(const fs::path& file, const YAML::Node& values) {
+  std::vector<VaryValue> out;
+  if (values.IsSequence()) {
+    for (const YAML::Node& v : values) {
+      const std::string text = v.IsScalar() ? v.as<std::string>() : YamlText(v);
+      out.push_back({text, text});
+    }
+  } else if (values.IsMap()) {
+    for (const auto& v : values) {
+      const std::string text =
+          v.second.IsScalar() ? v.second.as<std::string>() : YamlText(v.second);
+      out.push_back({v.first.as<std::string>(), text});
+    }
+  } else {
+    throw StudyError(file, values, "values: a list, or a mapping label: value");
+  }
+  return out;
+}
+
+// One entry of a study's `vary`: "key=..." as on the command line, {key, values} or
+// {key, range: [start, stop, count]}.
+VaryAxis StudyAxis(const fs::path& file, const YAML::Node& entry) {
+  if (entry.IsScalar()) {
+    try {
+      return ParseVary(entry.as<std::string>());
+    } catch (const ConfigError& e) {
+      throw StudyError(file, entry, e.what());
+    }
+  }
+  if (!entry.IsMap() || !entry["key"] || (!entry["values"] == !entry["range"])) {
+    throw StudyError(file, entry,
+                     "a vary entry is {key, values} or {key, range: [start, stop, count]}");
+  }
+  VaryAxis axis{.key = entry["key"].as<std::string>(), .values = {}};
+  if (const YAML::Node values = entry["values"]) {
+    axis.values = StudyValues(file, values);
+  } else {
+    const YAML::Node range = entry["range"];
+    if (!range.IsSequence() || range.size() != 3) {
+      throw StudyError(file, range, "range: [start, stop, count]");
+    }
+    try {
+      axis.values = ParseVary(axis.key + "=" + range[0].as<std::string>() + ":" +
+                              range[1].as<std::string>() + ":" + range[2].as<std::string>())
+                        .values;
+    } catch (const ConfigError& e) {
+      throw StudyError(file, range, e.what());
+    }
+  }
+  if (axis.values.empty()) throw StudyError(file, entry, "vary " + axis.key + ": no values");
+  return axis;
+}
+
 }  // namespace
 
 bool IsStudyFile(const fs::path& file) {
@@ -156,84 +229,32 @@ bool IsStudyFile(const fs::path& file) {
 
 SweepSpec LoadStudy(const fs::path& file) {
   const YAML::Node root = LoadYamlFile(file);
-  const std::string where = file.string();
-  auto fail = [&](const YAML::Node& node, const std::string& message) -> ConfigError {
-    const YAML::Mark mark = node.Mark();
-    return ConfigError(fmt::format("{}:{}:{}: {}", where, mark.line + 1, mark.column + 1, message));
-  };
-  if (!root.IsMap()) throw fail(root, "a study file is a mapping with scenario: (and vary:)");
-  for (const auto& item : root) {
-    const std::string key = item.first.as<std::string>();
-    if (key != "scenario" && key != "description" && key != "set" && key != "repeat" &&
-        key != "vary") {
-      throw fail(item.first, "unknown key '" + key +
-                                 "' (a study has scenario, description, set, repeat, vary)");
-    }
+  if (!root.IsMap()) {
+    throw StudyError(file, root, "a study file is a mapping with scenario: (and vary:)");
   }
+  CheckStudyKeys(file, root);
   SweepSpec spec;
   if (!root["scenario"] || !root["scenario"].IsScalar()) {
-    throw fail(root, "scenario: the scenario file, relative to the study file");
+    throw StudyError(file, root, "scenario: the scenario file, relative to the study file");
   }
   spec.scenario = (file.parent_path() / root["scenario"].as<std::string>()).lexically_normal();
   if (const YAML::Node set = root["set"]) {
-    if (!set.IsSequence()) throw fail(set, "set: a list of key=value");
+    if (!set.IsSequence()) throw StudyError(file, set, "set: a list of key=value");
     for (const YAML::Node& s : set) spec.overrides.push_back(s.as<std::string>());
   }
   if (const YAML::Node repeat = root["repeat"]) {
     try {
       spec.repeat = repeat.as<int>();
     } catch (const YAML::Exception&) {
-      throw fail(repeat, "repeat: a whole number >= 1");
+      throw StudyError(file, repeat, "repeat: a whole number >= 1");
     }
-    if (spec.repeat < 1) throw fail(repeat, "repeat: a whole number >= 1");
+    if (spec.repeat < 1) throw StudyError(file, repeat, "repeat: a whole number >= 1");
   }
   // No vary: one grid point, `repeat` seeds of it.
   const YAML::Node vary = root["vary"] ? root["vary"] : YAML::Node(YAML::NodeType::Sequence);
-  if (!vary.IsSequence()) throw fail(vary, "vary: a list of {key, values} or {key, range}");
-  for (const YAML::Node& entry : vary) {
-    if (entry.IsScalar()) {
-      try {
-        spec.axes.push_back(ParseVary(entry.as<std::string>()));
-      } catch (const ConfigError& e) {
-        throw fail(entry, e.what());
-      }
-      continue;
-    }
-    if (!entry.IsMap() || !entry["key"] || (!entry["values"] == !entry["range"])) {
-      throw fail(entry, "a vary entry is {key, values} or {key, range: [start, stop, count]}");
-    }
-    VaryAxis axis{.key = entry["key"].as<std::string>(), .values = {}};
-    if (const YAML::Node values = entry["values"]) {
-      if (values.IsSequence()) {
-        for (const YAML::Node& v : values) {
-          const std::string text = v.IsScalar() ? v.as<std::string>() : YamlText(v);
-          axis.values.push_back({text, text});
-        }
-      } else if (values.IsMap()) {
-        for (const auto& v : values) {
-          const std::string text =
-              v.second.IsScalar() ? v.second.as<std::string>() : YamlText(v.second);
-          axis.values.push_back({v.first.as<std::string>(), text});
-        }
-      } else {
-        throw fail(values, "values: a list, or a mapping label: value");
-      }
-    } else {
-      const YAML::Node range = entry["range"];
-      if (!range.IsSequence() || range.size() != 3) {
-        throw fail(range, "range: [start, stop, count]");
-      }
-      try {
-        axis.values = ParseVary(axis.key + "=" + range[0].as<std::string>() + ":" +
-                                range[1].as<std::string>() + ":" + range[2].as<std::string>())
-                          .values;
-      } catch (const ConfigError& e) {
-        throw fail(range, e.what());
-      }
-    }
-    if (axis.values.empty()) throw fail(entry, "vary " + axis.key + ": no values");
-    spec.axes.push_back(std::move(axis));
-  }
+  if (!vary.IsSequence())
+    throw StudyError(file, vary, "vary: a list of {key, values} or {key, range}");
+  for (const YAML::Node& entry : vary) spec.axes.push_back(StudyAxis(file, entry));
   return spec;
 }
 
