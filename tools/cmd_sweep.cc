@@ -91,6 +91,10 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   }
   SweepProgressPrinter printer(o.quiet);
   options.progress = [&printer](const sim::SweepProgress& p) { printer.Update(p); };
+  options.wall_clock = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::steady_clock::now().time_since_epoch());
+  };
 
   std::size_t grid = 1;
   for (const sim::VaryAxis& axis : spec.axes) grid *= axis.values.size();

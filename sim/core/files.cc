@@ -19,6 +19,18 @@ void WriteFile(const fs::path& file, const std::string& content) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
+void WriteFileAtomically(const fs::path& file, const std::string& content) {
+  const fs::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
+  try {
+    WriteFile(tmp, content);
+    fs::rename(tmp, file);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
 namespace {
 
 // What stands at `path` (not following a final symbolic link), for messages; empty if nothing.

@@ -11,6 +11,11 @@ namespace autonomsim::sim {
 // Writes `content` to `file`; throws std::runtime_error naming the file on failure.
 void WriteFile(const std::filesystem::path& file, const std::string& content);
 
+// Writes `content` to `file` through a sibling "<file>.tmp-<pid>" renamed over it, so a reader
+// sees the previous file or the new one, never half of one (one writer per file at a time in a
+// process). On failure the temporary is removed and the error (a std::runtime_error naming the
+// file) propagates.
+void WriteFileAtomically(const std::filesystem::path& file, const std::string& content);
 // Output folders. Every folder this program writes (a run, a render, a sweep) carries this marker
 // file; only a folder that has it is ever replaced, unless the user says --force.
 inline constexpr const char* kOutputMarker = ".autonomsim";

@@ -1,24 +1,17 @@
 #include "sim/results/outputs.h"
 
-#include <box2d/b2_settings.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <array>
-#include <fstream>
 #include <opencv2/core.hpp>
-#include <opencv2/core/version.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/platform/node_metrics.h"
+#include "sim/results/png.h"
+#include "sim/results/summary.h"
 #include "world/floor_raster.h"
-
-#ifndef AUTONOMSIM_VERSION
-#define AUTONOMSIM_VERSION "unknown"
-#endif
 
 namespace autonomsim::sim {
 namespace {
@@ -74,90 +67,6 @@ cv::Mat DrawTrack(const LoadedScenario& loaded, const RunRecord& record) {
 
 }  // namespace
 
-nlohmann::json Summary(const LoadedScenario& loaded, const RunRecord& record,
-                       const std::vector<ExpectationResult>& expectations, double wall_seconds) {
-  const double sim_seconds = ToSeconds(record.sim_duration);
-  nlohmann::json summary;
-  summary["scenario"] = loaded.scenario.name;
-  summary["scenario_file"] = loaded.file.string();
-  summary["seed"] = loaded.scenario.seed;
-  summary["scenario_sha256"] = loaded.sha256;
-  summary["result_sha256"] = ResultSha256(record);
-  summary["sim_seconds"] = sim_seconds;
-  summary["wall_seconds"] = wall_seconds;
-  summary["real_time_factor"] =
-      wall_seconds > 0.0 ? nlohmann::json(sim_seconds / wall_seconds) : nlohmann::json();
-  summary["kernel_events"] = record.kernel_events;
-  bool passed = true;
-  nlohmann::json verdicts = nlohmann::json::array();
-  for (const ExpectationResult& r : expectations) {
-    verdicts.push_back({{"name", r.name}, {"passed", r.passed}, {"detail", r.detail}});
-    passed = passed && r.passed;
-  }
-  summary["expectations"] = verdicts;
-  summary["passed"] = passed;
-  nlohmann::json cars = nlohmann::json::array();
-  for (const CarMetrics& c : record.cars) {
-    cars.push_back(
-        {{"id", c.id},
-         {"route", c.route},
-         {"route_length_m", c.route_length_m},
-         {"laps", c.laps},
-         {"lap_times_s", c.lap_times_s},
-         {"collisions", c.collisions},
-         {"max_lateral_error_m", c.max_lateral_error_m},
-         {"rms_lateral_error_m", c.rms_lateral_error_m},
-         {"distance_m", c.distance_m},
-         {"mean_speed_mps", c.mean_speed_mps},
-         {"intersection_entries", c.intersection_entries},
-         {"waits", c.waits},
-         {"total_wait_s", c.total_wait_s},
-         {"max_wait_s", c.max_wait_s},
-         {"min_obstacle_gap_m",
-          c.min_obstacle_gap_m ? nlohmann::json(*c.min_obstacle_gap_m) : nlohmann::json()}});
-    if (c.perception) {
-      const PerceptionMetrics& p = *c.perception;
-      cars.back()["perception"] = {{"lane_frames", p.lane_frames},
-                                   {"lane_valid_frames", p.lane_valid_frames},
-                                   {"lane_error_samples", p.lane_error_samples},
-                                   {"lane_error_max_m", p.lane_error_max_m},
-                                   {"lane_error_rms_m", p.lane_error_rms_m},
-                                   {"grid_frames", p.grid_frames},
-                                   {"grid_obstacle_frames", p.grid_obstacle_frames}};
-    }
-    if (c.stack) {
-      const StackMetrics& m = *c.stack;
-      cars.back()["stack"] = {{"control_cycles", m.control_cycles},
-                              {"follow_path_cycles", m.follow_path_cycles},
-                              {"collision_cycles", m.collision_cycles},
-                              {"recoveries", m.recoveries},
-                              {"navigation_failed", m.navigation_failed},
-                              {"max_localization_error_m", m.max_localization_error_m},
-                              {"final_localization_error_m", m.final_localization_error_m}};
-    }
-  }
-  summary["cars"] = cars;
-  summary["server"] = {{"requests", record.server.requests},
-                       {"grants", record.server.grants},
-                       {"denials", record.server.denials},
-                       {"frees", record.server.frees},
-                       {"lease_expiries", record.server.lease_expiries},
-                       {"malformed", record.server.malformed}};
-  summary["v2i"] = {
-      {"sent", record.v2i.sent}, {"delivered", record.v2i.delivered}, {"lost", record.v2i.lost}};
-  if (!record.boards.empty()) {
-    nlohmann::json platform = nlohmann::json::object();
-    for (const BoardReport& board : record.boards) platform[board.board] = ReportJson(board.report);
-    summary["platform"] = platform;
-  }
-  summary["versions"] = {
-      {"autonomsim", AUTONOMSIM_VERSION},
-      {"box2d", fmt::format("{}.{}.{}", b2_version.major, b2_version.minor, b2_version.revision)},
-      {"opencv", CV_VERSION},
-      {"compiler", __VERSION__}};
-  return summary;
-}
-
 void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
                     const std::vector<ExpectationResult>& expectations, double wall_seconds,
                     const std::filesystem::path& out_dir, bool force) {
@@ -170,12 +79,11 @@ void WriteRunFolder(const LoadedScenario& loaded, const RunRecord& record,
         if (!record.boards.empty()) WriteFile(partial / "nodes.csv", NodesCsv(record.boards));
         if (!record.trace_json.empty()) WriteFile(partial / "trace.json", record.trace_json);
         WriteFile(partial / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
-        if (!cv::imwrite((partial / "track.png").string(), DrawTrack(loaded, record))) {
-          throw std::runtime_error("cannot write track.png");
-        }
+        WritePng(partial / "track.png", DrawTrack(loaded, record));
         // summary.json last: its presence marks a complete folder
-        WriteFile(partial / "summary.json",
-                  Summary(loaded, record, expectations, wall_seconds).dump(2) + "\n");
+        WriteFile(
+            partial / "summary.json",
+            SummaryJson(Summarize(loaded, record, expectations, wall_seconds)).dump(2) + "\n");
       },
       force);
 }

@@ -1,11 +1,10 @@
-// The result folder of a run: summary.json, trajectory.csv, events.jsonl, track.png and the
-// resolved scenario. Written under a temporary name and renamed when complete, so a killed run
-// never leaves a folder that looks complete.
+// The result folder of a run: summary.json (sim/results/summary.h), trajectory.csv,
+// events.jsonl, nodes.csv and trace.json (with a board), track.png and the resolved scenario.
+// Written under a temporary name and renamed when complete, so a killed run never leaves a folder
+// that looks complete.
 #pragma once
 
 #include <filesystem>
-#include <nlohmann/json.hpp>
-#include <string>
 #include <vector>
 
 #include "sim/results/expectations.h"
@@ -13,9 +12,6 @@
 #include "sim/scenario/scenario.h"
 
 namespace autonomsim::sim {
-
-nlohmann::json Summary(const LoadedScenario& scenario, const RunRecord& record,
-                       const std::vector<ExpectationResult>& expectations, double wall_seconds);
 
 // Writes every file of the folder to `out_dir`, replacing a previous result there (a folder this
 // program wrote, or with `force` anything but a device: sim/core/files.h CheckOutputFolder).

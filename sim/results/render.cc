@@ -8,22 +8,18 @@
 #include <memory>
 #include <numbers>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 #include "sim/core/files.h"
 #include "sim/loop/simulation.h"
+#include "sim/results/png.h"
 #include "world/floor_raster.h"
 
 namespace autonomsim::sim {
 namespace {
 
 namespace fs = std::filesystem;
-
-void WritePng(const fs::path& file, const cv::Mat& image) {
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
-}
 
 template <std::size_t N>
 nlohmann::json Array(const std::array<double, N>& values) {

@@ -6,9 +6,10 @@
 #include <array>
 #include <cmath>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
+
+#include "sim/results/png.h"
 
 namespace autonomsim::sim {
 
@@ -79,10 +80,6 @@ std::string FileSafe(const std::string& text) {
   return out;
 }
 
-void Save(const cv::Mat& image, const fs::path& file) {
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
-}
-
 // A run's label in legends: its varied values.
 std::string RunLabel(const PointRecord& p) {
   std::string label;
@@ -124,15 +121,35 @@ std::vector<double> NiceTicks(double lo, double hi, int target_count) {
   return ticks;
 }
 
-cv::Mat DrawPlot(const PlotSpec& spec) {
-  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
-  auto tx = [&](double x) { return spec.log_x ? std::log10(x) : x; };
+namespace {
+
+// Where the data goes in the picture: the plotted ranges, their ticks, and the mapping to pixels.
+struct Frame {
+  bool log_x{false};
+  double x_lo{0.0}, x_hi{1.0}, y_lo{0.0}, y_hi{1.0};  // x on the log10 scale when log_x
+  std::vector<double> x_ticks, y_ticks;               // no x_ticks: categories
+  int plot_w{kWidth - kLeft - kRight};
+  int plot_h{kHeight - kTop - kBottom};
+
+  double tx(double x) const { return log_x ? std::log10(x) : x; }
+  int px(double x) const {
+    return kLeft + static_cast<int>(std::lround((x - x_lo) / (x_hi - x_lo) * plot_w));
+  }
+  int py(double y) const {
+    return kTop + plot_h - static_cast<int>(std::lround((y - y_lo) / (y_hi - y_lo) * plot_h));
+  }
+  // Whether a point is drawn at all: a finite y, and x > 0 on a log scale.
+  bool Shown(double x, double y) const { return std::isfinite(y) && !(log_x && x <= 0); }
+};
+
+Frame FrameFor(const PlotSpec& spec) {
+  Frame f{.log_x = spec.log_x};
   double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
   for (const PlotSeries& s : spec.series) {
     for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!std::isfinite(s.y[i]) || (spec.log_x && s.x[i] <= 0)) continue;
-      x_lo = std::min(x_lo, tx(s.x[i]));
-      x_hi = std::max(x_hi, tx(s.x[i]));
+      if (!f.Shown(s.x[i], s.y[i])) continue;
+      x_lo = std::min(x_lo, f.tx(s.x[i]));
+      x_hi = std::max(x_hi, f.tx(s.x[i]));
       y_lo = std::min(y_lo, s.y[i]);
       y_hi = std::max(y_hi, s.y[i]);
     }
@@ -143,84 +160,81 @@ cv::Mat DrawPlot(const PlotSpec& spec) {
     x_hi = static_cast<double>(spec.categories.size()) - 0.5;
   }
   y_lo = std::min(y_lo, 0.0);  // metrics here are >= 0: show the zero line
-  const std::vector<double> y_ticks = NiceTicks(y_lo, y_hi);
-  y_lo = y_ticks.front();
-  y_hi = y_ticks.back();
-  std::vector<double> x_ticks;
+  f.y_ticks = NiceTicks(y_lo, y_hi);
+  f.y_lo = f.y_ticks.front();
+  f.y_hi = f.y_ticks.back();
   if (spec.categories.empty()) {
-    x_ticks = spec.log_x ? std::vector<double>{} : NiceTicks(x_lo, x_hi);
     if (spec.log_x) {
-      for (double d = std::floor(x_lo); d <= std::ceil(x_hi); d += 1.0) x_ticks.push_back(d);
+      for (double d = std::floor(x_lo); d <= std::ceil(x_hi); d += 1.0) f.x_ticks.push_back(d);
+    } else {
+      f.x_ticks = NiceTicks(x_lo, x_hi);
     }
-    x_lo = std::min(x_lo, x_ticks.front());
-    x_hi = std::max(x_hi, x_ticks.back());
+    x_lo = std::min(x_lo, f.x_ticks.front());
+    x_hi = std::max(x_hi, f.x_ticks.back());
     if (x_hi <= x_lo) x_hi = x_lo + 1;
   }
-  const int plot_w = kWidth - kLeft - kRight;
-  const int plot_h = kHeight - kTop - kBottom;
-  auto px = [&](double x) {
-    return kLeft + static_cast<int>(std::lround((x - x_lo) / (x_hi - x_lo) * plot_w));
-  };
-  auto py = [&](double y) {
-    return kTop + plot_h - static_cast<int>(std::lround((y - y_lo) / (y_hi - y_lo) * plot_h));
-  };
+  f.x_lo = x_lo;
+  f.x_hi = x_hi;
+  return f;
+}
 
-  // grid, ticks and tick labels
+// Grid lines, ticks and tick labels, and the frame around the plot area.
+void DrawAxes(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
   const cv::Scalar grid(225, 225, 225), axis(60, 60, 60);
-  for (double y : y_ticks) {
-    cv::line(image, {kLeft, py(y)}, {kLeft + plot_w, py(y)}, grid, 1);
-    const std::string text = TickText(y, y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : 1.0);
-    PutText(image, text, {kLeft - 8 - TextWidth(text, 0.45), py(y) + 5}, 0.45);
+  for (double y : f.y_ticks) {
+    cv::line(image, {kLeft, f.py(y)}, {kLeft + f.plot_w, f.py(y)}, grid, 1);
+    const std::string text = TickText(y, f.y_ticks.size() > 1 ? f.y_ticks[1] - f.y_ticks[0] : 1.0);
+    PutText(image, text, {kLeft - 8 - TextWidth(text, 0.45), f.py(y) + 5}, 0.45);
   }
-  if (!spec.categories.empty()) {
-    for (std::size_t i = 0; i < spec.categories.size(); ++i) {
-      const int x = px(static_cast<double>(i));
-      cv::line(image, {x, kTop}, {x, kTop + plot_h}, grid, 1);
-      // labels alternate between two rows when there are many, so each may be twice as wide
-      const bool stagger = spec.categories.size() > 6;
-      const std::size_t max_chars = std::max<std::size_t>(
-          4, static_cast<std::size_t>(plot_w * (stagger ? 2 : 1) /
-                                      std::max<std::size_t>(1, spec.categories.size()) / 8));
-      const std::string text = Shorten(spec.categories[i], max_chars);
-      const int row = stagger ? static_cast<int>(i % 2) : 0;
-      PutText(image, text, {x - TextWidth(text, 0.42) / 2, kTop + plot_h + 20 + 16 * row}, 0.42);
-    }
-  } else {
-    for (double x : x_ticks) {
-      cv::line(image, {px(x), kTop}, {px(x), kTop + plot_h}, grid, 1);
-      const std::string text =
-          spec.log_x ? TickText(std::pow(10.0, x), std::pow(10.0, x))
-                     : TickText(x, x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0);
-      PutText(image, text, {px(x) - TextWidth(text, 0.45) / 2, kTop + plot_h + 20}, 0.45);
-    }
+  const int bottom = kTop + f.plot_h;
+  for (std::size_t i = 0; i < spec.categories.size(); ++i) {
+    const int x = f.px(static_cast<double>(i));
+    cv::line(image, {x, kTop}, {x, bottom}, grid, 1);
+    // labels alternate between two rows when there are many, so each may be twice as wide
+    const bool stagger = spec.categories.size() > 6;
+    const std::size_t max_chars = std::max<std::size_t>(
+        4, static_cast<std::size_t>(f.plot_w * (stagger ? 2 : 1) /
+                                    std::max<std::size_t>(1, spec.categories.size()) / 8));
+    const std::string text = Shorten(spec.categories[i], max_chars);
+    const int row = stagger ? static_cast<int>(i % 2) : 0;
+    PutText(image, text, {x - TextWidth(text, 0.42) / 2, bottom + 20 + 16 * row}, 0.42);
   }
-  cv::rectangle(image, {kLeft, kTop}, {kLeft + plot_w, kTop + plot_h}, axis, 1);
+  for (double x : f.x_ticks) {
+    cv::line(image, {f.px(x), kTop}, {f.px(x), bottom}, grid, 1);
+    const std::string text =
+        spec.log_x ? TickText(std::pow(10.0, x), std::pow(10.0, x))
+                   : TickText(x, f.x_ticks.size() > 1 ? f.x_ticks[1] - f.x_ticks[0] : 1.0);
+    PutText(image, text, {f.px(x) - TextWidth(text, 0.45) / 2, bottom + 20}, 0.45);
+  }
+  cv::rectangle(image, {kLeft, kTop}, {kLeft + f.plot_w, bottom}, axis, 1);
+}
 
-  // titles
+// The title above, the x label below, and the y label rotated along the left edge.
+void DrawTitles(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
   PutText(image, spec.title, {(kWidth - TextWidth(spec.title, 0.62, 2)) / 2, 30}, 0.62, 2);
   const std::string x_label = spec.x_label + (spec.log_x ? " (log scale)" : "");
-  PutText(image, x_label, {kLeft + (plot_w - TextWidth(x_label, 0.5)) / 2, kHeight - 14}, 0.5);
-  {
-    // the y label, written horizontally and rotated into place
-    const int w = TextWidth(spec.y_label, 0.5) + 10;
-    cv::Mat label(24, w, CV_8UC3, cv::Scalar(255, 255, 255));
-    PutText(label, spec.y_label, {5, 17}, 0.5);
-    cv::Mat rotated;
-    cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
-    const int top = std::max(0, kTop + (plot_h - rotated.rows) / 2);
-    const int rows = std::min(rotated.rows, kHeight - top);
-    rotated(cv::Rect(0, 0, rotated.cols, rows)).copyTo(image(cv::Rect(8, top, rotated.cols, rows)));
-  }
+  PutText(image, x_label, {kLeft + (f.plot_w - TextWidth(x_label, 0.5)) / 2, kHeight - 14}, 0.5);
+  // the y label, written horizontally and rotated into place
+  const int w = TextWidth(spec.y_label, 0.5) + 10;
+  cv::Mat label(24, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  PutText(label, spec.y_label, {5, 17}, 0.5);
+  cv::Mat rotated;
+  cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
+  const int top = std::max(0, kTop + (f.plot_h - rotated.rows) / 2);
+  const int rows = std::min(rotated.rows, kHeight - top);
+  rotated(cv::Rect(0, 0, rotated.cols, rows)).copyTo(image(cv::Rect(8, top, rotated.cols, rows)));
+}
 
-  // data, clipped to the plot area
-  cv::Mat area = image(cv::Rect(kLeft, kTop, plot_w + 1, plot_h + 1));
+// The series' lines and dots, clipped to the plot area.
+void DrawSeries(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
+  cv::Mat area = image(cv::Rect(kLeft, kTop, f.plot_w + 1, f.plot_h + 1));
   const cv::Point offset(kLeft, kTop);
   for (std::size_t s = 0; s < spec.series.size(); ++s) {
     const PlotSeries& series = spec.series[s];
     std::vector<cv::Point> points;
     for (std::size_t i = 0; i < series.x.size(); ++i) {
-      if (!std::isfinite(series.y[i]) || (spec.log_x && series.x[i] <= 0)) continue;
-      points.push_back(cv::Point(px(tx(series.x[i])), py(series.y[i])) - offset);
+      if (!f.Shown(series.x[i], series.y[i])) continue;
+      points.push_back(cv::Point(f.px(f.tx(series.x[i])), f.py(series.y[i])) - offset);
     }
     if (series.line && points.size() > 1) {
       cv::polylines(area, points, false, Colour(s), 2, cv::LINE_AA);
@@ -229,23 +243,179 @@ cv::Mat DrawPlot(const PlotSpec& spec) {
       for (const cv::Point& p : points) cv::circle(area, p, 4, Colour(s), cv::FILLED, cv::LINE_AA);
     }
   }
+}
 
-  // legend
+// The legend right of the plot area: the first 20 series, and how many more there are.
+void DrawLegend(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
+  const int x = kLeft + f.plot_w;
   const std::size_t shown = std::min<std::size_t>(spec.series.size(), 20);
   for (std::size_t s = 0; s < shown; ++s) {
     const int y = kTop + 12 + 20 * static_cast<int>(s);
-    cv::line(image, {kLeft + plot_w + 12, y - 4}, {kLeft + plot_w + 32, y - 4}, Colour(s), 3);
-    PutText(image, Shorten(spec.series[s].label, 22), {kLeft + plot_w + 38, y}, 0.4);
+    cv::line(image, {x + 12, y - 4}, {x + 32, y - 4}, Colour(s), 3);
+    PutText(image, Shorten(spec.series[s].label, 22), {x + 38, y}, 0.4);
   }
   if (spec.series.size() > shown) {
     PutText(image, fmt::format("+{} more", spec.series.size() - shown),
-            {kLeft + plot_w + 38, kTop + 12 + 20 * static_cast<int>(shown)}, 0.4);
+            {x + 38, kTop + 12 + 20 * static_cast<int>(shown)}, 0.4);
   }
+}
+
+}  // namespace
+
+cv::Mat DrawPlot(const PlotSpec& spec) {
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  const Frame frame = FrameFor(spec);
+  DrawAxes(image, spec, frame);
+  DrawTitles(image, spec, frame);
+  DrawSeries(image, spec, frame);
+  DrawLegend(image, spec, frame);
   return image;
 }
 
+namespace {
+
+// Where a run lands on a varied key's x axis: its value when every value of the key is a number,
+// else the index of its label (a categorical axis, labels in their first-given order).
+struct AxisPositions {
+  bool numeric{true};
+  std::vector<std::string> categories;
+  std::map<std::string, std::size_t> category;  // label -> index in categories
+
+  // false when the label is not a number on a numeric axis
+  bool X(const std::string& label, double* x) const {
+    if (numeric) return ParseDouble(label, x);
+    *x = static_cast<double>(category.at(label));
+    return true;
+  }
+};
+
+AxisPositions PositionsOf(const VaryAxis& axis) {
+  AxisPositions positions;
+  double unused = 0.0;
+  for (const VaryValue& v : axis.values) {
+    positions.numeric = positions.numeric && ParseDouble(v.label, &unused);
+    if (positions.category.emplace(v.label, positions.categories.size()).second) {
+      positions.categories.push_back(v.label);
+    }
+  }
+  return positions;
+}
+
+// The series of one key metric against one varied key (its values in column `axis_column`): per
+// car or board that has the metric (the column's prefix), the mean over its runs at each x as a
+// line, and the runs as dots of their own where an x has several.
+std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::string& metric,
+                                     std::size_t axis_column, const AxisPositions& positions) {
+  std::vector<PlotSeries> series;
+  for (std::size_t c = 0; c < table.columns.size(); ++c) {
+    const std::string& column = table.columns[c];
+    const auto dot = column.rfind('.');
+    const std::string suffix = dot == std::string::npos ? column : column.substr(dot + 1);
+    const std::string prefix = dot == std::string::npos ? "all" : column.substr(0, dot);
+    // only car/board-level columns (carN.metric), not per-node ones (carN.node.metric)
+    if (suffix != metric || prefix.find('.') != std::string::npos) continue;
+    PlotSeries dots{.label = prefix, .x = {}, .y = {}, .dots = true, .line = false};
+    std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
+    for (const auto& row : table.rows) {
+      double y = 0.0, x = 0.0;
+      if (!ParseDouble(row[c], &y) || !positions.X(row[axis_column], &x)) continue;
+      dots.x.push_back(x);
+      dots.y.push_back(y);
+      mean[x].first += y;
+      mean[x].second += 1;
+    }
+    if (dots.x.empty()) continue;
+    PlotSeries line{.label = prefix, .x = {}, .y = {}, .dots = false, .line = true};
+    for (const auto& [x, sum] : mean) {
+      line.x.push_back(x);
+      line.y.push_back(sum.first / sum.second);
+    }
+    // dots and the mean line share a colour: put them in one series when one run per x
+    if (line.x.size() == dots.x.size()) {
+      line.dots = true;
+      series.push_back(std::move(line));
+    } else {
+      series.push_back(std::move(line));
+      dots.label = prefix + " (runs)";
+      series.push_back(std::move(dots));
+    }
+  }
+  return series;
+}
+
+// Each key metric against one varied key, one plot each (those no run has are left out).
+void WriteMetricPlots(const VaryAxis& axis, std::size_t axis_column, const ResultsTable& table,
+                      const fs::path& dir) {
+  const AxisPositions positions = PositionsOf(axis);
+  for (const std::string& metric : kKeyMetrics) {
+    const PlotSpec plot{
+        .title = fmt::format("{} vs {}", metric, axis.key),
+        .x_label = axis.key,
+        .y_label = metric,
+        .series = MetricSeries(table, metric, axis_column, positions),
+        .categories = positions.numeric ? std::vector<std::string>{} : positions.categories,
+        .log_x = false};
+    if (plot.series.empty()) continue;
+    WritePng(dir / (FileSafe(metric) + "_vs_" + FileSafe(axis.key) + ".png"), DrawPlot(plot));
+  }
+}
+
+// One run's turnaround histogram of one node (`node` from sim/platform's ReportJson) as a series of
+// the node's plot in `histograms` (by board/node); nothing for a node without jobs.
+void AddHistogramSeries(const std::string& board, const nlohmann::json& node,
+                        const std::string& label, std::map<std::string, PlotSpec>* histograms) {
+  if (!node.contains("turnaround_histogram_ms")) return;
+  const auto counts = node["turnaround_histogram_ms"].value("counts", std::vector<double>{});
+  const auto edges = node["turnaround_histogram_ms"].value("edges", std::vector<double>{});
+  double total = 0.0;
+  for (double c : counts) total += c;
+  if (total == 0.0 || edges.size() != counts.size() + 1) return;
+  const std::string name = node.at("name").get<std::string>();
+  PlotSpec& h = (*histograms)[board + "/" + name];
+  h.title = fmt::format("Turnaround of {} on {}", name, board);
+  h.x_label = "turnaround [ms], bin centre";
+  h.y_label = "fraction of jobs";
+  h.log_x = true;
+  // empty bins trimmed at both ends (one kept) so the plot shows where the jobs are
+  std::size_t first = 0, last = counts.size();
+  while (first < last && counts[first] == 0) ++first;
+  while (last > first && counts[last - 1] == 0) --last;
+  first = first > 0 ? first - 1 : 0;
+  last = std::min(counts.size(), last + 1);
+  PlotSeries histogram{.label = label, .x = {}, .y = {}, .dots = true, .line = true};
+  for (std::size_t b = first; b < last; ++b) {
+    histogram.x.push_back(std::sqrt(edges[b] * edges[b + 1]));
+    histogram.y.push_back(counts[b] / total);
+  }
+  h.series.push_back(std::move(histogram));
+}
+
+// One run's series in the CPU load plot of a board (`report`: sim/platform's ReportJson) and in
+// the turnaround histograms of the board's nodes.
+void AddBoardSeries(const std::string& board, const nlohmann::json& report,
+                    const std::string& label, std::map<std::string, PlotSpec>* loads,
+                    std::map<std::string, PlotSpec>* histograms) {
+  PlotSpec& load = (*loads)[board];
+  load.title = fmt::format("CPU load over time, {}", board);
+  load.x_label = "simulated time [s]";
+  load.y_label = fmt::format("CPU load [%, 100 = one core, {} cores]", report.value("cores", 0));
+  PlotSeries series{.label = label, .x = {}, .y = {}, .dots = false, .line = true};
+  const double bin_s = report.value("load_bin_s", 1.0);
+  const auto bins = report.value("cpu_load_percent", std::vector<double>{});
+  for (std::size_t b = 0; b < bins.size(); ++b) {
+    series.x.push_back((static_cast<double>(b) + 0.5) * bin_s);
+    series.y.push_back(bins[b]);
+  }
+  load.series.push_back(std::move(series));
+  for (const nlohmann::json& node : report.at("nodes")) {
+    AddHistogramSeries(board, node, label, histograms);
+  }
+}
+
+}  // namespace
+
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
-                     const std::vector<nlohmann::json>& summaries, const ResultsTable& table,
+                     const std::vector<RunSummary>& summaries, const ResultsTable& table,
                      const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -253,134 +423,25 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
 
   // 1. Each key metric against each varied key; one series per car or board (column prefix).
   for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-    const VaryAxis& axis = spec.axes[a];
-    bool numeric = true;
-    std::vector<double> numbers(axis.values.size());
-    for (std::size_t v = 0; v < axis.values.size(); ++v) {
-      numeric = numeric && ParseDouble(axis.values[v].label, &numbers[v]);
-    }
-    std::map<std::string, std::size_t> category;
-    std::vector<std::string> categories;
-    for (const VaryValue& v : axis.values) {
-      if (category.emplace(v.label, categories.size()).second) categories.push_back(v.label);
-    }
-    const std::size_t axis_column = 2 + a;
-    for (const std::string& metric : kKeyMetrics) {
-      PlotSpec plot{.title = fmt::format("{} vs {}", metric, axis.key),
-                    .x_label = axis.key,
-                    .y_label = metric,
-                    .series = {},
-                    .categories = numeric ? std::vector<std::string>{} : categories,
-                    .log_x = false};
-      for (std::size_t c = 0; c < table.columns.size(); ++c) {
-        const std::string& column = table.columns[c];
-        const auto dot = column.rfind('.');
-        const std::string suffix = dot == std::string::npos ? column : column.substr(dot + 1);
-        const std::string prefix = dot == std::string::npos ? "all" : column.substr(0, dot);
-        // only car/board-level columns (carN.metric), not per-node ones (carN.node.metric)
-        if (suffix != metric || prefix.find('.') != std::string::npos) continue;
-        PlotSeries dots{.label = prefix, .x = {}, .y = {}, .dots = true, .line = false};
-        std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
-        for (const auto& row : table.rows) {
-          double y = 0.0, x = 0.0;
-          if (!ParseDouble(row[c], &y)) continue;
-          if (numeric) {
-            if (!ParseDouble(row[axis_column], &x)) continue;
-          } else {
-            x = static_cast<double>(category.at(row[axis_column]));
-          }
-          dots.x.push_back(x);
-          dots.y.push_back(y);
-          mean[x].first += y;
-          mean[x].second += 1;
-        }
-        if (dots.x.empty()) continue;
-        PlotSeries line{.label = prefix, .x = {}, .y = {}, .dots = false, .line = true};
-        for (const auto& [x, sum] : mean) {
-          line.x.push_back(x);
-          line.y.push_back(sum.first / sum.second);
-        }
-        // dots and the mean line share a colour: put them in one series when one run per x
-        if (line.x.size() == dots.x.size()) {
-          line.dots = true;
-          plot.series.push_back(std::move(line));
-        } else {
-          plot.series.push_back(std::move(line));
-          dots.label = prefix + " (runs)";
-          plot.series.push_back(std::move(dots));
-        }
-      }
-      if (plot.series.empty()) continue;
-      Save(DrawPlot(plot), dir / (FileSafe(metric) + "_vs_" + FileSafe(axis.key) + ".png"));
-    }
+    WriteMetricPlots(spec.axes[a], 2 + a, table, dir);  // the axes' columns follow index, run_id
   }
 
-  // The distinct runs, in grid order.
-  std::vector<std::size_t> runs;
+  // 2. CPU load over time per board; 3. turnaround histograms per board and node: a series per
+  // distinct run, in grid order.
+  std::map<std::string, PlotSpec> loads;       // by board, in name order
+  std::map<std::string, PlotSpec> histograms;  // by board/node, in name order
   std::set<std::string> seen;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (seen.insert(points[i].run_id).second) runs.push_back(i);
-  }
-
-  // 2. Turnaround histograms per board and node; 3. CPU load over time per board.
-  std::map<std::string, PlotSpec> histograms;  // by board/node, in name order
-  std::map<std::string, PlotSpec> loads;
-  for (std::size_t i : runs) {
-    const nlohmann::json& summary = summaries[i];
-    if (!summary.contains("platform")) continue;
-    const std::string label = RunLabel(points[i]);
-    for (const auto& [board, report] : summary.at("platform").items()) {
-      PlotSpec& load = loads[board];
-      load.title = fmt::format("CPU load over time, {}", board);
-      load.x_label = "simulated time [s]";
-      load.y_label =
-          fmt::format("CPU load [%, 100 = one core, {} cores]", report.value("cores", 0));
-      PlotSeries series{.label = label, .x = {}, .y = {}, .dots = false, .line = true};
-      const double bin_s = report.value("load_bin_s", 1.0);
-      const auto bins = report.value("cpu_load_percent", std::vector<double>{});
-      for (std::size_t b = 0; b < bins.size(); ++b) {
-        series.x.push_back((static_cast<double>(b) + 0.5) * bin_s);
-        series.y.push_back(bins[b]);
-      }
-      load.series.push_back(std::move(series));
-
-      for (const nlohmann::json& node : report.at("nodes")) {
-        if (!node.contains("turnaround_histogram_ms")) continue;
-        const auto counts = node["turnaround_histogram_ms"].value("counts", std::vector<double>{});
-        const auto edges = node["turnaround_histogram_ms"].value("edges", std::vector<double>{});
-        double total = 0.0;
-        for (double c : counts) total += c;
-        if (total == 0.0 || edges.size() != counts.size() + 1) continue;
-        const std::string name = node.at("name").get<std::string>();
-        PlotSpec& h = histograms[board + "/" + name];
-        h.title = fmt::format("Turnaround of {} on {}", name, board);
-        h.x_label = "turnaround [ms], bin centre";
-        h.y_label = "fraction of jobs";
-        h.log_x = true;
-        PlotSeries histogram{.label = label, .x = {}, .y = {}, .dots = true, .line = true};
-        for (std::size_t b = 0; b < counts.size(); ++b) {
-          histogram.x.push_back(std::sqrt(edges[b] * edges[b + 1]));
-          histogram.y.push_back(counts[b] / total);
-        }
-        // trim empty bins at both ends so the plot shows where the jobs are
-        std::size_t first = 0, last = counts.size();
-        while (first < last && counts[first] == 0) ++first;
-        while (last > first && counts[last - 1] == 0) --last;
-        first = first > 0 ? first - 1 : 0;
-        last = std::min(counts.size(), last + 1);
-        histogram.x = std::vector<double>(histogram.x.begin() + static_cast<std::ptrdiff_t>(first),
-                                          histogram.x.begin() + static_cast<std::ptrdiff_t>(last));
-        histogram.y = std::vector<double>(histogram.y.begin() + static_cast<std::ptrdiff_t>(first),
-                                          histogram.y.begin() + static_cast<std::ptrdiff_t>(last));
-        h.series.push_back(std::move(histogram));
-      }
+    if (!seen.insert(points[i].run_id).second || !summaries[i].platform) continue;
+    for (const auto& [board, report] : *summaries[i].platform) {
+      AddBoardSeries(board, report, RunLabel(points[i]), &loads, &histograms);
     }
   }
   for (const auto& [board, plot] : loads) {
-    Save(DrawPlot(plot), dir / ("cpu_load_" + FileSafe(board) + ".png"));
+    WritePng(dir / ("cpu_load_" + FileSafe(board) + ".png"), DrawPlot(plot));
   }
   for (const auto& [name, plot] : histograms) {
-    Save(DrawPlot(plot), dir / ("turnaround_" + FileSafe(name) + ".png"));
+    WritePng(dir / ("turnaround_" + FileSafe(name) + ".png"), DrawPlot(plot));
   }
 }
 

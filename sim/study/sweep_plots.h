@@ -3,13 +3,13 @@
 #pragma once
 
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "sim/results/summary.h"
 #include "sim/study/sweep.h"
 
 namespace autonomsim::sim {
@@ -40,7 +40,7 @@ std::vector<double> NiceTicks(double lo, double hi, int target_count = 6);
 // Writes every plot of a sweep into `dir` (replacing what is there). `points[i]` and
 // `summaries[i]` belong together (grid order); `table` is their results.csv.
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
-                     const std::vector<nlohmann::json>& summaries, const ResultsTable& table,
+                     const std::vector<RunSummary>& summaries, const ResultsTable& table,
                      const std::filesystem::path& dir);
 
 }  // namespace autonomsim::sim

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -113,18 +115,20 @@ TEST(Sweep, ShardsPartitionTheGrid) {
   }
 }
 
-nlohmann::json FakeSummary(double error_m, int laps, bool with_board) {
-  nlohmann::json car = {{"id", 0},
-                        {"laps", laps},
-                        {"lap_times_s", std::vector<double>(static_cast<std::size_t>(laps), 0.0)},
-                        {"collisions", 0},
-                        {"max_lateral_error_m", error_m},
-                        {"rms_lateral_error_m", error_m / 2},
-                        {"min_obstacle_gap_m", nullptr}};
-  if (laps > 0) car["lap_times_s"].back() = 30.0 * laps;
-  nlohmann::json s = {{"passed", true}, {"cars", {car}}};
+RunSummary FakeSummary(double error_m, int laps, bool with_board) {
+  CarMetrics car;
+  car.id = 0;
+  car.laps = laps;
+  car.lap_times_s = std::vector<double>(static_cast<std::size_t>(laps), 0.0);
+  if (laps > 0) car.lap_times_s.back() = 30.0 * laps;
+  car.max_lateral_error_m = error_m;
+  car.rms_lateral_error_m = error_m / 2;
+  RunSummary s;
+  s.passed = true;
+  s.cars = {car};
   if (with_board) {
-    s["platform"]["car0"] = {
+    s.platform.emplace();
+    (*s.platform)["car0"] = {
         {"cpu_percent", 150.0},
         {"cpu_demand_percent", 160.0},
         {"topics",
@@ -143,8 +147,8 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
       {.index = 2, .run_id = "cc", .labels = {"2", "a,b"}, .repeat = 0, .seed = 42},
       {.index = 0, .run_id = "aa", .labels = {"0", "plain"}, .repeat = 0, .seed = 42},
       {.index = 1, .run_id = "bb", .labels = {"1", "say \"hi\""}, .repeat = 1, .seed = 43}};
-  const std::vector<nlohmann::json> summaries = {
-      FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false), FakeSummary(0.2, 0, false)};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.3, 2, true), FakeSummary(0.1, 3, false),
+                                             FakeSummary(0.2, 0, false)};
   const ResultsTable table = BuildResultsTable({"v2i.latency_s", "label"}, points, summaries);
   ASSERT_EQ(table.rows.size(), 3u);
   EXPECT_THAT(std::vector<std::string>(table.columns.begin(), table.columns.begin() + 6),
@@ -308,6 +312,52 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   EXPECT_EQ(ReadText(dir.path / "merged" / "results.csv"), table);
   // one shard alone is incomplete, and says so
   EXPECT_EQ(MergeSweeps({dir.path / "s1"}, dir.path / "half", false), 2u);
+}
+
+// The sweep reads the wall clock only through the one it is given: a fake clock, 1.5 s later at
+// each reading, gives every run 1.5 s (one reading before its simulation, one after) and the
+// progress its own readings; no clock, no wall time.
+TEST(SweepRun, WallTimesComeFromTheClockItIsGiven) {
+  TempDir dir;
+  SweepSpec spec = TinySweep();
+  spec.axes.pop_back();  // two runs, of 3 s simulated
+  std::atomic<int> readings{0};
+  std::vector<SweepProgress> progress;
+  SweepOptions options{.out_dir = dir.path / "fake",
+                       .jobs = 1,  // one thread: the readings come in a known order
+                       .shard = {},
+                       .plots = false,
+                       .progress = [&](const SweepProgress& p) { progress.push_back(p); },
+                       .wall_clock = [&] { return std::chrono::milliseconds(1500) * readings++; }};
+  ASSERT_EQ(RunSweep(spec, options).ran, 2u);
+  // readings: 0 the start; 1, 2 around run 1; 3 its progress; 4, 5 around run 2; 6 its progress
+  EXPECT_EQ(readings.load(), 7);
+  ASSERT_EQ(progress.size(), 3u);
+  EXPECT_EQ(progress[0].wall_s, 0.0);
+  EXPECT_EQ(progress[1].done, 1u);
+  EXPECT_EQ(progress[1].wall_s, 4.5);
+  EXPECT_EQ(progress[2].done, 2u);
+  EXPECT_EQ(progress[2].wall_s, 9.0);
+  std::size_t runs = 0;
+  for (const auto& run : fs::directory_iterator(dir.path / "fake" / "runs")) {
+    const nlohmann::json summary = nlohmann::json::parse(ReadText(run.path() / "summary.json"));
+    EXPECT_EQ(summary.at("wall_seconds"), 1.5);
+    EXPECT_EQ(summary.at("real_time_factor"), 2.0);  // 3 s simulated in 1.5 s
+    ++runs;
+  }
+  EXPECT_EQ(runs, 2u);
+
+  options.out_dir = dir.path / "none";
+  options.wall_clock = {};
+  progress.clear();
+  RunSweep(spec, options);
+  ASSERT_EQ(progress.size(), 3u);
+  EXPECT_EQ(progress[2].wall_s, 0.0);
+  for (const auto& run : fs::directory_iterator(dir.path / "none" / "runs")) {
+    const nlohmann::json summary = nlohmann::json::parse(ReadText(run.path() / "summary.json"));
+    EXPECT_EQ(summary.at("wall_seconds"), 0.0);
+    EXPECT_TRUE(summary.at("real_time_factor").is_null());
+  }
 }
 
 TEST(SweepRun, UnusableInputStopsTheSweepBeforeAnyRunNamingTheKey) {

@@ -1,0 +1,85 @@
+// Atomic files and folders: a reader finds the old content or the new, and nothing is left behind.
+#include "sim/core/files.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ReadText(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+struct TempDir {
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("autonomsim_files_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  fs::path path;
+};
+
+std::size_t Entries(const fs::path& dir) {
+  return static_cast<std::size_t>(
+      std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+TEST(Files, AnAtomicWriteReplacesTheFileAndLeavesNoTemporary) {
+  TempDir dir;
+  const fs::path file = dir.path / "results.csv";
+  WriteFileAtomically(file, "a,b\n");
+  EXPECT_EQ(ReadText(file), "a,b\n");
+  WriteFileAtomically(file, "c\n");
+  EXPECT_EQ(ReadText(file), "c\n");
+  EXPECT_EQ(Entries(dir.path), 1u);
+}
+
+TEST(Files, AFailedAtomicWriteThrowsNamingTheFileAndKeepsTheOldOne) {
+  TempDir dir;
+  const fs::path file = dir.path / "sweep.json";
+  WriteFileAtomically(file, "old");
+  fs::create_directory(dir.path / "in_the_way");
+  try {
+    // a folder where the file should go: the rename fails after the temporary is written
+    WriteFileAtomically(dir.path / "in_the_way", "new");
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("in_the_way"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadText(file), "old");
+  EXPECT_EQ(Entries(dir.path), 2u);  // sweep.json and the folder, no temporary
+  EXPECT_THROW(WriteFileAtomically(dir.path / "no" / "such" / "folder", "x"), std::runtime_error);
+}
+
+TEST(Files, AFolderWrittenAtomicallyAppearsWhole) {
+  TempDir dir;
+  const fs::path target = dir.path / "run";
+  WriteFolderAtomically(target, [](const fs::path& partial) { WriteFile(partial / "a", "1"); });
+  EXPECT_EQ(ReadText(target / "a"), "1");
+  EXPECT_THROW(WriteFolderAtomically(target,
+                                     [](const fs::path& partial) {
+                                       WriteFile(partial / "a", "2");
+                                       throw std::runtime_error("killed");
+                                     }),
+               std::runtime_error);
+  EXPECT_EQ(ReadText(target / "a"), "1");  // the previous folder stays
+  EXPECT_EQ(Entries(dir.path), 1u);        // and no partial one
+}
+
+}  // namespace
+}  // namespace autonomsim::sim
