@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/mqtt/mqtt_client.h"
 #include "sim/study/sweep.h"
 #include "tools/cli_common.h"
@@ -65,6 +66,7 @@ struct SweepOptions {
   bool quiet{false};
   std::vector<std::string> merge_dirs;
   std::string merge_out;
+  bool force{false};
 };
 
 int SweepCommand(const SweepOptions& o, bool repeat_given) {
@@ -81,10 +83,11 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     spec.overrides.insert(spec.overrides.end(), o.overrides.begin(), o.overrides.end());
     for (const std::string& v : o.vary) spec.axes.push_back(sim::ParseVary(v));
     if (repeat_given) spec.repeat = o.repeat;
-    options.out_dir = o.out;
     options.jobs = o.jobs;
     options.shard = sim::ParseShard(o.shard);
     options.plots = !o.no_plots;
+    // last: refused, or created and marked, once the rest of the command is known to be usable
+    options.out_dir = sim::PrepareOutputFolder(o.out, o.force);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -122,9 +125,10 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
 
 int MergeCommand(const SweepOptions& o) {
   std::vector<fs::path> dirs(o.merge_dirs.begin(), o.merge_dirs.end());
-  const fs::path out = o.merge_out.empty() ? dirs.front() : fs::path(o.merge_out);
+  fs::path out = dirs.front();
   std::size_t missing = 0;
   try {
+    if (!o.merge_out.empty()) out = sim::PrepareOutputFolder(o.merge_out, o.force);
     missing = sim::MergeSweeps(dirs, out, !o.no_plots);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
@@ -161,8 +165,13 @@ Command AddSweepCommand(CLI::App& parent) {
       sweep
           ->add_option("--repeat", o->repeat, "Seeds per grid point: seed, seed+1, ... (default 1)")
           ->check(CLI::PositiveNumber);
-  sweep->add_option("--out", o->out, "Sweep folder (shared by its shards and resumed runs)")
+  sweep
+      ->add_option("--out", o->out,
+                   "Sweep folder (shared by its shards and resumed runs); an existing folder that "
+                   "this program did not write is refused unless empty (see --force)")
       ->type_name("DIR");
+  sweep->add_flag("--force", o->force,
+                  "Write into --out even if this program did not write it (never a device)");
   sweep->add_option("--jobs,-j", o->jobs, "Runs in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
   sweep
@@ -180,6 +189,8 @@ Command AddSweepCommand(CLI::App& parent) {
   merge->add_option("DIR", o->merge_dirs, "Sweep folders")->required();
   merge->add_option("--out", o->merge_out, "Where to write (default: the first DIR)")
       ->type_name("DIR");
+  merge->add_flag("--force", o->force,
+                  "Write into --out even if this program did not write it (never a device)");
   merge->add_flag("--no-plots", o->no_plots, "Write results.csv only");
 
   return {sweep, [o, merge, repeat] {

@@ -98,6 +98,22 @@ fs::path CheckOutputFolder(const std::string& given, bool force) {
   throw refuse(what + "; choose another --out, or add --force to replace it and all it holds");
 }
 
+fs::path PrepareOutputFolder(const std::string& given, bool force) {
+  std::string trimmed = given;
+  while (trimmed.size() > 1 && trimmed.back() == '/') trimmed.pop_back();
+  const bool empty_folder = fs::is_directory(fs::symlink_status(trimmed)) && fs::is_empty(trimmed);
+  const fs::path target = CheckOutputFolder(given, force || empty_folder);
+  if (fs::exists(fs::symlink_status(target)) && !fs::is_directory(fs::symlink_status(target))) {
+    throw ConfigError("--out " + given + ": is not a folder; choose another --out");
+  }
+  fs::create_directories(target);
+  if (!fs::exists(target / kOutputMarker)) {
+    WriteFile(target / kOutputMarker,
+              "Written by autonomsim. Later outputs may add to or replace what is here.\n");
+  }
+  return target;
+}
+
 void WriteFolderAtomically(const fs::path& target_dir,
                            const std::function<void(const fs::path& partial)>& fill, bool force) {
   const fs::path target = CheckOutputFolder(target_dir.string(), force);

@@ -28,6 +28,12 @@ inline constexpr const char* kOutputMarker = ".autonomsim";
 // file or a symbolic link. Returns the path to use.
 std::filesystem::path CheckOutputFolder(const std::string& given, bool force);
 
+// A folder that outputs accumulate in (a sweep's: it is resumed, never replaced): created if
+// absent and given the marker. An empty folder is taken; one that holds anything without the
+// marker is refused unless `force`; otherwise CheckOutputFolder's rules, except that a file is
+// refused even with `force`. Returns the path to use.
+std::filesystem::path PrepareOutputFolder(const std::string& given, bool force);
+
 // Creates `target` by letting `fill` write into a sibling "<target>.partial-<pid>" folder and
 // renaming it to `target` when `fill` returns; a previous `target` is replaced only then, and only
 // if CheckOutputFolder(target, force) allows it (checked first, before `fill` runs). The folder

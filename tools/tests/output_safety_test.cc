@@ -96,7 +96,8 @@ TEST(OutputSafety, APathThroughAFileIsRefusedBeforeTheRun) {
 }
 
 TEST(OutputSafety, RenderAndCheckRefuseToo) {
-  const fs::path notes = Scratch() / "notes";
+  const fs::path dir = Scratch();
+  const fs::path notes = dir / "notes";
   fs::create_directories(notes / "intersection_conflict");
   WriteText(notes / "intersection_conflict" / "keep.txt", "mine");
   const Result check = Cli("check scenarios/intersection_conflict.yaml --out " + notes.string());
@@ -107,7 +108,7 @@ TEST(OutputSafety, RenderAndCheckRefuseToo) {
   EXPECT_EQ(render.exit_code, 2) << render.output;
   EXPECT_EQ(Read(notes / "intersection_conflict" / "keep.txt"), "mine");
   // check's folders are its own afterwards
-  const fs::path ours = Scratch() / "ours";
+  const fs::path ours = dir / "ours";
   ASSERT_EQ(Cli("check scenarios/intersection_conflict.yaml --out " + ours.string()).exit_code, 0);
   EXPECT_EQ(Cli("check scenarios/intersection_conflict.yaml --out " + ours.string()).exit_code, 0);
 }

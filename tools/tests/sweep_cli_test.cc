@@ -59,6 +59,27 @@ TEST(SweepCliTest, BadInputExitsTwoNamingWhatIsWrong) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+// Issue 15: a sweep writes into a folder that is absent, empty, or its own; never into someone's.
+TEST(SweepCliTest, AFolderItDidNotWriteIsRefusedUnlessEmptyOrForced) {
+  const fs::path dir = Scratch();
+  const fs::path notes = dir / "notes";
+  fs::create_directories(notes);
+  std::ofstream(notes / "results.csv") << "mine\n";
+  const std::string vary = " --vary 'v2i.loss=0,0.1' --set duration_s=1 -q --no-plots";
+  Result r = Cli(kSweep + vary + " --out " + notes.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("did not write"));
+  EXPECT_EQ(Read(notes / "results.csv"), "mine\n");
+  const fs::path empty = dir / "empty";
+  fs::create_directories(empty);
+  r = Cli(kSweep + vary + " --out " + empty.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(empty / ".autonomsim"));
+  r = Cli(kSweep + vary + " --out " + empty.string());  // its own now: resumed
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr(" 0 ran,"));
+}
+
 TEST(SweepCliTest, ShardsRunByGnuParallelMergeToTheSameTable) {
   if (Shell("command -v parallel").exit_code != 0) {
     GTEST_SKIP() << "GNU parallel is not installed (tools/install_deps.sh installs it)";
