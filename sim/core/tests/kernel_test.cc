@@ -1,4 +1,4 @@
-// 685 lines: one file keeps the kernel's whole contract beside its randomized reference-model test.
+// Over 600 lines: one file keeps the kernel's whole contract beside its randomized reference model.
 #include "sim/core/kernel.h"
 
 #include <gtest/gtest.h>
