@@ -453,7 +453,7 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       });
 }
 
-// carcontroller: the PID on speed, 30 Hz, with its watchdog.
+// carcontroller: the PID on speed, 30 Hz, with its watchdog (stack/cruise_control.h).
 void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                           const stack::CruiseControlParams& params, const Kernel& kernel) {
   struct State {
@@ -461,7 +461,6 @@ void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& top
     std::optional<stack::VelocityCommand> command;
     std::optional<stack::OdometrySpeed> odometry;
     Time command_stamp{kZeroTime};
-    bool stopped_sent{false};  // the watchdog's zero output went out
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("carcontroller"));
@@ -481,12 +480,7 @@ void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& top
                        &state->cruise);
                    state->command.reset();
                    state->odometry.reset();
-                   // While the watchdog holds the car the output stays zero: it goes out once
-                   // (the PWM generator holds it), so that the end-to-end latency on
-                   // /carcontrol/command is measured on commands derived from fresh input.
-                   const bool stopped = r.stopped != stack::CruiseStop::kNone;
-                   if (stopped && state->stopped_sent) return;
-                   state->stopped_sent = stopped;
+                   if (!r.publish) return;  // a stop's zero output goes out once
                    outbox.Publish(out, vehicle::ActuatorCommand{r.throttle, r.curvature_per_m},
                                   state->command_stamp);
                  });
