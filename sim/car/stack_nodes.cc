@@ -248,7 +248,7 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::optional<stack::LocalizationEkfOutput> odom;
     bool intersection_free{true};
     bool collision_ahead{false};
-    bool plan_failed{false};
+    std::optional<bool> plan_failed;  // the newest /plan reply since the last tick
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("bt_navigator"));
@@ -272,11 +272,9 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                                                     .collision_ahead = state->collision_ahead,
                                                     .plan_failed = state->plan_failed,
                                                     .mission_done = mission_done && mission_done()};
+                   state->plan_failed.reset();
                    stack::BehaviorOutput result =
                        stack::StepBehavior(params, *route, input, &state->behavior);
-                   if (result.clear_costmaps) {
-                     state->plan_failed = false;  // planned again after recovery
-                   }
                    if (on_behavior) on_behavior(result);
                    outbox.Publish(out, std::move(result), state->odom->stamp);
                  });
