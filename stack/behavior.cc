@@ -118,7 +118,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
   return out;
 }
 
-bool UseFollowPath(const std::vector<world::IntersectionSpec>& intersections,
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
                    const world::Vec2& p_map) {
   for (const world::IntersectionSpec& i : intersections) {
     if (i.area.Contains(p_map)) return true;

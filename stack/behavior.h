@@ -17,6 +17,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "world/geometry.h"
@@ -101,7 +102,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 // Which controller the controller server runs (reference §6, /controller_selector): FollowPath
 // inside an intersection's area or stop zones (strict boxes, as the real cars test them),
 // LaneController elsewhere.
-bool UseFollowPath(const std::vector<world::IntersectionSpec>& intersections,
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
                    const world::Vec2& p_map);
 
 }  // namespace autonomsim::stack

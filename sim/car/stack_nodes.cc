@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "stack/controller_server.h"
+
 namespace autonomsim::sim {
 namespace {
 
@@ -19,17 +21,10 @@ struct PathMessage {  // /plan, in the map frame
   std::uint64_t id{0};
   bool ok{false};
 };
-struct ControllerStatus {  // /controller/status
-  bool collision_ahead{false};
-  bool follow_path{false};
-};
 struct IntersectionFree {  // /intersection_free
   bool free{true};
 };
-struct Twist {  // /cmd_vel
-  double speed_mps{0.0};
-  double yaw_rate_rad_per_s{0.0};
-};
+// /cmd_vel carries stack::Twist, /controller/status stack::ControllerStatus.
 
 // Message types and sizes (CDR, 4-byte encapsulation header included). Assumed from the ROS 2
 // message definitions: a std_msgs/Header with frame id "map"/"odom" is 16 B; a PoseStamped 72 B.
@@ -81,9 +76,9 @@ struct StackTopics {
   TopicId<CostmapMessage> costmap;
   TopicId<stack::BehaviorOutput> behavior;
   TopicId<PathMessage> plan;
-  TopicId<ControllerStatus> status;
+  TopicId<stack::ControllerStatus> status;
   TopicId<IntersectionFree> intersection_free;
-  TopicId<Twist> cmd_vel;
+  TopicId<stack::Twist> cmd_vel;
   TopicId<vehicle::ActuatorCommand> command;
   PerceptionTopics perception;  // made by AddPerceptionNodes
 };
@@ -102,11 +97,11 @@ StackTopics AddStackTopics(NodeGraph& graph, const StackConfig& config, const Se
                                        CostmapType(config.local_costmap)),
       .behavior = Topic<stack::BehaviorOutput>(graph, "/behavior", GoalsType(goals)),
       .plan = Topic<PathMessage>(graph, "/plan", PathType(0)),
-      .status = Topic<ControllerStatus>(graph, "/controller/status",
-                                        BoolType("autonomsim/ControllerStatus")),
+      .status = Topic<stack::ControllerStatus>(graph, "/controller/status",
+                                               BoolType("autonomsim/ControllerStatus")),
       .intersection_free =
           Topic<IntersectionFree>(graph, "/intersection_free", BoolType("std_msgs/Bool")),
-      .cmd_vel = Topic<Twist>(graph, "/cmd_vel", TwistType()),
+      .cmd_vel = Topic<stack::Twist>(graph, "/cmd_vel", TwistType()),
       .command = Topic<vehicle::ActuatorCommand>(graph, kCarCommandTopic, CarCommandType()),
       .perception = perception};
 }
@@ -256,9 +251,10 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
   cache.Keep<IntersectionFree>(
       node, topics.intersection_free,
       [state](const IntersectionFree& f, Time) { state->intersection_free = f.free; });
-  cache.Keep<ControllerStatus>(node, topics.status, [state](const ControllerStatus& s, Time) {
-    state->collision_ahead = s.collision_ahead;
-  });
+  cache.Keep<stack::ControllerStatus>(node, topics.status,
+                                      [state](const stack::ControllerStatus& s, Time) {
+                                        state->collision_ahead = s.collision_ahead;
+                                      });
   cache.Keep<PathMessage>(node, topics.plan,
                           [state](const PathMessage& p, Time) { state->plan_failed = !p.ok; });
   const auto out = graph.AddPublisher(node, topics.behavior);
@@ -352,32 +348,57 @@ void AddLocalCostmapNode(NodeGraph& graph, Cache& cache, const StackTopics& topi
   });
 }
 
-template <class T>
-struct Stamped {
-  T value;
-  Time stamp{kZeroTime};
+// What the controller server's node keeps of its messages for the next cycle.
+struct ControllerNodeState {
+  struct Lanes {                           // the newest LanePoints, decoded to base_link
+    std::vector<world::Vec2> points_base;  // empty unless valid
+    bool valid{false};
+    Time stamp{kZeroTime};
+  };
+  std::optional<stack::LocalizationEkfOutput> odom;
+  std::optional<Lanes> lanes;
+  std::optional<PathMessage> path;  // the newest successful plan
+  std::shared_ptr<const stack::Costmap2D> costmap;
+  bool hold{true};  // nothing to do before the behaviour's first goals
+  stack::ControllerServerState server;
 };
 
-// controller_server: LaneController or FollowPath by zone, 20 Hz.
+ControllerNodeState::Lanes DecodeLanes(const stack::LanePoints& lanes, Time stamp) {
+  ControllerNodeState::Lanes decoded{.valid = lanes.valid != 0, .stamp = stamp};
+  if (decoded.valid) {
+    decoded.points_base.reserve(lanes.points.size());
+    for (const stack::LanePoint& p : lanes.points) decoded.points_base.emplace_back(p.x_m, p.y_m);
+  }
+  return decoded;
+}
+
+// The cycle's input from what the node keeps (odom must be set).
+stack::ControllerServerInput ControllerInput(const ControllerNodeState& s,
+                                             const world::Pose2& X_map_odom) {
+  stack::ControllerServerInput input{.hold = s.hold,
+                                     .odometry_stamp = s.odom->stamp,
+                                     .X_map_base = s.odom->X_map_base,
+                                     .speed_mps = s.odom->speed_mps};
+  if (s.lanes) {
+    input.lanes = stack::ControllerLanes{
+        .points_base = s.lanes->points_base, .valid = s.lanes->valid, .stamp = s.lanes->stamp};
+  }
+  if (s.path) input.path = stack::ControllerPath{.points_map = *s.path->path, .id = s.path->id};
+  if (s.costmap) input.is_lethal = stack::LethalInLocalCostmap(s.costmap, X_map_odom);
+  return input;
+}
+
+// controller_server: LaneController or FollowPath by zone, 20 Hz (stack/controller_server.h).
 void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                        const StackConfig& config, const StackContext& context,
                        std::function<void(bool, bool)> on_control) {
-  struct State {
-    std::optional<stack::LocalizationEkfOutput> odom;
-    std::optional<Stamped<stack::LanePoints>> lanes;
-    std::optional<PathMessage> path;
-    std::shared_ptr<const stack::Costmap2D> costmap;
-    bool hold{true};      // nothing to do before the behaviour's first goals
-    bool stopped{false};  // the zero velocity of the last hold was published
-    stack::PathFollowerState follower;
-  };
+  using State = ControllerNodeState;
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("controller_server"));
   cache.KeepLatest(node, topics.odometry, state, &State::odom);
-  cache.Keep<stack::LanePoints>(node, topics.perception.lanes,
-                                [state](const stack::LanePoints& l, Time stamp) {
-                                  state->lanes = Stamped<stack::LanePoints>{l, stamp};
-                                });
+  cache.Keep<stack::LanePoints>(
+      node, topics.perception.lanes,
+      [state](const stack::LanePoints& l, Time stamp) { state->lanes = DecodeLanes(l, stamp); });
   cache.Keep<PathMessage>(node, topics.plan, [state](const PathMessage& p, Time) {
     if (p.ok) state->path = p;
   });
@@ -388,66 +409,21 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       [state](const stack::BehaviorOutput& o, Time) { state->hold = o.hold; });
   const auto out = graph.AddPublisher(node, topics.cmd_vel);
   const auto status_out = graph.AddPublisher(node, topics.status);
+  const stack::ControllerServerParams params{.lane_controller = config.lane_controller,
+                                             .follow_path = config.follow_path};
   graph.AddTimer(
       node, config.controller_period, config.controller_period,
-      [state, out, status_out, lane_params = config.lane_controller,
-       follow_params = config.follow_path, intersections = context.intersections,
+      [state, out, status_out, params, intersections = context.intersections,
        X_map_odom = context.X_map_odom, on_control = std::move(on_control)](Time, Outbox& outbox) {
         if (!state->odom) return;
-        const stack::LocalizationEkfOutput& odom = *state->odom;
-        if (state->hold) {
-          // cancelled: one zero velocity (Nav2's publishZeroVelocity), then silence
-          if (!state->stopped) outbox.Publish(out, Twist{}, odom.stamp);
-          state->stopped = true;
-          outbox.Publish(status_out, ControllerStatus{}, odom.stamp);
-          return;
+        const stack::ControllerServerOutput r = stack::StepControllerServer(
+            params, *intersections, ControllerInput(*state, X_map_odom), &state->server);
+        if (on_control && r.controller != stack::ActiveController::kNone) {
+          on_control(r.controller == stack::ActiveController::kFollowPath,
+                     r.status.collision_ahead);
         }
-        state->stopped = false;
-        stack::LethalQuery is_lethal;
-        if (state->costmap) {
-          is_lethal = [costmap = state->costmap, X_map_odom](const world::Vec2& p_map) {
-            const std::optional<std::uint8_t> cost = costmap->CostAt(
-                stack::OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
-            return cost && *cost == stack::kLethalObstacle;
-          };
-        }
-        const bool follow = stack::UseFollowPath(*intersections, odom.X_map_base.position());
-        Twist twist;
-        bool collision = false;
-        Time stamp = odom.stamp;
-        if (follow) {
-          if (state->path) {
-            const stack::PathFollowerOutput r =
-                stack::StepPathFollower(follow_params,
-                                        {.path = *state->path->path,
-                                         .path_id = state->path->id,
-                                         .X_F_base = odom.X_map_base,
-                                         .speed_mps = odom.speed_mps,
-                                         .is_lethal = is_lethal},
-                                        &state->follower);
-            twist = {r.speed_mps, r.yaw_rate_rad_per_s};
-            collision = r.collision_ahead;
-          }
-        } else if (state->lanes) {
-          std::vector<world::Vec2> points;
-          const stack::LanePoints& lanes = state->lanes->value;
-          if (lanes.valid != 0) {
-            points.reserve(lanes.points.size());
-            for (const stack::LanePoint& p : lanes.points) points.emplace_back(p.x_m, p.y_m);
-          }
-          const stack::LaneControllerOutput r =
-              stack::StepLaneController(lane_params, {.lane_points_base = points,
-                                                      .lanes_valid = lanes.valid != 0,
-                                                      .speed_mps = odom.speed_mps,
-                                                      .X_F_base = odom.X_map_base,
-                                                      .is_lethal = is_lethal});
-          twist = {r.speed_mps, r.yaw_rate_rad_per_s};
-          collision = r.collision_ahead;
-          stamp = state->lanes->stamp;
-        }
-        if (on_control) on_control(follow, collision);
-        outbox.Publish(out, twist, stamp);
-        outbox.Publish(status_out, ControllerStatus{collision, follow}, odom.stamp);
+        if (r.cmd_vel) outbox.Publish(out, *r.cmd_vel, r.cmd_vel_stamp);
+        outbox.Publish(status_out, r.status, r.status_stamp);
       });
 }
 
@@ -462,10 +438,11 @@ void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& top
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("carcontroller"));
-  cache.Keep<Twist>(node, topics.cmd_vel, [state, &kernel](const Twist& t, Time stamp) {
-    state->command = stack::VelocityCommand{kernel.Now(), t.speed_mps, t.yaw_rate_rad_per_s};
-    state->command_stamp = stamp;
-  });
+  cache.Keep<stack::Twist>(
+      node, topics.cmd_vel, [state, &kernel](const stack::Twist& t, Time stamp) {
+        state->command = stack::VelocityCommand{kernel.Now(), t.speed_mps, t.yaw_rate_rad_per_s};
+        state->command_stamp = stamp;
+      });
   cache.Keep<stack::LocalizationEkfOutput>(
       node, topics.odometry, [state, &kernel](const stack::LocalizationEkfOutput& o, Time) {
         state->odometry = stack::OdometrySpeed{kernel.Now(), o.speed_mps};

@@ -16,11 +16,13 @@
 //
 // As in Nav2, the behaviour's hold (intersection wait, recovery) cancels the controller, which
 // then publishes one zero velocity and nothing more; the cruise control's 1 s watchdog cuts the
-// throttle after that. A callback that only keeps the latest message (most subscriptions here)
-// costs the profile's `subscription_cache` entry; each node's main job costs the node's entry.
-// Where a ROS message carries strings (headers) its type is variable-size and its topic uses DDS;
-// the fixed-size ones (cmd_vel, the actuator command) default to zero-copy, like the perception
-// topics.
+// throttle after that. The nodes are wiring: what they decide lives in the pure components of
+// stack/ (the controller server's cycle in stack/controller_server.h, the plan-failure latch in
+// stack/behavior.h, the watchdog's single zero output in stack/cruise_control.h). A callback that
+// only keeps the latest message (most subscriptions here) costs the profile's `subscription_cache`
+// entry; each node's main job costs the node's entry. Where a ROS message carries strings (headers)
+// its type is variable-size and its topic uses DDS; the fixed-size ones (cmd_vel, the actuator
+// command) default to zero-copy, like the perception topics.
 #pragma once
 
 #include <functional>
