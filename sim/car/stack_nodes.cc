@@ -156,23 +156,10 @@ TopicId<stack::PoseFix> AddPoseFixSource(NodeGraph& graph, const PoseFixConfig& 
   }
   const auto topic = Topic<stack::PoseFix>(graph, "/pose_fix", PoseFixType());
   const Duration period = FromSeconds(1.0 / fix.rate_hz);
-  AddSourceNode(graph, SoftwareNode("pose_fix"), topic, period, period,
-                [fix, true_pose = context.true_pose,
-                 rng = std::make_shared<Rng>(*context.pose_fix_noise)](Time now) {
-                  const world::Pose2 truth = true_pose();
-                  stack::PoseFix f;
-                  f.stamp = now;
-                  f.X_map_base = world::Pose2{
-                      truth.x_m + rng->Normal(0.0, fix.position_stddev_m),
-                      truth.y_m + rng->Normal(0.0, fix.position_stddev_m),
-                      world::WrapAngle(truth.yaw_rad + rng->Normal(0.0, fix.yaw_stddev_rad))};
-                  const double var_p =
-                      std::max(fix.position_stddev_m * fix.position_stddev_m, kMinFixVariance);
-                  const double var_y =
-                      std::max(fix.yaw_stddev_rad * fix.yaw_stddev_rad, kMinFixVariance);
-                  f.covariance = Eigen::Vector3d(var_p, var_p, var_y).asDiagonal();
-                  return f;
-                });
+  AddSourceNode(
+      graph, SoftwareNode("pose_fix"), topic, period, period,
+      [fix, true_pose = context.true_pose, rng = std::make_shared<Rng>(*context.pose_fix_noise)](
+          Time now) { return DrawPoseFix(fix, true_pose(), now, rng.get()); });
   return topic;
 }
 
@@ -473,6 +460,23 @@ void AddActuatorNode(NodeGraph& graph, const StackTopics& topics,
 }
 
 }  // namespace
+
+stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_map_base_true,
+                           Time now, Rng* noise) {
+  // x, y, then yaw: the draws' order is part of the run's reproducibility
+  const double x_m = X_map_base_true.x_m + noise->Normal(0.0, config.position_stddev_m);
+  const double y_m = X_map_base_true.y_m + noise->Normal(0.0, config.position_stddev_m);
+  const double yaw_rad =
+      world::WrapAngle(X_map_base_true.yaw_rad + noise->Normal(0.0, config.yaw_stddev_rad));
+  const double var_p =
+      std::max(config.position_stddev_m * config.position_stddev_m, kMinFixVariance);
+  const double var_y = std::max(config.yaw_stddev_rad * config.yaw_stddev_rad, kMinFixVariance);
+  stack::PoseFix fix;
+  fix.stamp = now;
+  fix.X_map_base = world::Pose2{x_m, y_m, yaw_rad};
+  fix.covariance = Eigen::Vector3d(var_p, var_p, var_y).asDiagonal();
+  return fix;
+}
 
 void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
                    SensorSuite& sensors, const PerceptionTopics& perception,

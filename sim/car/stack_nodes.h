@@ -83,6 +83,12 @@ struct StackHooks {
   std::function<void(bool follow_path, bool collision_ahead)> on_control;
 };
 
+// The pose_fix node's sample: the true chassis pose plus Gaussian noise (x, y, then yaw drawn from
+// `noise`; the yaw wrapped), the covariance the configured variances but at least (1 mm)² and
+// (1 mrad)², since the EKF inverts it.
+stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_map_base_true,
+                           Time now, Rng* noise);
+
 // Adds the nodes and topics above to `graph`. `kernel` gives the arrival times the cruise
 // control's watchdog needs. The perception topics must be on the same graph.
 void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
