@@ -61,6 +61,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
   if (!std::isfinite(input.p_map.x()) || !std::isfinite(input.p_map.y())) {
     throw std::invalid_argument("StepBehavior: non-finite position");
   }
+  if (input.plan_failed) state->plan_failed = *input.plan_failed;
   // where the estimate is along the route
   const double previous_s = state->route_s_m;
   state->route_s_m =
@@ -90,7 +91,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
     if (state->mode != BehaviorMode::kRecovery) {
       if (!input.intersection_free) {
         state->mode = BehaviorMode::kIntersectionWait;
-      } else if (input.collision_ahead || input.plan_failed) {
+      } else if (input.collision_ahead || state->plan_failed) {
         if (state->retries >= params.max_retries) {
           state->mode = BehaviorMode::kFailed;
         } else {
@@ -106,6 +107,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
     }
   }
 
+  if (out.clear_costmaps) state->plan_failed = false;  // the planner plans again after recovery
   out.mode = state->mode;
   out.retries = state->retries;
   out.hold = state->mode != BehaviorMode::kDrive;
@@ -116,7 +118,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
   return out;
 }
 
-bool UseFollowPath(const std::vector<world::IntersectionSpec>& intersections,
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
                    const world::Vec2& p_map) {
   for (const world::IntersectionSpec& i : intersections) {
     if (i.area.Contains(p_map)) return true;

@@ -10,9 +10,14 @@
 //              clear the costmaps, wait recovery_wait, retry; after max_retries failed retries
 //              the navigation fails and the car holds for good. Progress of recovery_reset_m along
 //              the route since the last recovery counts as a success and resets the count.
+//              A failed plan counts until the next plan reply or until a recovery starts: the
+//              planner replies at 1 Hz and the tree ticks at 3 Hz, and Nav2 plans again after a
+//              recovery, so the old failure must not start a second one.
 // The route is map knowledge (the road graph a car is given); the position is the estimate.
 #pragma once
 
+#include <optional>
+#include <span>
 #include <vector>
 
 #include "world/geometry.h"
@@ -67,8 +72,9 @@ struct BehaviorInput {
   world::Vec2 p_map{world::Vec2::Zero()};  // the estimated position
   bool intersection_free{true};            // the intersection client's permission
   bool collision_ahead{false};             // the controller's latest report
-  bool plan_failed{false};                 // the planner's latest result
-  bool mission_done{false};                // the operator ended the drive (laps done)
+  // The newest plan reply since the previous tick: true when it failed; none when no reply came.
+  std::optional<bool> plan_failed;
+  bool mission_done{false};  // the operator ended the drive (laps done)
 };
 
 struct BehaviorOutput {
@@ -86,6 +92,7 @@ struct BehaviorState {
   Time recovery_until{kZeroTime};
   int retries{0};
   double progress_since_recovery_m{0.0};
+  bool plan_failed{false};  // the latest plan reply failed, and no recovery has run since
 };
 
 // Throws std::invalid_argument on a non-finite position.
@@ -95,7 +102,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 // Which controller the controller server runs (reference §6, /controller_selector): FollowPath
 // inside an intersection's area or stop zones (strict boxes, as the real cars test them),
 // LaneController elsewhere.
-bool UseFollowPath(const std::vector<world::IntersectionSpec>& intersections,
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
                    const world::Vec2& p_map);
 
 }  // namespace autonomsim::stack

@@ -88,8 +88,11 @@ CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
   }
   if (out.stopped != CruiseStop::kNone) {
     s.pid_fresh = true;
+    out.publish = !s.stop_published;
+    s.stop_published = true;
     return out;
   }
+  s.stop_published = false;
 
   // PID on speed
   const double error = s.command->speed_mps - std::abs(s.odometry->speed_mps);

@@ -13,6 +13,10 @@
 //   watchdog_timeout ago (strictly: exactly 1 s old still runs), none arrived yet, or the latched
 //   emergency stop is set. The first normal cycle afterwards resets the PID (integral and
 //   derivative memory) and has no elapsed time, so its output is p·e alone, as on the real car.
+// - The real node sends its output every cycle. Here a stop's zero output is marked for sending
+//   once (`publish`) and the following stopped cycles are silent until a normal cycle: the PWM
+//   generator holds the last command, so the car does the same, and the end-to-end latency on the
+//   command topic is measured only on commands derived from fresh input.
 // - The real node divides ω / v_cmd unguarded: v = 0 with ω ≠ 0 gives ±inf, which the FPGA's
 //   steering clamp turns into full lock in ω's direction, and 0/0 gives NaN (an undefined pulse).
 //   Here: |v_cmd| < min_speed_for_curvature_mps gives full lock (±max_curvature_per_m) in ω's
@@ -91,7 +95,8 @@ struct CruiseControlOutput {
   double throttle{0.0};         // u ∈ [-throttle_limit, throttle_limit]
   double curvature_per_m{0.0};  // κ > 0 turns left, finite, |κ| <= max_curvature_per_m
   CruiseStop stopped{CruiseStop::kNone};
-  double error_mps{0.0};      // v_cmd − |v_measured| in a normal cycle, else 0
+  bool publish{true};     // false: a stopped cycle after the stop's zero output already went out
+  double error_mps{0.0};  // v_cmd − |v_measured| in a normal cycle, else 0
   double integral_term{0.0};  // the clamped i·∫e that went into u
 };
 
@@ -100,6 +105,7 @@ struct CruiseControlState {
   std::optional<OdometrySpeed> odometry;
   bool emergency{false};
   Time last_step{kZeroTime};
+  bool stop_published{false};  // the current stop's zero output went out
   // PID memory; `pid_fresh` means the next normal cycle (re)starts it with dt = 0.
   bool pid_fresh{true};
   Time last_cycle{kZeroTime};    // the previous normal (PID) cycle

@@ -20,6 +20,7 @@
 
 #include <functional>
 
+#include "sim/car/perception_config.h"
 #include "sim/car/sensors.h"
 #include "sim/platform/node_graph.h"
 #include "stack/lane_detection.h"
@@ -27,23 +28,7 @@
 
 namespace autonomsim::sim {
 
-// A car's `perception:` entry.
-struct PerceptionConfig {
-  bool enabled{false};
-  stack::ObstacleGridParams obstacle_grid;
-  stack::LaneDetectionParams lane_detection;
-
-  template <class V>
-  void Describe(V& v) {
-    v("enabled", enabled);
-    v("obstacle_grid", obstacle_grid);
-    v("lane_detection", lane_detection);
-  }
-  void Validate() const {}  // the parts validate themselves
-};
-
-// The lane detection's output topic (reference §5), read by the controller and by sweeps' tables.
-inline constexpr const char* kLanePointsTopic = "/lane_detector/central_line/point_cloud";
+// The perception's parameters (PerceptionConfig) and kLanePointsTopic: sim/car/perception_config.h.
 
 // The topics the rest of the stack reads.
 struct PerceptionTopics {

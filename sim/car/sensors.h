@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/car/sensor_config.h"
 #include "sim/core/kernel.h"
 #include "sim/core/priorities.h"
 #include "sim/core/random.h"
@@ -36,6 +37,7 @@
 namespace autonomsim::sim {
 
 // Priorities: sim/core/priorities.h (kPrioritySensorIntegrate, kPrioritySensor).
+// The sensors' parameters (SensorSuiteParams and its streams): sim/car/sensor_config.h.
 
 // The message types the sensors publish, with their sizes on the wire. Images: reference §8. The
 // others are not in the reference; their sizes are the ROS 2 messages' fixed fields (header stamp,
@@ -49,96 +51,6 @@ SensorMessageType DepthImageType();  // Image640mono, 614,400 B (reference §8; 
 SensorMessageType ImuType();         // sensor_msgs/Imu, 304 B
 SensorMessageType WheelSpeedType();  // geometry_msgs/TwistWithCovarianceStamped, 344 B
 SensorMessageType RangeType();       // sensor_msgs/Range, 25 B
-
-struct CameraStreamParams {
-  vehicle::CameraParams camera;
-  double rate_hz{30.0};  // reference §2: both cameras run at 30 fps
-  // The topic the real car publishes the frame on (code/reconros_ws/carcontrol/build.cfg and the
-  // camera drivers): the colour camera's driver publishes "/image", the depth camera's
-  // "/depth/image_raw" and "/depth/camera_info".
-  std::string topic;
-  std::string info_topic;     // CameraInfo; empty: none (the colour camera's driver sends none)
-  bool publish_color{false};  // which image the topic carries
-  bool publish_depth{false};
-  vehicle::CameraNoiseParams noise;
-
-  template <class V>
-  void Describe(V& v) {
-    v("camera", camera);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
-    v("info_topic", info_topic);
-    v("publish_color", publish_color);
-    v("publish_depth", publish_depth);
-    v("noise", noise);
-  }
-  void Validate() const;
-};
-CameraStreamParams ColorCameraStream();  // See3CAM CU30 on /image (bgr8)
-CameraStreamParams DepthCameraStream();  // Astra Pro depth on /depth/image_raw (mono16, mm)
-
-struct ImuStreamParams {
-  vehicle::ImuParams imu;
-  double rate_hz{100.0};  // reference §2
-  // the EKF's imu0 input (code/ros_ws/src/localization/params/ekf.yaml)
-  std::string topic{"/bno055/imu"};
-
-  template <class V>
-  void Describe(V& v) {
-    v("imu", imu);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
-  }
-  void Validate() const;
-};
-
-struct WheelSpeedStreamParams {
-  vehicle::WheelEncoderParams encoder;
-  double rate_hz{10.0};  // reference §2
-  // the Hall sensor node's publisher (build.cfg), the EKF's twist0 input
-  std::string topic{"/modelcar/speed"};
-
-  template <class V>
-  void Describe(V& v) {
-    v("encoder", encoder);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
-  }
-  void Validate() const;
-};
-
-struct UltrasonicStreamParams {
-  vehicle::UltrasonicParams sensor;
-  double rate_hz{10.0};                        // reference §2
-  std::string topic{"/modelcar/front_range"};  // the ultrasound node's publisher (build.cfg)
-
-  template <class V>
-  void Describe(V& v) {
-    v("sensor", sensor);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
-  }
-  void Validate() const;
-};
-
-// One car's sensors, as a scenario file would set them (e.g. `cars[0].sensors`).
-struct SensorSuiteParams {
-  CameraStreamParams color_camera{ColorCameraStream()};
-  CameraStreamParams depth_camera{DepthCameraStream()};
-  ImuStreamParams imu;
-  WheelSpeedStreamParams wheel_speed;
-  UltrasonicStreamParams ultrasonic;
-
-  template <class V>
-  void Describe(V& v) {
-    v("color_camera", color_camera);
-    v("depth_camera", depth_camera);
-    v("imu", imu);
-    v("wheel_speed", wheel_speed);
-    v("ultrasonic", ultrasonic);
-  }
-  void Validate() const;  // each part, and the two cameras' names differ
-};
 
 // What the sensors of every car share: the world they look at, the floor's texture, the scene's
 // colours, and the per-pixel ray tables (one per distinct camera, however many cars carry it).

@@ -16,11 +16,13 @@
 //
 // As in Nav2, the behaviour's hold (intersection wait, recovery) cancels the controller, which
 // then publishes one zero velocity and nothing more; the cruise control's 1 s watchdog cuts the
-// throttle after that. A callback that only keeps the latest message (most subscriptions here)
-// costs the profile's `subscription_cache` entry; each node's main job costs the node's entry.
-// Where a ROS message carries strings (headers) its type is variable-size and its topic uses DDS;
-// the fixed-size ones (cmd_vel, the actuator command) default to zero-copy, like the perception
-// topics.
+// throttle after that. The nodes are wiring: what they decide lives in the pure components of
+// stack/ (the controller server's cycle in stack/controller_server.h, the plan-failure latch in
+// stack/behavior.h, the watchdog's single zero output in stack/cruise_control.h). A callback that
+// only keeps the latest message (most subscriptions here) costs the profile's `subscription_cache`
+// entry; each node's main job costs the node's entry. Where a ROS message carries strings (headers)
+// its type is variable-size and its topic uses DDS; the fixed-size ones (cmd_vel, the actuator
+// command) default to zero-copy, like the perception topics.
 #pragma once
 
 #include <functional>
@@ -29,6 +31,7 @@
 
 #include "sim/car/perception_nodes.h"
 #include "sim/car/sensors.h"
+#include "sim/car/stack_config.h"
 #include "sim/core/config.h"
 #include "sim/core/kernel.h"
 #include "sim/core/random.h"
@@ -48,59 +51,7 @@
 
 namespace autonomsim::sim {
 
-// An external absolute pose fix for the EKF (an overhead tracking system, say). Beyond the real
-// car, which has no absolute correction (reference §6): used only with
-// stack.localization.use_pose_fix: true. A source node `pose_fix` publishes the true chassis pose
-// with Gaussian noise at rate_hz on /pose_fix (geometry_msgs/PoseWithCovarianceStamped).
-struct PoseFixConfig {
-  double rate_hz{5.0};             // assumed: a modest tracking system
-  double position_stddev_m{0.02};  // assumed: per axis
-  double yaw_stddev_rad{0.02};     // assumed
-
-  template <class V>
-  void Describe(V& v) {
-    v("rate_hz", rate_hz);
-    v("position_stddev_m", position_stddev_m);
-    v("yaw_stddev_rad", yaw_stddev_rad);
-  }
-  void Validate() const;
-};
-
-// The actuator command topic: where the end-to-end latency from the sensor stamp is measured.
-inline constexpr const char* kCarCommandTopic = "/carcontrol/command";
-
-// A car's `stack:` entry: every component's parameters (defaults: the real car's, see each).
-struct StackConfig {
-  stack::LocalizationEkfParams localization;
-  PoseFixConfig pose_fix;  // localization.use_pose_fix only
-  stack::BehaviorParams behavior;
-  stack::GlobalCostmapParams global_costmap;
-  stack::GlobalPlannerParams planner;
-  Duration planner_period{std::chrono::seconds(1)};  // reference §6: path replanned at 1 Hz
-  stack::LocalCostmapParams local_costmap;
-  stack::ObstacleLayerParams obstacle_layer;
-  Duration controller_period{Milliseconds(50)};  // reference §6: controller server at 20 Hz
-  stack::LaneControllerParams lane_controller;
-  stack::PathFollowerParams follow_path;
-  stack::CruiseControlParams cruise_control;
-
-  template <class V>
-  void Describe(V& v) {
-    v("localization", localization);
-    v("pose_fix", pose_fix);
-    v("behavior", behavior);
-    v("global_costmap", global_costmap);
-    v("planner", planner);
-    v("planner_period_s", planner_period);
-    v("local_costmap", local_costmap);
-    v("obstacle_layer", obstacle_layer);
-    v("controller_period_s", controller_period);
-    v("lane_controller", lane_controller);
-    v("follow_path", follow_path);
-    v("cruise_control", cruise_control);
-  }
-  void Validate() const;
-};
+// The stack's parameters (StackConfig, PoseFixConfig): sim/car/stack_config.h.
 
 // What the stack knows of the world: the map a real car is given, and where it starts.
 struct StackContext {
@@ -131,6 +82,12 @@ struct StackHooks {
   // Every controller cycle that drove: which controller ran, whether it saw a collision ahead.
   std::function<void(bool follow_path, bool collision_ahead)> on_control;
 };
+
+// The pose_fix node's sample: the true chassis pose plus Gaussian noise (x, y, then yaw drawn from
+// `noise`; the yaw wrapped), the covariance the configured variances but at least (1 mm)² and
+// (1 mrad)², since the EKF inverts it.
+stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_map_base_true,
+                           Time now, Rng* noise);
 
 // Adds the nodes and topics above to `graph`. `kernel` gives the arrival times the cruise
 // control's watchdog needs. The perception topics must be on the same graph.

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "sim/car/oracle_driver.h"
-#include "sim/car/perception_nodes.h"
-#include "sim/car/sensors.h"
-#include "sim/car/stack_nodes.h"
+#include "sim/car/perception_config.h"
+#include "sim/car/sensor_config.h"
+#include "sim/car/stack_config.h"
 #include "sim/core/config.h"
 #include "sim/mqtt/mqtt_link_config.h"
 #include "sim/platform/platform_profile.h"

@@ -129,6 +129,44 @@ TEST(BehaviorTest, ProgressAfterARecoveryResetsTheRetries) {
   EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 0);
 }
 
+TEST(BehaviorTest, AFailedPlanCountsUntilTheNextReplyOrARecovery) {
+  const BehaviorParams params{.recovery_wait = std::chrono::seconds(1)};
+  BehaviorState state;
+  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
+  // A failed reply while the intersection is not free: the gate holds, the failure is kept ...
+  input.intersection_free = false;
+  input.plan_failed = true;
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode,
+            BehaviorMode::kIntersectionWait);
+  EXPECT_TRUE(state.plan_failed);
+  // ... and starts a recovery once the gate opens, with no new reply.
+  input.intersection_free = true;
+  input.plan_failed = std::nullopt;
+  input.now = FromSeconds(0.333);
+  BehaviorOutput out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
+  EXPECT_TRUE(out.clear_costmaps);
+  EXPECT_EQ(out.retries, 1);
+  EXPECT_FALSE(state.plan_failed);
+  // After the 1 s wait, still no reply: the old failure does not start a second recovery.
+  input.now = FromSeconds(1.4);
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_EQ(out.retries, 1);
+  // The newest reply counts: a failure held at the gate, then a success, drives on.
+  input.intersection_free = false;
+  input.plan_failed = true;
+  input.now = FromSeconds(1.7);
+  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode,
+            BehaviorMode::kIntersectionWait);
+  input.intersection_free = true;
+  input.plan_failed = false;
+  input.now = FromSeconds(2.0);
+  out = StepBehavior(params, Straight(10.0), input, &state);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_EQ(out.retries, 1);
+}
+
 TEST(BehaviorTest, TheOperatorEndsTheMission) {
   BehaviorState state;
   BehaviorInput input = At(0.0, Vec2(1.0, 0.0));

@@ -176,6 +176,33 @@ TEST(CruiseControlTest, WatchdogTriggersAfterOneSecondAndNotBefore) {
   EXPECT_EQ(o.Step(1.001, Cmd(1.001, 0.25), std::nullopt).stopped, CruiseStop::kOdometryStale);
 }
 
+TEST(CruiseControlTest, AStopsZeroOutputIsPublishedOnce) {
+  Cruise c;
+  // Nothing received yet: the first stopped cycle's zero goes out, the next ones do not.
+  CruiseControlOutput out = c.Step(0.0, std::nullopt, std::nullopt);
+  EXPECT_EQ(out.stopped, CruiseStop::kNoCommand);
+  EXPECT_TRUE(out.publish);
+  EXPECT_FALSE(c.Step(0.033, std::nullopt, std::nullopt).publish);
+  // Driving: every cycle is published.
+  EXPECT_TRUE(c.Step(0.066, Cmd(0.066, 0.25), 0.0).publish);
+  EXPECT_TRUE(c.Step(0.1, Cmd(0.1, 0.25), 0.1).publish);
+  // The command goes stale (1.1 s > 1 s): one zero output, then silence while stale, even when
+  // the reason changes (emergency on top).
+  out = c.Step(1.2, std::nullopt, 0.1);
+  EXPECT_EQ(out.stopped, CruiseStop::kCommandStale);
+  EXPECT_TRUE(out.publish);
+  EXPECT_FALSE(c.Step(1.233, std::nullopt, 0.1).publish);
+  EXPECT_FALSE(c.Step(1.266, std::nullopt, 0.1, true).publish);
+  // Released and driving again, then a new stop: its zero goes out once more.
+  out = c.Step(1.3, Cmd(1.3, 0.25), 0.1, false);
+  EXPECT_EQ(out.stopped, CruiseStop::kNone);
+  EXPECT_TRUE(out.publish);
+  out = c.Step(1.333, Cmd(1.333, 0.25), 0.1, true);
+  EXPECT_EQ(out.stopped, CruiseStop::kEmergency);
+  EXPECT_TRUE(out.publish);
+  EXPECT_FALSE(c.Step(1.366, Cmd(1.366, 0.25), 0.1).publish);
+}
+
 TEST(CruiseControlTest, NothingReceivedYetIsAStop) {
   Cruise c;
   EXPECT_EQ(c.Step(0.0, std::nullopt, std::nullopt).stopped, CruiseStop::kNoCommand);

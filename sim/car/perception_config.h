@@ -1,0 +1,29 @@
+// A car's `perception:` entry and the lane detection's topic name. Kept apart from the nodes
+// (sim/car/perception_nodes.h: node graph, sensors) so that a scenario can name them without the
+// simulator's machinery.
+#pragma once
+
+#include "stack/lane_detection.h"
+#include "stack/obstacle_grid.h"
+
+namespace autonomsim::sim {
+
+// A car's `perception:` entry.
+struct PerceptionConfig {
+  bool enabled{false};
+  stack::ObstacleGridParams obstacle_grid;
+  stack::LaneDetectionParams lane_detection;
+
+  template <class V>
+  void Describe(V& v) {
+    v("enabled", enabled);
+    v("obstacle_grid", obstacle_grid);
+    v("lane_detection", lane_detection);
+  }
+  void Validate() const {}  // the parts validate themselves
+};
+
+// The lane detection's output topic (reference §5), read by the controller and by sweeps' tables.
+inline constexpr const char* kLanePointsTopic = "/lane_detector/central_line/point_cloud";
+
+}  // namespace autonomsim::sim

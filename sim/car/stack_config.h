@@ -1,0 +1,74 @@
+// A car's `stack:` entry: the parameters of every stack component, as one plain struct, and the
+// pose fix's. Kept apart from the nodes (sim/car/stack_nodes.h: node graph, kernel) so that a
+// scenario can name them without the simulator's machinery.
+#pragma once
+
+#include <chrono>
+
+#include "stack/behavior.h"
+#include "stack/costmap.h"
+#include "stack/cruise_control.h"
+#include "stack/global_planner.h"
+#include "stack/lane_controller.h"
+#include "stack/localization_ekf.h"
+#include "stack/obstacle_grid.h"
+#include "stack/path_follower.h"
+#include "world/time.h"
+
+namespace autonomsim::sim {
+
+// An external absolute pose fix for the EKF (an overhead tracking system, say). Beyond the real
+// car, which has no absolute correction (reference §6): used only with
+// stack.localization.use_pose_fix: true. A source node `pose_fix` publishes the true chassis pose
+// with Gaussian noise at rate_hz on /pose_fix (geometry_msgs/PoseWithCovarianceStamped).
+struct PoseFixConfig {
+  double rate_hz{5.0};             // assumed: a modest tracking system
+  double position_stddev_m{0.02};  // assumed: per axis
+  double yaw_stddev_rad{0.02};     // assumed
+
+  template <class V>
+  void Describe(V& v) {
+    v("rate_hz", rate_hz);
+    v("position_stddev_m", position_stddev_m);
+    v("yaw_stddev_rad", yaw_stddev_rad);
+  }
+  void Validate() const;
+};
+
+// The actuator command topic: where the end-to-end latency from the sensor stamp is measured.
+inline constexpr const char* kCarCommandTopic = "/carcontrol/command";
+
+// A car's `stack:` entry: every component's parameters (defaults: the real car's, see each).
+struct StackConfig {
+  stack::LocalizationEkfParams localization;
+  PoseFixConfig pose_fix;  // localization.use_pose_fix only
+  stack::BehaviorParams behavior;
+  stack::GlobalCostmapParams global_costmap;
+  stack::GlobalPlannerParams planner;
+  Duration planner_period{std::chrono::seconds(1)};  // reference §6: path replanned at 1 Hz
+  stack::LocalCostmapParams local_costmap;
+  stack::ObstacleLayerParams obstacle_layer;
+  Duration controller_period{Milliseconds(50)};  // reference §6: controller server at 20 Hz
+  stack::LaneControllerParams lane_controller;
+  stack::PathFollowerParams follow_path;
+  stack::CruiseControlParams cruise_control;
+
+  template <class V>
+  void Describe(V& v) {
+    v("localization", localization);
+    v("pose_fix", pose_fix);
+    v("behavior", behavior);
+    v("global_costmap", global_costmap);
+    v("planner", planner);
+    v("planner_period_s", planner_period);
+    v("local_costmap", local_costmap);
+    v("obstacle_layer", obstacle_layer);
+    v("controller_period_s", controller_period);
+    v("lane_controller", lane_controller);
+    v("follow_path", follow_path);
+    v("cruise_control", cruise_control);
+  }
+  void Validate() const;
+};
+
+}  // namespace autonomsim::sim

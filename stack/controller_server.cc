@@ -1,0 +1,73 @@
+#include "stack/controller_server.h"
+
+#include <utility>
+
+#include "stack/behavior.h"
+#include "stack/localization_ekf.h"
+
+namespace autonomsim::stack {
+
+void ControllerServerParams::Validate() const {
+  lane_controller.Validate();
+  follow_path.Validate();
+}
+
+ControllerServerOutput StepControllerServer(const ControllerServerParams& params,
+                                            std::span<const world::IntersectionSpec> intersections,
+                                            const ControllerServerInput& input,
+                                            ControllerServerState* state) {
+  ControllerServerOutput out;
+  out.status_stamp = input.odometry_stamp;
+  out.cmd_vel_stamp = input.odometry_stamp;
+
+  // hold: cancelled, one zero velocity then silence
+  if (input.hold) {
+    if (!state->stopped) out.cmd_vel = Twist{};
+    state->stopped = true;
+    return out;
+  }
+  state->stopped = false;
+
+  // select and drive
+  const bool follow = UseFollowPath(intersections, input.X_map_base.position());
+  out.controller = follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
+  Twist twist;
+  bool collision = false;
+  if (follow) {
+    if (input.path) {
+      const PathFollowerOutput r = StepPathFollower(params.follow_path,
+                                                    {.path = input.path->points_map,
+                                                     .path_id = input.path->id,
+                                                     .X_F_base = input.X_map_base,
+                                                     .speed_mps = input.speed_mps,
+                                                     .is_lethal = input.is_lethal},
+                                                    &state->follower);
+      twist = {r.speed_mps, r.yaw_rate_rad_per_s};
+      collision = r.collision_ahead;
+    }
+  } else if (input.lanes) {
+    const LaneControllerOutput r =
+        StepLaneController(params.lane_controller, {.lane_points_base = input.lanes->points_base,
+                                                    .lanes_valid = input.lanes->valid,
+                                                    .speed_mps = input.speed_mps,
+                                                    .X_F_base = input.X_map_base,
+                                                    .is_lethal = input.is_lethal});
+    twist = {r.speed_mps, r.yaw_rate_rad_per_s};
+    collision = r.collision_ahead;
+    out.cmd_vel_stamp = input.lanes->stamp;
+  }
+  out.cmd_vel = twist;
+  out.status = {.collision_ahead = collision, .follow_path = follow};
+  return out;
+}
+
+LethalQuery LethalInLocalCostmap(std::shared_ptr<const Costmap2D> costmap,
+                                 const world::Pose2& X_map_odom) {
+  return [costmap = std::move(costmap), X_map_odom](const world::Vec2& p_map) {
+    const std::optional<std::uint8_t> cost =
+        costmap->CostAt(OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
+    return cost && *cost == kLethalObstacle;
+  };
+}
+
+}  // namespace autonomsim::stack

@@ -1,0 +1,108 @@
+// The controller server (reference §6: Nav2's controller_server on the car with the lab's
+// /controller_selector) as one pure cycle, run at 20 Hz on the latest messages its node holds:
+//   hold      while the behaviour holds the car (stack/behavior.h: intersection wait, recovery,
+//             failed, done; and before its first goals) the controller is cancelled: one zero
+//             velocity goes out (Nav2's publishZeroVelocity), then nothing on cmd_vel until the
+//             car may drive again;
+//   select    FollowPath inside an intersection's area or stop zones (UseFollowPath), the
+//             LaneController elsewhere;
+//   drive     FollowPath (stack/path_follower.h) on the newest successful plan, the
+//             LaneController (stack/lane_controller.h) on the newest lane points; a controller
+//             with nothing to follow yet commands (0, 0);
+//   stamp     the twist carries the lane points' stamp when the LaneController ran on them (so the
+//             latency chain from the camera reaches the actuator command), else the odometry's;
+//   status    every cycle, stamped with the odometry: collision ahead and FollowPath selected
+//             (both false while held).
+// Differences from the real node: a controller that sees a collision ahead throws there, and the
+// controller server aborts its action, which the behaviour tree turns into a recovery; here the
+// cycle commands (0, 0) and reports collision_ahead in the status the behaviour reads. The real
+// node reads its costmap in-process; here the caller passes the lethal-point query
+// (LethalInLocalCostmap on the latest local costmap).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+
+#include "stack/costmap.h"
+#include "stack/lane_controller.h"
+#include "stack/path_follower.h"
+#include "world/geometry.h"
+#include "world/time.h"
+#include "world/track_spec.h"
+
+namespace autonomsim::stack {
+
+// Assembled by the node from the stack's lane_controller and follow_path entries.
+struct ControllerServerParams {
+  LaneControllerParams lane_controller;
+  PathFollowerParams follow_path;
+
+  void Validate() const;
+};
+
+// The newest lane points (LanePoints, reference §5), decoded to base_link.
+struct ControllerLanes {
+  std::span<const world::Vec2> points_base;  // read only when valid
+  bool valid{false};
+  Time stamp{kZeroTime};  // the camera frame's
+};
+
+// The newest successful plan (/plan).
+struct ControllerPath {
+  std::span<const world::Vec2> points_map;  // start to goal
+  std::uint64_t id{0};                      // the planner's counter: a new id restarts pruning
+};
+
+struct ControllerServerInput {
+  bool hold{true};  // the behaviour's newest hold; true before its first output
+  // The newest odometry (the node runs no cycle before the first).
+  Time odometry_stamp{kZeroTime};
+  world::Pose2 X_map_base;
+  double speed_mps{0.0};
+  std::optional<ControllerLanes> lanes;  // none: no lane points received yet
+  std::optional<ControllerPath> path;    // none: no successful plan received yet
+  LethalQuery is_lethal;                 // map frame; empty: no costmap yet, no collision check
+};
+
+// geometry_msgs/Twist on cmd_vel.
+struct Twist {
+  double speed_mps{0.0};           // linear.x
+  double yaw_rate_rad_per_s{0.0};  // angular.z
+};
+
+// /controller/status, read by the behaviour.
+struct ControllerStatus {
+  bool collision_ahead{false};
+  bool follow_path{false};  // FollowPath selected (else the LaneController)
+};
+
+enum class ActiveController { kNone, kLaneController, kFollowPath };
+
+struct ControllerServerOutput {
+  std::optional<Twist> cmd_vel;  // to publish; none: silent (held, its zero already sent)
+  Time cmd_vel_stamp{kZeroTime};
+  ControllerStatus status;  // published every cycle
+  Time status_stamp{kZeroTime};
+  ActiveController controller{ActiveController::kNone};  // the one selected; kNone while held
+};
+
+struct ControllerServerState {
+  bool stopped{false};  // the zero velocity of the current hold went out
+  PathFollowerState follower;
+};
+
+// `intersections` are the zone boxes of the map the car is given. Throws std::invalid_argument
+// where the controllers do (non-finite pose, speed, path or valid lane points).
+ControllerServerOutput StepControllerServer(const ControllerServerParams& params,
+                                            std::span<const world::IntersectionSpec> intersections,
+                                            const ControllerServerInput& input,
+                                            ControllerServerState* state);
+
+// Whether a map-frame point is LETHAL in the local costmap (odom frame) through the static
+// map→odom transform; points outside the costmap are not. Keeps the costmap alive.
+LethalQuery LethalInLocalCostmap(std::shared_ptr<const Costmap2D> costmap,
+                                 const world::Pose2& X_map_odom);
+
+}  // namespace autonomsim::stack

@@ -1,0 +1,192 @@
+#include "stack/controller_server.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+namespace autonomsim::stack {
+namespace {
+
+using world::Vec2;
+
+constexpr double kTol = 1e-12;
+
+// One intersection whose area is the square 1.5 < x < 2.5, -0.5 < y < 0.5 of the map.
+std::vector<world::IntersectionSpec> OneIntersection() {
+  world::IntersectionSpec i;
+  i.area = world::Box{.x_min_m = 1.5, .x_max_m = 2.5, .y_min_m = -0.5, .y_max_m = 0.5};
+  return {i};
+}
+
+// A driving cycle at (x, y), heading +x, standing still, with odometry stamped 10 s.
+ControllerServerInput DriveAt(double x_m, double y_m) {
+  return ControllerServerInput{.hold = false,
+                               .odometry_stamp = FromSeconds(10.0),
+                               .X_map_base = world::Pose2{x_m, y_m, 0.0}};
+}
+
+struct Server {
+  ControllerServerParams params;
+  std::vector<world::IntersectionSpec> intersections{OneIntersection()};
+  ControllerServerState state;
+
+  ControllerServerOutput Step(const ControllerServerInput& input) {
+    return StepControllerServer(params, intersections, input, &state);
+  }
+};
+
+TEST(ControllerServerTest, AHoldSendsOneZeroVelocityThenNothing) {
+  Server s;
+  ControllerServerInput input = DriveAt(0.0, 0.0);
+  input.hold = true;
+  ControllerServerOutput out = s.Step(input);
+  ASSERT_TRUE(out.cmd_vel.has_value());
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_EQ(out.cmd_vel->yaw_rate_rad_per_s, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(10.0));
+  EXPECT_EQ(out.controller, ActiveController::kNone);
+  // The status goes out every cycle, all false while held.
+  EXPECT_FALSE(out.status.collision_ahead);
+  EXPECT_FALSE(out.status.follow_path);
+  EXPECT_EQ(out.status_stamp, FromSeconds(10.0));
+  out = s.Step(input);
+  EXPECT_FALSE(out.cmd_vel.has_value());
+  EXPECT_EQ(out.controller, ActiveController::kNone);
+  // Driving again, then a new hold: its zero velocity goes out once more.
+  input.hold = false;
+  EXPECT_TRUE(s.Step(input).cmd_vel.has_value());
+  input.hold = true;
+  EXPECT_TRUE(s.Step(input).cmd_vel.has_value());
+  EXPECT_FALSE(s.Step(input).cmd_vel.has_value());
+  // Before the behaviour's first output the server holds.
+  EXPECT_TRUE(ControllerServerInput{}.hold);
+}
+
+TEST(ControllerServerTest, LaneControllerOutsideTheZonesOnTheLanePoints) {
+  Server s;
+  // Far to near, as the detector sends them. The nearest at range >= 0.6 m is (0.6, 0.3) at
+  // 0.671 m: κ = 2·0.3 / 0.45 = 4/3 1/m, radius 0.75 m < 0.9 m slows to 0.25·(1 − 0.15/0.9), but
+  // not below the 0.25 m/s minimum; |0.6 − 0.671| < 0.1 m: no approach scaling.
+  // v = 0.25 m/s, ω = v·κ = 1/3 rad/s.
+  const std::vector<Vec2> points{Vec2(1.5, 0.2), Vec2(0.6, 0.3), Vec2(0.4, 0.1)};
+  ControllerServerInput input = DriveAt(0.0, 0.0);
+  input.lanes = ControllerLanes{.points_base = points, .valid = true, .stamp = FromSeconds(9.9)};
+  ControllerServerOutput out = s.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kLaneController);
+  ASSERT_TRUE(out.cmd_vel.has_value());
+  EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25, kTol);
+  EXPECT_NEAR(out.cmd_vel->yaw_rate_rad_per_s, 1.0 / 3.0, kTol);
+  // The twist carries the camera frame's stamp, the status the odometry's.
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(9.9));
+  EXPECT_EQ(out.status_stamp, FromSeconds(10.0));
+  EXPECT_FALSE(out.status.follow_path);
+  EXPECT_FALSE(out.status.collision_ahead);
+
+  // Invalid lanes: (0, 0), still stamped with the frame that said so.
+  input.lanes->valid = false;
+  out = s.Step(input);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_EQ(out.cmd_vel->yaw_rate_rad_per_s, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(9.9));
+
+  // No lane points yet: (0, 0) on the odometry's stamp, the LaneController still selected.
+  input.lanes.reset();
+  out = s.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kLaneController);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(10.0));
+}
+
+TEST(ControllerServerTest, FollowPathInsideAnIntersectionOnThePlan) {
+  Server s;
+  // The car at (2, 0) inside the area. The path's closest point is (2.1, 0) (index 1); the
+  // carrot is the first at range >= 0.6 m, (3.0, 0) at 1.0 m: κ = 0, approach scaling
+  // v = 0.25·(1 − 0.4/0.6) = 1/12 m/s (above the 0.05 m/s floor).
+  const std::vector<Vec2> path{Vec2(1.7, 0.0), Vec2(2.1, 0.0), Vec2(2.4, 0.0), Vec2(3.0, 0.0),
+                               Vec2(3.6, 0.0)};
+  const std::vector<Vec2> lanes{Vec2(0.6, 0.3)};
+  ControllerServerInput input = DriveAt(2.0, 0.0);
+  input.path = ControllerPath{.points_map = path, .id = 7};
+  input.lanes = ControllerLanes{.points_base = lanes, .valid = true, .stamp = FromSeconds(9.9)};
+  ControllerServerOutput out = s.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kFollowPath);
+  ASSERT_TRUE(out.cmd_vel.has_value());
+  EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25 / 3.0, kTol);
+  EXPECT_EQ(out.cmd_vel->yaw_rate_rad_per_s, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(10.0));  // the lanes' stamp is not used
+  EXPECT_TRUE(out.status.follow_path);
+  EXPECT_FALSE(out.status.collision_ahead);
+  EXPECT_EQ(s.state.follower.path_id, 7u);
+  EXPECT_EQ(s.state.follower.begin, 1u);
+
+  // No successful plan yet: (0, 0), FollowPath still selected, its pruning state untouched.
+  Server fresh;
+  input.path.reset();
+  out = fresh.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kFollowPath);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_TRUE(out.status.follow_path);
+  EXPECT_FALSE(fresh.state.follower.path_id.has_value());
+}
+
+TEST(ControllerServerTest, ACollisionAheadStopsAndIsReported) {
+  // FollowPath from (2, 0) at 1/12 m/s (as above) against a wall beyond x = 2.3 m: the arc is
+  // tested every 0.05 m, and the first pose ahead puts the footprint's front (+0.265 m) at
+  // 2.315 m.
+  const std::vector<Vec2> path{Vec2(1.7, 0.0), Vec2(2.1, 0.0), Vec2(2.4, 0.0), Vec2(3.0, 0.0),
+                               Vec2(3.6, 0.0)};
+  Server s;
+  ControllerServerInput input = DriveAt(2.0, 0.0);
+  input.path = ControllerPath{.points_map = path, .id = 1};
+  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 2.3; };
+  ControllerServerOutput out = s.Step(input);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_TRUE(out.status.collision_ahead);
+  EXPECT_TRUE(out.status.follow_path);
+
+  // The LaneController from (1.2, 0), outside the area, straight at 0.25 m/s: within the 1 s
+  // horizon the front reaches 1.2 + 0.265 + 0.25 = 1.715 m. A wall beyond 1.8 m is clear of it,
+  // one beyond 1.65 m is not.
+  const std::vector<Vec2> lanes{Vec2(0.6, 0.0)};
+  input = DriveAt(1.2, 0.0);
+  input.lanes = ControllerLanes{.points_base = lanes, .valid = true, .stamp = FromSeconds(9.9)};
+  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.8; };
+  out = s.Step(input);
+  EXPECT_FALSE(out.status.collision_ahead);
+  EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25, kTol);
+  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.65; };
+  out = s.Step(input);
+  EXPECT_TRUE(out.status.collision_ahead);
+  EXPECT_FALSE(out.status.follow_path);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(9.9));
+}
+
+TEST(ControllerServerTest, LethalInLocalCostmapGoesThroughMapToOdom) {
+  // A 10 × 10 grid of 0.1 m cells at the odom origin, lethal in cell (3, 4): odom point
+  // (0.35, 0.45). With map→odom = (1, 2, 90°) that point is at (1 − 0.45, 2 + 0.35) in the map.
+  auto costmap = std::make_shared<Costmap2D>(10, 10, 0.1, Vec2(0.0, 0.0));
+  costmap->SetCost(3, 4, kLethalObstacle);
+  costmap->SetCost(2, 4, kInscribedInflatedObstacle);
+  const LethalQuery lethal =
+      LethalInLocalCostmap(costmap, world::Pose2{1.0, 2.0, 1.5707963267948966});
+  EXPECT_TRUE(lethal(Vec2(0.55, 2.35)));
+  EXPECT_FALSE(lethal(Vec2(0.55, 2.25)));  // odom (0.25, 0.45): inscribed, not lethal
+  EXPECT_FALSE(lethal(Vec2(0.55, 2.55)));  // odom (0.55, 0.45): free
+  EXPECT_FALSE(lethal(Vec2(5.0, 5.0)));    // outside the grid
+}
+
+TEST(ControllerServerTest, ParamsValidateBothControllers) {
+  ControllerServerParams params;
+  EXPECT_NO_THROW(params.Validate());
+  params.follow_path.collision.step_m = -1.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = {};
+  params.lane_controller.pursuit.lookahead_dist_m = -1.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace autonomsim::stack
