@@ -38,7 +38,7 @@ struct CarConfig {
   StackConfig stack;  // driver: stack
   stack::IntersectionClientParams intersection_client;
   vehicle::CarParams vehicle;
-  SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/car/sensors.h)
+  SensorSuiteParams sensors;  // cameras, IMU, wheel encoder, ultrasonic (sim/car/sensor_config.h)
   // The perception nodes (point cloud, obstacle detection, lane detection), run on the car's
   // board on its camera frames when enabled (sim/car/perception_nodes.h).
   PerceptionConfig perception;
