@@ -1,5 +1,6 @@
 #include "world/track_spec.h"
 
+#include <cmath>
 #include <numbers>
 #include <set>
 #include <stdexcept>
@@ -12,6 +13,15 @@ namespace {
 void ValidatePoints(const PointList& points, const std::string& key) {
   Require(points.size() >= 2,
           key + " needs at least 2 points, got " + std::to_string(points.size()));
+}
+
+// Every point of the track lies on its floor, a square of side `size_m` centred on the origin:
+// geometry off it (1e308, say) would reach Box2D and the path sampler as infinities.
+void RequireOnFloor(double x_m, double y_m, double size_m, const std::string& what) {
+  const double half = 0.5 * size_m;
+  Require(std::abs(x_m) <= half && std::abs(y_m) <= half,
+          what + " (" + Num(x_m) + ", " + Num(y_m) +
+              ") m is off the floor (|x|, |y| <= " + Num(half) + " m: size_m " + Num(size_m) + ")");
 }
 
 }  // namespace
@@ -49,6 +59,22 @@ Pose2 StartPoseSpec::ToPose() const { return Pose2{x_m, y_m, yaw_deg * std::numb
 
 void TrackSpec::Validate() const {
   Require(size_m > 0.0, "size_m must be > 0, got " + std::to_string(size_m));
+  for (const TrackLineSpec& line : lines) {
+    for (std::size_t i = 0; i < line.points_m.size(); ++i) {
+      RequireOnFloor(line.points_m[i][0], line.points_m[i][1], size_m,
+                     "line '" + line.name + "' points_m[" + std::to_string(i) + "]");
+    }
+  }
+  for (const LaneSegmentSpec& lane : lanes) {
+    for (std::size_t i = 0; i < lane.points_m.size(); ++i) {
+      RequireOnFloor(lane.points_m[i][0], lane.points_m[i][1], size_m,
+                     "lane '" + lane.name + "' points_m[" + std::to_string(i) + "]");
+    }
+  }
+  // (zone boxes may reach past the floor's edge, as the lab's do: they are look-ups, not bodies)
+  for (const auto& [pose_name, pose] : start_poses) {
+    RequireOnFloor(pose.x_m, pose.y_m, size_m, "start pose '" + pose_name + "'");
+  }
   auto check_rgb = [](const Rgb& rgb, const std::string& key) {
     for (int c : rgb) Require(c >= 0 && c <= 255, key + " components must be in 0..255");
   };

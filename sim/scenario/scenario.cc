@@ -236,6 +236,32 @@ ResolvedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Tra
   return resolved;
 }
 
+// Every obstacle on the track's floor and smaller than it, before Box2D sees it (an obstacle at
+// 1e39 m aborted in Box2D's IsValid assertion; one 9 m off a 5 m floor was accepted).
+void CheckObstaclesOnFloor(const Scenario& scenario, double floor_size_m,
+                           const ScenarioSite& site) {
+  const double half_floor_m = 0.5 * floor_size_m;
+  for (std::size_t i = 0; i < scenario.obstacles.size(); ++i) {
+    const ObstacleConfig& o = scenario.obstacles[i];
+    for (const auto& [key, value] : {std::pair{"x_m", o.x_m}, std::pair{"y_m", o.y_m}}) {
+      if (std::abs(value) > half_floor_m) {
+        FailAt(site.root, site.source, {"obstacles", i, key},
+               std::string(key) + " " + Num(value) + " m is off the track's floor (|" + key +
+                   "| <= " + Num(half_floor_m) + " m)");
+      }
+    }
+    for (const auto& [key, value] :
+         {std::pair{"length_m", o.length_m}, std::pair{"width_m", o.width_m},
+          std::pair{"height_m", o.height_m}}) {
+      if (value > 2.0 * half_floor_m) {
+        FailAt(site.root, site.source, {"obstacles", i, key},
+               std::string(key) + " " + Num(value) + " m is larger than the track's floor (" +
+                   Num(2.0 * half_floor_m) + " m)");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 LoadedScenario LoadScenario(const std::filesystem::path& file,
@@ -262,6 +288,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     loaded.start_poses.push_back(car.start_pose);
     loaded.profiles.push_back(std::move(car.profile));
   }
+  CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
   for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
     const ExpectArgs& args = scenario.expect[i].args();
     if (args.car && car_ids.count(*args.car) == 0) {

@@ -9,10 +9,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -73,6 +75,28 @@ world::Track* LabTrackTest::track_ = nullptr;
 TEST(LabTrackFileTest, LoadsAndRejectsAMissingFile) {
   EXPECT_NO_THROW(LoadTrack(kLabTrack));
   EXPECT_THROW(LoadTrack("scenarios/tracks/no_such_track.yaml"), ConfigError);
+}
+
+// Issue 15: a track point at 1e308 m reached the path sampler ("arc length s is not finite").
+TEST(LabTrackFileTest, APointOffTheFloorIsAnErrorNamingIt) {
+  std::ifstream in(kLabTrack);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string first_point = "points_m: [[";
+  const std::size_t at = yaml.find(first_point);
+  ASSERT_NE(at, std::string::npos);
+  yaml.insert(at + first_point.size(), "1e308, 0], [");
+  const std::filesystem::path file =
+      std::filesystem::path(::testing::TempDir()) / "track_off_floor.yaml";
+  std::ofstream(file) << yaml;
+  try {
+    LoadTrack(file);
+    ADD_FAILURE() << "a point at 1e308 m was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("points_m[0] (1e+308, 0) m is off the floor"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("track_off_floor.yaml"));
+  }
 }
 
 TEST_F(LabTrackTest, ForbiddenLinesAreTheYellowLinesAndTheIslands) {
