@@ -88,7 +88,7 @@ void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s, 
   NodeData& n = nodes_.at(static_cast<std::size_t>(node));
   ++n.jobs;
   n.job_core_s += nominal_core_s;
-  if (timed) n.turnaround_ms.push_back(ToSeconds(end - start) * 1e3);
+  if (timed) n.turnaround.Add(end - start);
 }
 
 void RunMetrics::ReceiveDone(int node, Time t, double core_s) {
@@ -123,7 +123,7 @@ void RunMetrics::Published(int /*node*/, int topic, Time t, Time stamp) {
   if (!Measured(t)) return;
   TopicData& d = topics_.at(static_cast<std::size_t>(topic));
   ++d.published;
-  d.latency_ms.push_back(ToSeconds(t - stamp) * 1e3);
+  d.latency.Add(t - stamp);
 }
 
 void RunMetrics::Span(TraceLane lane, int id, const std::string& name, Time start, Time end) {
@@ -148,25 +148,6 @@ void RunMetrics::AddTrace(const TraceEvent& event) {
   trace_.push_back(event);
 }
 
-Stats ComputeStats(std::vector<double> samples) {
-  Stats s;
-  s.count = samples.size();
-  if (samples.empty()) return s;
-  std::sort(samples.begin(), samples.end());
-  auto rank = [&](double q) {
-    // nearest rank: the smallest value with at least q of the sample at or below it
-    const double r = std::ceil(q * static_cast<double>(samples.size()));
-    const std::size_t i = r < 1.0 ? 0 : static_cast<std::size_t>(r) - 1;
-    return samples[std::min(i, samples.size() - 1)];
-  };
-  s.min = samples.front();
-  s.max = samples.back();
-  s.p50 = rank(0.50);
-  s.p95 = rank(0.95);
-  s.p99 = rank(0.99);
-  return s;
-}
-
 std::vector<double> HistogramEdgesMs() {
   const int decades =
       static_cast<int>(std::lround(std::log10(kHistogramMax_ms / kHistogramMin_ms)));
@@ -176,19 +157,6 @@ std::vector<double> HistogramEdgesMs() {
                     std::pow(10.0, static_cast<double>(i) / kHistogramBinsPerDecade));
   }
   return edges;
-}
-
-std::vector<std::uint64_t> HistogramMs(const std::vector<double>& samples_ms) {
-  const std::vector<double> edges = HistogramEdgesMs();
-  std::vector<std::uint64_t> counts(edges.size() - 1, 0);
-  for (double x : samples_ms) {
-    // the last edge not above x, clamped to the outer bins
-    const auto it = std::upper_bound(edges.begin(), edges.end(), x);
-    const std::ptrdiff_t bin = std::clamp<std::ptrdiff_t>(
-        (it - edges.begin()) - 1, 0, static_cast<std::ptrdiff_t>(counts.size()) - 1);
-    ++counts[static_cast<std::size_t>(bin)];
-  }
-  return counts;
 }
 
 const NodeReport* MetricsReport::FindNode(const std::string& name) const {
@@ -229,8 +197,8 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     r.timer_overruns = n.timer_overruns;
     r.input_hz = static_cast<double>(n.arrivals + n.timer_ticks) / window;
     r.rate_hz = static_cast<double>(n.jobs) / window;
-    r.turnaround_ms = ComputeStats(n.turnaround_ms);
-    r.turnaround_histogram = HistogramMs(n.turnaround_ms);
+    r.turnaround_ms = n.turnaround.ComputeStats();
+    r.turnaround_histogram = n.turnaround.Counts(HistogramEdgesMs());
     r.cpu_percent = 100.0 * n.cpu_core_s / window;
     const double per_job = n.jobs > 0 ? n.job_core_s / static_cast<double>(n.jobs) : 0.0;
     const double triggers = static_cast<double>(n.arrivals + n.timer_ticks);
@@ -247,7 +215,7 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     r.drops = t.drops;
     r.loan_failures = t.loan_failures;
     r.rate_hz = static_cast<double>(t.published) / window;
-    r.latency_ms = ComputeStats(t.latency_ms);
+    r.latency_ms = t.latency.ComputeStats();
     report.topics.push_back(std::move(r));
   }
   return report;

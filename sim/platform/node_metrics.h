@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/platform/duration_histogram.h"
 #include "world/time.h"
 
 namespace autonomsim::sim {
@@ -66,7 +67,7 @@ class RunMetrics {
     std::string mapping;
     std::uint64_t jobs{0}, arrivals{0}, drops{0}, loan_failures{0}, timer_ticks{0},
         timer_overruns{0};
-    std::vector<double> turnaround_ms;
+    DurationHistogram turnaround;  // of the timed jobs
     double cpu_core_s{0.0};
     double job_core_s{0.0};      // nominal, summed over jobs counted in `jobs`
     double receive_core_s{0.0};  // DDS receive thread
@@ -76,7 +77,7 @@ class RunMetrics {
     std::string transport;
     std::int64_t bytes{0};
     std::uint64_t published{0}, drops{0}, loan_failures{0};
-    std::vector<double> latency_ms;
+    DurationHistogram latency;  // publish time minus the sensor stamp
   };
   struct TraceEvent {
     char phase;  // 'X' span, 'C' counter
@@ -116,13 +117,6 @@ class RunMetrics {
   double last_busy_{-1.0};
 };
 
-// min / p50 / p95 / p99 / max of a sample (nearest-rank percentiles); all zero when empty.
-struct Stats {
-  std::size_t count{0};
-  double min{0.0}, p50{0.0}, p95{0.0}, p99{0.0}, max{0.0};
-};
-Stats ComputeStats(std::vector<double> samples);
-
 // A histogram of milliseconds on log-spaced bins, kHistogramBinsPerDecade per decade from
 // kHistogramMin_ms to kHistogramMax_ms: bin i holds [edge i, edge i+1); the first bin also holds
 // what is below the range, the last what is above it (so the counts sum to the sample's size).
@@ -130,7 +124,6 @@ inline constexpr int kHistogramBinsPerDecade = 5;
 inline constexpr double kHistogramMin_ms = 0.1;
 inline constexpr double kHistogramMax_ms = 10000.0;
 std::vector<double> HistogramEdgesMs();  // bins + 1 edges
-std::vector<std::uint64_t> HistogramMs(const std::vector<double>& samples_ms);
 
 struct NodeReport {
   std::string name;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "sim/core/config.h"
@@ -32,8 +33,8 @@ PlatformProfile TestProfile(int cores = 2) {
 int Identity(const int&, const int& in, void*) { return in; }
 
 // A source every 100 ms into "work" (jobs never overlap), on a board built from `config`;
-// returns every job's turnaround of "work" in ms.
-std::vector<double> WorkTurnarounds(const PlatformConfig& config, std::uint64_t seed = 1,
+// returns the turnaround statistics of "work"'s jobs, in ms.
+Stats WorkTurnarounds(const PlatformConfig& config, std::uint64_t seed = 1,
                                     int* cores = nullptr) {
   Kernel kernel;
   RngStreams rng(seed);
@@ -51,57 +52,56 @@ std::vector<double> WorkTurnarounds(const PlatformConfig& config, std::uint64_t 
   kernel.RunUntil(std::chrono::seconds(5) + milliseconds(50));
   if (cores) *cores = board.platform().cpu().cores();
   for (const auto& n : board.metrics().nodes()) {
-    if (n.name == "work") return n.turnaround_ms;
+    if (n.name == "work") return n.turnaround.ComputeStats();
   }
   return {};
 }
 
 TEST(PlatformKnobs, CostScaleMultipliesSoftwareWorkAndHardwareFabricTime) {
   PlatformConfig sw;
-  EXPECT_NEAR(WorkTurnarounds(sw).at(0), 30.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(sw).min, 30.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(sw).max, 30.0, 1e-6);
   sw.cost_scale["work"] = 2.5;
-  const std::vector<double> scaled = WorkTurnarounds(sw);
-  ASSERT_EQ(scaled.size(), 50u);  // the 51st job (at 5 s) still runs at 5.05 s
-  for (double t : scaled) EXPECT_NEAR(t, 75.0, 1e-6);
+  const Stats scaled = WorkTurnarounds(sw);
+  ASSERT_EQ(scaled.count, 50u);  // the 51st job (at 5 s) still runs at 5.05 s
+  EXPECT_NEAR(scaled.min, 75.0, 1e-6);
+  EXPECT_NEAR(scaled.max, 75.0, 1e-6);
 
   PlatformConfig hw;
   hw.mapping["work"] = NodeMappingConfig{.target = "hw", .slot = 1};
   // 5 ms of fabric + 16 bytes over the memory interface at 1 GB/s
-  EXPECT_NEAR(WorkTurnarounds(hw).at(0), 5.000016, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(hw).max, 5.000016, 1e-6);
   hw.cost_scale["work"] = 4.0;
-  EXPECT_NEAR(WorkTurnarounds(hw).at(0), 4 * 5.000016, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(hw).min, 4 * 5.000016, 1e-6);
 }
 
 TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
   PlatformConfig fixed;
   fixed.cost_override["work"] = CostDistributionConfig{.distribution = "fixed", .value_s = 0.012};
-  for (double t : WorkTurnarounds(fixed)) EXPECT_NEAR(t, 12.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(fixed).min, 12.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(fixed).max, 12.0, 1e-6);
   fixed.cost_scale["work"] = 2.0;  // applies on top of the override
-  for (double t : WorkTurnarounds(fixed)) EXPECT_NEAR(t, 24.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(fixed).min, 24.0, 1e-6);
+  EXPECT_NEAR(WorkTurnarounds(fixed).max, 24.0, 1e-6);
 
   PlatformConfig uniform;
   uniform.cost_override["work"] =
       CostDistributionConfig{.distribution = "uniform", .min_s = 0.010, .max_s = 0.020};
-  const std::vector<double> a = WorkTurnarounds(uniform, 7);
-  ASSERT_EQ(a.size(), 51u);
-  for (double t : a) {
-    EXPECT_GE(t, 10.0 - 1e-6);
-    EXPECT_LE(t, 20.0 + 1e-6);
-  }
-  EXPECT_GT(*std::max_element(a.begin(), a.end()) - *std::min_element(a.begin(), a.end()), 5.0);
-  EXPECT_EQ(a, WorkTurnarounds(uniform, 7));  // same seed, same draws
-  EXPECT_NE(a, WorkTurnarounds(uniform, 8));
+  const Stats a = WorkTurnarounds(uniform, 7);
+  ASSERT_EQ(a.count, 51u);
+  EXPECT_GE(a.min, 10.0 - 1e-6);
+  EXPECT_LE(a.max, 20.0 + 1e-6);
+  EXPECT_GT(a.max - a.min, 5.0);
+  const Stats again = WorkTurnarounds(uniform, 7);  // same seed, same draws
+  EXPECT_EQ(std::tie(a.min, a.p50, a.max, a.mean), std::tie(again.min, again.p50, again.max, again.mean));
+  EXPECT_NE(a.mean, WorkTurnarounds(uniform, 8).mean);
 
   PlatformConfig lognormal;
   lognormal.cost_override["work"] =
       CostDistributionConfig{.distribution = "lognormal", .mean_s = 0.020, .stddev_s = 0.005};
-  const std::vector<double> l = WorkTurnarounds(lognormal, 3);
-  double mean = 0.0;
-  for (double t : l) {
-    EXPECT_GT(t, 0.0);
-    mean += t / static_cast<double>(l.size());
-  }
-  EXPECT_NEAR(mean, 20.0, 2.5);  // 51 draws: the sample mean within ~3 standard errors
+  const Stats l = WorkTurnarounds(lognormal, 3);
+  EXPECT_GT(l.min, 0.0);
+  EXPECT_NEAR(l.mean, 20.0, 2.5);  // 51 draws: the sample mean within ~3 standard errors
 }
 
 TEST(PlatformKnobs, DrawsFollowTheirDistributions) {
