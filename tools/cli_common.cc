@@ -78,8 +78,11 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   Outcome outcome;
   outcome.file = loaded.file.string();
   outcome.scenario_name = loaded.scenario.name;
+  // with a folder, the run streams its trajectory and events into it (bounded memory)
+  std::optional<sim::RunFolder> folder;
+  if (out_dir) folder.emplace(*out_dir, force);
   const auto start = std::chrono::steady_clock::now();
-  sim::Simulation simulation(loaded);
+  sim::Simulation simulation(loaded, folder ? folder->store() : nullptr);
   if (progress) {
     simulation.Run([progress](Time t) { progress->Update(ToSeconds(t)); });
     progress->Done();
@@ -89,9 +92,8 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   outcome.wall_seconds = WallSecondsSince(start);
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
-  if (out_dir) {
-    sim::WriteRunFolder(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds,
-                        *out_dir, force);
+  if (folder) {
+    folder->Complete(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds);
   }
   return outcome;
 }

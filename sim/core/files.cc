@@ -114,31 +114,39 @@ fs::path PrepareOutputFolder(const std::string& given, bool force) {
   return target;
 }
 
+PartialFolder::PartialFolder(const fs::path& target, bool force)
+    : target_(CheckOutputFolder(target.string(), force)),
+      partial_(target_.string() + ".partial-" + std::to_string(::getpid())) {
+  fs::create_directories(target_.parent_path());
+  fs::remove_all(partial_);
+  fs::create_directory(partial_);
+}
+
+PartialFolder::~PartialFolder() {
+  if (committed_) return;
+  std::error_code ignored;
+  fs::remove_all(partial_, ignored);
+}
+
+void PartialFolder::Commit() {
+  WriteFile(partial_ / kOutputMarker,
+            "Written by autonomsim. The next output written here may replace this folder.\n");
+  if (fs::exists(fs::symlink_status(target_))) {
+    const fs::path old = target_.string() + ".old-" + std::to_string(::getpid());
+    fs::rename(target_, old);
+    fs::rename(partial_, target_);
+    fs::remove_all(old);
+  } else {
+    fs::rename(partial_, target_);
+  }
+  committed_ = true;
+}
+
 void WriteFolderAtomically(const fs::path& target_dir,
                            const std::function<void(const fs::path& partial)>& fill, bool force) {
-  const fs::path target = CheckOutputFolder(target_dir.string(), force);
-  const std::string suffix = std::to_string(::getpid());
-  const fs::path partial = target.string() + ".partial-" + suffix;
-  fs::create_directories(target.parent_path());
-  fs::remove_all(partial);
-  fs::create_directory(partial);
-  try {
-    fill(partial);
-    WriteFile(partial / kOutputMarker,
-              "Written by autonomsim. The next output written here may replace this folder.\n");
-    if (fs::exists(fs::symlink_status(target))) {
-      const fs::path old = target.string() + ".old-" + suffix;
-      fs::rename(target, old);
-      fs::rename(partial, target);
-      fs::remove_all(old);
-    } else {
-      fs::rename(partial, target);
-    }
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(partial, ignored);
-    throw;
-  }
+  PartialFolder folder(target_dir, force);
+  fill(folder.path());
+  folder.Commit();
 }
 
 }  // namespace autonomsim::sim

@@ -34,6 +34,29 @@ std::filesystem::path CheckOutputFolder(const std::string& given, bool force);
 // refused even with `force`. Returns the path to use.
 std::filesystem::path PrepareOutputFolder(const std::string& given, bool force);
 
+// A folder written under a temporary name and renamed to its target when complete, for outputs
+// written over time (a run streams its trajectory into its folder): the constructor checks the
+// target (CheckOutputFolder, before anything runs) and creates "<target>.partial-<pid>"; Commit
+// gives it the marker and renames it to the target, replacing a previous one only then. Destroyed
+// uncommitted (an error, an exception), it removes the partial folder: nothing half-written is
+// left looking complete.
+class PartialFolder {
+ public:
+  PartialFolder(const std::filesystem::path& target, bool force);
+  ~PartialFolder();
+  PartialFolder(const PartialFolder&) = delete;
+  PartialFolder& operator=(const PartialFolder&) = delete;
+
+  const std::filesystem::path& path() const { return partial_; }  // write here
+  const std::filesystem::path& target() const { return target_; }
+  void Commit();
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path partial_;
+  bool committed_{false};
+};
+
 // Creates `target` by letting `fill` write into a sibling "<target>.partial-<pid>" folder and
 // renaming it to `target` when `fill` returns; a previous `target` is replaced only then, and only
 // if CheckOutputFolder(target, force) allows it (checked first, before `fill` runs). The folder

@@ -41,14 +41,15 @@ std::unique_ptr<TrafficLightEndpoint> MakeServerEndpoint(const LoadedScenario& l
 
 }  // namespace
 
-Simulation::Impl::Impl(const LoadedScenario& loaded_scenario)
+Simulation::Impl::Impl(const LoadedScenario& loaded_scenario, std::shared_ptr<RecordStore> store_)
     : loaded(loaded_scenario),
       scenario(loaded_scenario.scenario),
       end(loaded_scenario.scenario.duration),
       streams(loaded_scenario.scenario.seed),
       physics(loaded_scenario.scenario.physics),
       server(&kernel, MakeServerEndpoint(loaded_scenario),
-             [this](Event event) { Emit(std::move(event)); }) {
+             [this](Event event) { Emit(std::move(event)); }),
+      store(std::move(store_)) {
   // The closed loop. At each instant the kernel runs, in this order (sim/core/priorities.h):
   // obstacles appear or go · V2I messages arrive · the server's lease ticks · sensors sample the
   // world at t · nodes run on the boards (perception, stack → actuator commands) · oracle cars'
@@ -345,10 +346,18 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
   }
 }
 
+void Simulation::Impl::Emit(Event event) {
+  if (store) {
+    store->Append(event);
+  } else {
+    record.events.push_back(std::move(event));
+  }
+}
+
 void Simulation::Impl::Sample() {
   for (const CarAgent& agent : agents) {
     const world::Pose2 pose = agent.car->pose();
-    record.trajectory.push_back(TrajectorySample{
+    const TrajectorySample sample{
         .t = kernel.Now(),
         .car = agent.config->id,
         .x_m = pose.x_m,
@@ -360,7 +369,12 @@ void Simulation::Impl::Sample() {
         .curvature_cmd_per_m = agent.command.curvature_per_m,
         .lateral_error_m = agent.lateral_error_m,
         .route_progress_m = agent.progress_m,
-    });
+    };
+    if (store) {
+      store->Append(sample);
+    } else {
+      record.trajectory.push_back(sample);
+    }
   }
 }
 
@@ -392,9 +406,14 @@ void Simulation::Impl::Finish() {
     }
   }
   if (!traced.empty()) record.trace_json = TraceJson(traced);
+  if (store) {
+    store->Close();
+    record.store = store;
+  }
 }
 
-Simulation::Simulation(const LoadedScenario& scenario) : impl_(std::make_unique<Impl>(scenario)) {}
+Simulation::Simulation(const LoadedScenario& scenario, std::shared_ptr<RecordStore> store)
+    : impl_(std::make_unique<Impl>(scenario, std::move(store))) {}
 
 Simulation::~Simulation() = default;
 

@@ -13,7 +13,9 @@ namespace autonomsim::sim {
 
 class Simulation {
  public:
-  explicit Simulation(const LoadedScenario& scenario);
+  // With a `store`, the run's trajectory samples and events go there as they are made (and the
+  // record points to it once the run is over); without, into the record's vectors.
+  explicit Simulation(const LoadedScenario& scenario, std::shared_ptr<RecordStore> store = nullptr);
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;

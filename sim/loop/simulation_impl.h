@@ -72,7 +72,7 @@ struct CarAgent {
 struct Simulation::Impl {
   using CarAgent = detail::CarAgent;
 
-  explicit Impl(const LoadedScenario& loaded);
+  Impl(const LoadedScenario& loaded, std::shared_ptr<RecordStore> store);
 
   // construction
   void AddCars();
@@ -83,7 +83,7 @@ struct Simulation::Impl {
   void ScheduleRecording();
   void ScheduleWorldStep();
 
-  void Emit(Event event) { record.events.push_back(std::move(event)); }
+  void Emit(Event event);
   void StepWorld();
   void RecordContacts(Time t);
   void Track(CarAgent* agent, Time t);
@@ -120,6 +120,7 @@ struct Simulation::Impl {
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
   LaneJudgeParams lane_judge;
+  std::shared_ptr<RecordStore> store;  // where samples and events go; null: into `record`
   RunRecord record;
 };
 

@@ -32,16 +32,16 @@ std::string At(const Event& e) { return fmt::format("t={:.3f} s", ToSeconds(e.t)
 ExpectationResult NoCollision(const ExpectArgs& args, const RunRecord& record) {
   int count = 0;
   std::string first;
-  for (const Event& e : record.events) {
-    if (e.type != "collision") continue;
-    if (!Concerns(args, e.car) && !(e.other_car >= 0 && Concerns(args, e.other_car))) continue;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type != "collision") return;
+    if (!Concerns(args, e.car) && !(e.other_car >= 0 && Concerns(args, e.other_car))) return;
     if (count++ == 0) {
       first = fmt::format("car {} hit {} at {}", e.car,
                           e.other_car >= 0 ? fmt::format("car {}", e.other_car)
                                            : fmt::format("obstacle '{}'", e.obstacle),
                           At(e));
     }
-  }
+  });
   return {"", count == 0,
           count == 0 ? "no collision" : fmt::format("{} collision(s); first: {}", count, first)};
 }
@@ -51,9 +51,9 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
   std::map<int, std::map<int, bool>> inside;  // intersection -> car -> inside
   int violations = 0;
   std::string first;
-  for (const Event& e : record.events) {
+  ForEachEvent(record, [&](const Event& e) {
     if (e.type == "exit") inside[e.intersection][e.car] = false;
-    if (e.type != "enter") continue;
+    if (e.type != "enter") return;
     for (const auto& [other, in] : inside[e.intersection]) {
       if (in && other != e.car) {
         if (violations++ == 0) {
@@ -63,7 +63,7 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
       }
     }
     inside[e.intersection][e.car] = true;
-  }
+  });
   return {"", violations == 0,
           violations == 0 ? "never two cars in one intersection area"
                           : fmt::format("{} violation(s); first: {}", violations, first)};
@@ -73,15 +73,15 @@ ExpectationResult NoEntryWithoutGrant(const ExpectArgs& args, const RunRecord& r
   int entries = 0;
   int violations = 0;
   std::string first;
-  for (const Event& e : record.events) {
-    if (e.type != "enter" || !Concerns(args, e.car)) continue;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type != "enter" || !Concerns(args, e.car)) return;
     ++entries;
-    if (e.granted.value_or(false)) continue;
+    if (e.granted.value_or(false)) return;
     if (violations++ == 0) {
       first = fmt::format("car {} entered intersection {} at {} without holding it", e.car,
                           e.intersection, At(e));
     }
-  }
+  });
   return {"", violations == 0,
           violations == 0 ? fmt::format("{} entries, all granted", entries)
                           : fmt::format("{} of {} entries without grant; first: {}", violations,

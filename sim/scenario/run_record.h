@@ -4,8 +4,11 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sim/platform/node_metrics.h"
@@ -92,11 +95,33 @@ struct CarMetrics {
 
 inline constexpr double kObstacleGapHorizon_m = 2.0;
 
+class Sha256;
+
+// Where a run's trajectory samples and events go when they are not kept in RunRecord's vectors:
+// a store written as the run goes (files: sim/scenario/record_files.h), so that a run of any length
+// holds none of them in memory, and read back in order by outputs and expectations.
+class RecordStore {
+ public:
+  virtual ~RecordStore() = default;
+  virtual void Append(const TrajectorySample& sample) = 0;
+  virtual void Append(const Event& event) = 0;
+  // After the run's last Append: makes what was appended readable.
+  virtual void Close() = 0;
+  virtual void ForEachSample(const std::function<void(const TrajectorySample&)>& visit) const = 0;
+  virtual void ForEachEvent(const std::function<void(const Event&)>& visit) const = 0;
+  // Feeds the text of trajectory.csv, then of events.jsonl, to `hash`.
+  virtual void HashText(Sha256* hash) const = 0;
+};
+
 struct RunRecord {
   Duration sim_duration{0};
   std::uint64_t kernel_events{0};
+  // The run's events and trajectory samples, in the order they were made: in these vectors, or in
+  // `store` when the run was given one (then both vectors stay empty). Read them with ForEachEvent
+  // and ForEachSample below, which serve either.
   std::vector<Event> events;
   std::vector<TrajectorySample> trajectory;
+  std::shared_ptr<const RecordStore> store;
   std::vector<CarMetrics> cars;
   struct ServerCounters {
     std::uint64_t requests{0}, grants{0}, denials{0}, frees{0}, lease_expiries{0}, malformed{0};
@@ -110,9 +135,20 @@ struct RunRecord {
   std::string trace_json;
 };
 
-// The record's canonical text: the run folder's trajectory.csv and events.jsonl.
+void ForEachEvent(const RunRecord& record, const std::function<void(const Event&)>& visit);
+void ForEachSample(const RunRecord& record,
+                   const std::function<void(const TrajectorySample&)>& visit);
+
+// The record's canonical text: the run folder's trajectory.csv and events.jsonl, whole or line by
+// line (a header, then one line per sample or event, each ending in a newline), and back.
 std::string TrajectoryCsv(const RunRecord& record);
 std::string EventsJsonl(const RunRecord& record);
+std::string TrajectoryCsvHeader();
+std::string TrajectoryCsvLine(const TrajectorySample& sample);
+std::string EventJsonLine(const Event& event);
+// Throw std::invalid_argument for a line these functions did not write.
+TrajectorySample ParseTrajectoryCsvLine(std::string_view line);
+Event ParseEventJsonLine(std::string_view line);
 // SHA-256 over trajectory.csv, events.jsonl and (with boards) nodes.csv: equal hashes mean
 // bit-identical results (summary.json's result_sha256).
 std::string ResultSha256(const RunRecord& record);

@@ -42,10 +42,10 @@ std::string ManifestName(const Shard& shard) {
   return shard.n == 1 ? "sweep.json" : fmt::format("sweep.{}-of-{}.json", shard.k, shard.n);
 }
 
-fs::path RunFolder(const fs::path& dir, const std::string& id) { return dir / "runs" / id; }
+fs::path RunFolderOf(const fs::path& dir, const std::string& id) { return dir / "runs" / id; }
 
 bool RunComplete(const fs::path& dir, const std::string& id) {
-  return fs::exists(RunFolder(dir, id) / "summary.json");
+  return fs::exists(RunFolderOf(dir, id) / "summary.json");
 }
 
 // What identifies a sweep across shards: everything but the scenario path's spelling.
@@ -101,7 +101,7 @@ std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRec
     if (it == cache.end()) {
       for (const fs::path& dir : dirs) {
         if (RunComplete(dir, p.run_id)) {
-          it = cache.emplace(p.run_id, ReadSummaryFile(RunFolder(dir, p.run_id) / "summary.json"))
+          it = cache.emplace(p.run_id, ReadSummaryFile(RunFolderOf(dir, p.run_id) / "summary.json"))
                    .first;
           break;
         }
@@ -206,12 +206,13 @@ double SecondsSince(std::chrono::nanoseconds start, const WallClock& clock) {
 // Runs one point and writes its folder. Its wall time is the simulation's alone: not loading the
 // scenario, judging it or writing the folder.
 void RunPoint(const LoadedScenario& loaded, const WallClock& clock, const fs::path& folder) {
+  RunFolder run_folder(folder);
   const std::chrono::nanoseconds start = Now(clock);
-  Simulation simulation(loaded);
+  Simulation simulation(loaded, run_folder.store());
   simulation.Run();
   const double wall_s = SecondsSince(start, clock);
   const auto expectations = EvaluateExpectations(loaded.scenario, simulation.record());
-  WriteRunFolder(loaded, simulation.record(), expectations, wall_s, folder);
+  run_folder.Complete(loaded, simulation.record(), expectations, wall_s);
 }
 
 // Runs the points `todo` (indices into `loaded` and `records`) on options.jobs threads, counting
@@ -230,7 +231,7 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
     std::string failure;
     bool input_error = false;
     try {
-      RunPoint(loaded[i], options.wall_clock, RunFolder(options.out_dir, records[i].run_id));
+      RunPoint(loaded[i], options.wall_clock, RunFolderOf(options.out_dir, records[i].run_id));
     } catch (const ConfigError& e) {
       failure = e.what();
       input_error = true;

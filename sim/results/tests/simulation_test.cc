@@ -6,15 +6,25 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "sim/results/expectations.h"
+#include "sim/mqtt/mqtt_process.h"  // TempDir
 #include "sim/results/outputs.h"
 
 namespace autonomsim::sim {
 namespace {
 
 constexpr const char* kDefault = "scenarios/lab_two_cars_oracle.yaml";
+
+std::string ReadFile(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 TEST(SimulationTest, SameScenarioAndSeedGiveBitIdenticalResults) {
   const LoadedScenario scenario = LoadScenario(kDefault);
@@ -38,6 +48,35 @@ TEST(SimulationTest, RunsOnTwoThreadsAtOnceMatchASequentialRun) {
   t2.join();
   EXPECT_EQ(first, sequential);
   EXPECT_EQ(second, sequential);
+}
+
+// A run streamed into its folder (RunFolder, what `run`, `check --out` and sweeps do) gives the
+// same files, hash and verdicts as the same run kept in memory.
+TEST(SimulationTest, AStreamedRunWritesWhatARunInMemoryWrites) {
+  const LoadedScenario scenario =
+      LoadScenario("scenarios/static_obstacle.yaml", {"duration_s=30", "v2i.loss=0.2"});
+  const TempDir dir("simulation_test");
+  const RunRecord memory = RunScenario(scenario);
+  WriteRunFolder(scenario, memory, EvaluateExpectations(scenario.scenario, memory), 0.0,
+                 dir.path() / "memory");
+
+  RunFolder folder(dir.path() / "streamed");
+  Simulation simulation(scenario, folder.store());
+  simulation.Run();
+  const RunRecord& streamed = simulation.record();
+  EXPECT_TRUE(streamed.events.empty());
+  EXPECT_TRUE(streamed.trajectory.empty());
+  EXPECT_EQ(ResultSha256(streamed), ResultSha256(memory));
+  const auto verdicts = EvaluateExpectations(scenario.scenario, streamed);
+  const auto expected = EvaluateExpectations(scenario.scenario, memory);
+  ASSERT_EQ(verdicts.size(), expected.size());
+  for (std::size_t i = 0; i < verdicts.size(); ++i) EXPECT_EQ(verdicts[i].detail, expected[i].detail);
+  folder.Complete(scenario, streamed, verdicts, 0.0);
+  for (const char* file : {"trajectory.csv", "events.jsonl", "track.png"}) {
+    EXPECT_EQ(ReadFile(dir.path() / "streamed" / file), ReadFile(dir.path() / "memory" / file))
+        << file;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "memory" / "nodes.csv"));
 }
 
 TEST(SimulationTest, TheSeedChangesTheRun) {

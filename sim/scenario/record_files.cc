@@ -1,0 +1,100 @@
+#include "sim/scenario/record_files.h"
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sim/core/hash.h"
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::ofstream OpenForWriting(const fs::path& file) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  return out;
+}
+
+std::ifstream OpenForReading(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  return in;
+}
+
+void Write(std::ofstream& out, const std::string& text, const fs::path& file) {
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+// Calls `visit` with each line of `file` (without its newline), after its header line if it has one.
+void ForEachLine(const fs::path& file, bool header,
+                 const std::function<void(const std::string&)>& visit) {
+  std::ifstream in = OpenForReading(file);
+  std::string line;
+  if (header) std::getline(in, line);
+  while (std::getline(in, line)) visit(line);
+  if (in.bad()) throw std::runtime_error("cannot read " + file.string());
+}
+
+void HashFile(const fs::path& file, Sha256* hash) {
+  std::ifstream in = OpenForReading(file);
+  std::vector<char> buffer(1 << 20);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    hash->Update(std::string_view(buffer.data(), static_cast<std::size_t>(in.gcount())));
+  }
+  if (in.bad()) throw std::runtime_error("cannot read " + file.string());
+}
+
+}  // namespace
+
+RecordFiles::RecordFiles(const fs::path& folder)
+    : trajectory_file_(folder / "trajectory.csv"),
+      events_file_(folder / "events.jsonl"),
+      trajectory_(OpenForWriting(trajectory_file_)),
+      events_(OpenForWriting(events_file_)) {
+  Write(trajectory_, TrajectoryCsvHeader(), trajectory_file_);
+}
+
+void RecordFiles::Append(const TrajectorySample& sample) {
+  Write(trajectory_, TrajectoryCsvLine(sample), trajectory_file_);
+}
+
+void RecordFiles::Append(const Event& event) {
+  Write(events_, EventJsonLine(event), events_file_);
+}
+
+void RecordFiles::RequireClosed() const {
+  if (!closed_) throw std::logic_error("RecordFiles read before Close: " + events_file_.string());
+}
+
+void RecordFiles::Close() {
+  if (closed_) return;
+  closed_ = true;
+  for (auto [out, file] : {std::pair{&trajectory_, &trajectory_file_}, {&events_, &events_file_}}) {
+    out->close();
+    if (!*out) throw std::runtime_error("cannot write " + file->string());
+  }
+}
+
+void RecordFiles::ForEachSample(
+    const std::function<void(const TrajectorySample&)>& visit) const {
+  RequireClosed();
+  ForEachLine(trajectory_file_, true,
+              [&](const std::string& line) { visit(ParseTrajectoryCsvLine(line)); });
+}
+
+void RecordFiles::ForEachEvent(const std::function<void(const Event&)>& visit) const {
+  RequireClosed();
+  ForEachLine(events_file_, false, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
+}
+
+void RecordFiles::HashText(Sha256* hash) const {
+  RequireClosed();
+  HashFile(trajectory_file_, hash);
+  HashFile(events_file_, hash);
+}
+
+}  // namespace autonomsim::sim

@@ -1,0 +1,40 @@
+// A run's trajectory and events streamed to its folder's trajectory.csv and events.jsonl as the
+// run makes them, and read back from there: a run of any length keeps none of them in memory.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+
+#include "sim/scenario/run_record.h"
+
+namespace autonomsim::sim {
+
+class RecordFiles : public RecordStore {
+ public:
+  // Creates (or truncates) `folder`/trajectory.csv and `folder`/events.jsonl.
+  explicit RecordFiles(const std::filesystem::path& folder);
+
+  // Throw std::runtime_error naming the file when it cannot be written (e.g. the disk is full).
+  void Append(const TrajectorySample& sample) override;
+  void Append(const Event& event) override;
+  void Close() override;
+
+  // After Close, while the files are where they were written.
+  void ForEachSample(const std::function<void(const TrajectorySample&)>& visit) const override;
+  void ForEachEvent(const std::function<void(const Event&)>& visit) const override;
+  void HashText(Sha256* hash) const override;
+
+  const std::filesystem::path& trajectory_file() const { return trajectory_file_; }
+  const std::filesystem::path& events_file() const { return events_file_; }
+
+ private:
+  void RequireClosed() const;
+
+  std::filesystem::path trajectory_file_;
+  std::filesystem::path events_file_;
+  std::ofstream trajectory_;
+  std::ofstream events_;
+  bool closed_{false};
+};
+
+}  // namespace autonomsim::sim
