@@ -10,6 +10,7 @@
 #include "sim/core/files.h"
 #include "sim/loop/simulation.h"
 #include "sim/mqtt/mqtt_client.h"
+#include "sim/mqtt/mqtt_process.h"  // TempDir
 #include "sim/results/outputs.h"
 
 namespace autonomsim::cli {
@@ -78,11 +79,20 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   Outcome outcome;
   outcome.file = loaded.file.string();
   outcome.scenario_name = loaded.scenario.name;
-  // with a folder, the run streams its trajectory and events into it (bounded memory)
+  // The run streams its trajectory and events into its folder, or without one into a scratch
+  // folder that goes with the run: memory stays bounded however long it runs.
   std::optional<sim::RunFolder> folder;
-  if (out_dir) folder.emplace(*out_dir, force);
+  std::optional<sim::TempDir> scratch;
+  std::shared_ptr<sim::RecordStore> store;
+  if (out_dir) {
+    folder.emplace(*out_dir, force);
+    store = folder->store();
+  } else {
+    scratch.emplace("autonomsim_run_");
+    store = std::make_shared<sim::RecordFiles>(scratch->path());
+  }
   const auto start = std::chrono::steady_clock::now();
-  sim::Simulation simulation(loaded, folder ? folder->store() : nullptr);
+  sim::Simulation simulation(loaded, store);
   if (progress) {
     simulation.Run([progress](Time t) { progress->Update(ToSeconds(t)); });
     progress->Done();
