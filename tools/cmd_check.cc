@@ -141,7 +141,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
     }
   });
 
-  int failed = 0, unusable = 0;
+  int failed = 0, unusable = 0, failed_expectations = 0;
   for (const Outcome& o : outcomes) {
     if (o.input_error) {
       ++unusable;
@@ -149,14 +149,16 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
       continue;
     }
     if (!o.passed()) ++failed;
+    for (const sim::ExpectationResult& e : o.expectations) failed_expectations += !e.passed;
     fmt::print("{} {} ({} expectation(s), {:.0f} s simulated in {:.2f} s)\n",
                o.passed() ? "PASS " : "FAIL ", o.file, o.expectations.size(), o.sim_seconds,
                o.wall_seconds);
     if (o.expectations.empty()) fmt::print("  warning: this scenario has no expectations\n");
     if (!o.passed()) PrintVerdicts(o);
   }
-  fmt::print("{} scenario(s): {} passed, {} failed, {} unusable\n", outcomes.size(),
-             outcomes.size() - static_cast<std::size_t>(failed + unusable), failed, unusable);
+  fmt::print("{} scenario(s): {} passed, {} failed ({} expectation(s) failed), {} unusable\n",
+             outcomes.size(), outcomes.size() - static_cast<std::size_t>(failed + unusable), failed,
+             failed_expectations, unusable);
   if (junit) {
     WriteJunit(*junit, outcomes);
     fmt::print("JUnit XML: {}\n", *junit);

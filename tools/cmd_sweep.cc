@@ -113,33 +113,39 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
-  fmt::print("{} run(s) in this shard: {} ran, {} already complete, {} failed\n", summary.selected,
-             summary.ran, summary.already_done, summary.failures.size());
+  fmt::print(
+      "{} run(s) in this shard: {} ran, {} already complete, {} failed to run, {} with failed "
+      "expectations\n",
+      summary.selected, summary.ran, summary.already_done, summary.failures.size(),
+      summary.failed_expectations.size());
   for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
+  for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
   fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
   if (!summary.failures.empty()) {
     return summary.input_error ? kExitUnusableInput : kExitExpectationFailed;
   }
-  return kExitOk;
+  return summary.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
 }
 
 int MergeCommand(const SweepOptions& o) {
   std::vector<fs::path> dirs(o.merge_dirs.begin(), o.merge_dirs.end());
   fs::path out = dirs.front();
-  std::size_t missing = 0;
+  sim::SweepTableSummary merged;
   try {
     if (!o.merge_out.empty()) out = sim::PrepareOutputFolder(o.merge_out, o.force);
-    missing = sim::MergeSweeps(dirs, out, !o.no_plots);
+    merged = sim::MergeSweeps(dirs, out, !o.no_plots);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
-  if (missing > 0) {
+  if (merged.missing > 0) {
     fmt::print(stderr, "warning: {} grid point(s) have no complete run in these folders\n",
-               missing);
+               merged.missing);
   }
+  fmt::print("{} run(s) with failed expectations\n", merged.failed_expectations.size());
+  for (const std::string& f : merged.failed_expectations) fmt::print("  FAIL {}\n", f);
   fmt::print("results: {}\n", (out / "results.csv").string());
-  return kExitOk;
+  return merged.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
 }
 
 }  // namespace

@@ -41,6 +41,15 @@ bool IsOverridden(const std::string& path, const ConfigSource& source) {
 
 }  // namespace
 
+std::string LeadingWord(const std::string& message) {
+  std::size_t n = 0;
+  while (n < message.size() && (std::isalnum(static_cast<unsigned char>(message[n])) != 0 ||
+                                message[n] == '_')) {
+    ++n;
+  }
+  return message.substr(0, n);
+}
+
 std::string JoinPath(const std::string& parent, const std::string& key) {
   return parent.empty() ? key : parent + "." + key;
 }

@@ -76,6 +76,8 @@ std::string Where(const YAML::Node& node, const std::string& path, const ConfigS
 [[noreturn]] void Fail(const YAML::Node& node, const std::string& path, const ConfigSource& source,
                        const std::string& message);
 std::string Describe(const YAML::Node& node);  // a short rendering of a bad value for messages
+// The identifier a message opens with ("loss must be ..." -> "loss"), or "" if none.
+std::string LeadingWord(const std::string& message);
 // Throws for keys of `node` not in `known`, suggesting the closest known key.
 void CheckKeys(const YAML::Node& node, const std::vector<std::string>& known,
                const std::string& path, const ConfigSource& source);
@@ -158,6 +160,12 @@ void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigS
     try {
       out.Validate();
     } catch (const std::invalid_argument& e) {
+      // a message that opens with one of the mapping's keys ("loss must be in [0, 1)") is
+      // reported at that key's own line
+      const std::string key = LeadingWord(e.what());
+      if (node.IsMap() && !key.empty() && node[key]) {
+        Fail(node[key], JoinPath(path, key), source, e.what());
+      }
       Fail(node, path, source, e.what());
     }
   } else {

@@ -294,6 +294,14 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     if (args.car && car_ids.count(*args.car) == 0) {
       FailAt(root, source, {"expect", i}, "no car with id " + std::to_string(*args.car));
     }
+    // a deadline past the run's end could never be judged (it would fail, or pass, on less time)
+    if (args.within_s && *args.within_s > ToSeconds(scenario.duration)) {
+      FailAt(root, source, {"expect", i, scenario.expect[i].kind(), "within_s"},
+             "within_s " + Num(*args.within_s) + " s is past duration_s " +
+                 Num(ToSeconds(scenario.duration)) +
+                 " s: the run ends before it can be judged; lower within_s, raise duration_s, "
+                 "or drop the expectation (e.g. --set 'expect=[]')");
+    }
   }
 
   loaded.resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(loaded.track.spec())}};

@@ -90,7 +90,7 @@ std::vector<std::string> AxisKeys(const SweepSpec& spec) {
 
 // results.csv and the plots of `points` (grid order), reading summaries from the first of `dirs`
 // that has each run.
-std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
+SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                                const std::vector<fs::path>& dirs, const fs::path& out_dir,
                                bool plots) {
   std::vector<PointRecord> complete;
@@ -115,7 +115,17 @@ std::size_t WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRec
   fs::create_directories(out_dir);
   WriteFileAtomically(out_dir / "results.csv", table.Csv());
   if (plots) WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
-  return points.size() - complete.size();
+  SweepTableSummary result{.missing = points.size() - complete.size()};
+  for (std::size_t i = 0; i < complete.size(); ++i) {
+    if (summaries[i].passed) continue;
+    std::vector<std::string> names;
+    for (const ExpectationResult& e : summaries[i].expectations) {
+      if (!e.passed) names.push_back(e.name);
+    }
+    result.failed_expectations.push_back(fmt::format("run {} (point {}): {}", complete[i].run_id,
+                                                     complete[i].index, fmt::join(names, ", ")));
+  }
+  return result;
 }
 
 }  // namespace
@@ -279,11 +289,14 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
 
   const std::vector<std::size_t> todo = RunsToDo(records, options.out_dir, &summary.already_done);
   RunPoints(loaded, records, todo, options, &summary);
-  WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots);
+  summary.failed_expectations =
+      WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots)
+          .failed_expectations;
   return summary;
 }
 
-std::size_t MergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out_dir, bool plots) {
+SweepTableSummary MergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out_dir,
+                              bool plots) {
   if (dirs.empty()) throw ConfigError("sweep merge: no folders given");
   std::optional<SweepSpec> spec;
   std::optional<nlohmann::json> identity;
@@ -338,8 +351,9 @@ std::size_t MergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out_d
   manifest["merged_from"] = nlohmann::json::array();
   for (const fs::path& dir : dirs) manifest["merged_from"].push_back(dir.string());
   WriteFileAtomically(out_dir / "sweep.json", manifest.dump(2) + "\n");
-  const std::size_t missing_runs = WriteTableAndPlots(*spec, ordered, dirs, out_dir, plots);
-  return missing_runs + (grid_points - ordered.size());
+  SweepTableSummary table = WriteTableAndPlots(*spec, ordered, dirs, out_dir, plots);
+  table.missing += grid_points - ordered.size();
+  return table;
 }
 
 }  // namespace autonomsim::sim

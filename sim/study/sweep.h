@@ -56,6 +56,15 @@ struct SweepSummary {
   std::size_t ran{0};
   std::vector<std::string> failures;  // "run <id> (point <index>): message"
   bool input_error{false};            // a failure was unusable input (ConfigError)
+  // The shard's complete runs (ran now or before) whose expectations did not all hold:
+  // "run <id> (point <index>): <each failed expectation's name>".
+  std::vector<std::string> failed_expectations;
+};
+
+// What the results table of a sweep (or of merged shards) found.
+struct SweepTableSummary {
+  std::size_t missing{0};  // grid points without a complete run
+  std::vector<std::string> failed_expectations;  // as in SweepSummary
 };
 
 // Loads every point of this shard (ConfigError for unusable input, before anything runs), writes
@@ -65,8 +74,9 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options);
 
 // Joins sweep folders (shards of one sweep: same spec, else ConfigError) into `out_dir`: the
 // union of their points in sweep.json, results.csv over every complete run found in any of them,
-// and the plots. Returns the number of grid points that have no complete run (warned about).
-std::size_t MergeSweeps(const std::vector<std::filesystem::path>& dirs,
+// and the plots. Returns how many grid points have no complete run (warned about) and the runs
+// whose expectations failed.
+SweepTableSummary MergeSweeps(const std::vector<std::filesystem::path>& dirs,
                         const std::filesystem::path& out_dir, bool plots = true);
 
 }  // namespace autonomsim::sim

@@ -135,6 +135,7 @@ TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
           junit.string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_THAT(r.output, HasSubstr("FAIL completes(laps=9"));
+  EXPECT_THAT(r.output, HasSubstr("1 scenario(s): 0 passed, 1 failed (1 expectation(s) failed)"));
   EXPECT_THAT(Read(junit), HasSubstr("<failure message="));
 }
 

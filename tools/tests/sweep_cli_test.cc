@@ -24,8 +24,29 @@ fs::path Scratch() { return testing::Scratch("autonomsim_sweep_cli"); }
 
 // Four runs of the oracle scenario, 5 s each: a second or two in all.
 const std::string kSweep =
-    "sweep scenarios/lab_two_cars_oracle.yaml --set duration_s=5 "
+    "sweep scenarios/lab_two_cars_oracle.yaml --set duration_s=5 --set 'expect=[]' "
     "--vary 'cars[0].oracle.speed_mps=0.3,0.5' --vary 'v2i.latency_s=0,1' --quiet";
+
+// Issue 15: a sweep whose runs all fail an expectation says so and exits 1 (it said "0 failed").
+TEST(SweepCliTest, RunsThatFailAnExpectationAreCountedAndExitOne) {
+  const fs::path dir = Scratch();
+  const Result r = Cli(kSweep + " --set 'expect=[{max_lateral_error: {max_m: 0.000001}}]' --out " +
+                       (dir / "strict").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("4 ran, 0 already complete, 0 failed to run, 4 with failed "
+                                  "expectations"));
+  EXPECT_THAT(r.output, HasSubstr("FAIL run "));
+  EXPECT_THAT(r.output, HasSubstr("max_lateral_error(max_m=1e-06)"));
+  // resumed, the complete runs' verdicts still count
+  EXPECT_EQ(Cli(kSweep + " --set 'expect=[{max_lateral_error: {max_m: 0.000001}}]' --out " +
+                (dir / "strict").string())
+                .exit_code,
+            1);
+  const Result merged = Cli("sweep merge " + (dir / "strict").string() + " --out " +
+                            (dir / "merged").string() + " --no-plots");
+  EXPECT_EQ(merged.exit_code, 1) << merged.output;
+  EXPECT_THAT(merged.output, HasSubstr("4 run(s) with failed expectations"));
+}
 
 TEST(SweepCliTest, HelpAnswers) {
   const Result sweep = Cli("sweep --help");
