@@ -61,14 +61,16 @@ std::string JoinIndex(const std::string& parent, std::size_t index) {
 std::string Where(const YAML::Node& node, const std::string& path, const ConfigSource& source) {
   std::string key = path.empty() ? "(top level)" : path;
   if (IsOverridden(path, source)) return "--set " + key + ": ";
+  const YAML::Mark mark = node.Mark();
   // a value below this one came from the command line: say so, the file alone would mislead
   for (const std::string& overridden : source.overridden_paths) {
     if (!path.empty() && IsOverridden(overridden, ConfigSource{"", {path}})) {
+      // made by that --set (no line in the file): the --set is where it is
+      if (mark.is_null()) return "--set " + overridden + ": " + key + ": ";
       key += " (with --set " + overridden + ")";
       break;
     }
   }
-  const YAML::Mark mark = node.Mark();
   std::string where = source.file;
   if (!mark.is_null()) {
     // fmt, not ":" + std::to_string(...): GCC 12 warns falsely (-Wrestrict) on that at -O2
@@ -189,18 +191,34 @@ void ReadScalar(const YAML::Node& node, Duration& out, const std::string& path,
 
 namespace {
 
-// The first byte of `text` that does not belong to valid UTF-8, or npos.
+// The first byte of `text` that does not belong to well-formed UTF-8 (RFC 3629: no over-long
+// forms, no surrogates, nothing above U+10FFFF), or npos.
 std::size_t FirstInvalidUtf8(const std::string& text) {
   std::size_t i = 0;
   while (i < text.size()) {
     const auto byte = static_cast<unsigned char>(text[i]);
-    const std::size_t length = byte < 0x80           ? 1
-                               : (byte >> 5) == 0x06 ? 2
-                               : (byte >> 4) == 0x0E ? 3
-                               : (byte >> 3) == 0x1E ? 4
-                                                     : 0;
+    if (byte < 0x80) {
+      ++i;
+      continue;
+    }
+    // the sequence's length, and the range its second byte must lie in
+    std::size_t length = 0;
+    unsigned char low = 0x80, high = 0xBF;
+    if (byte >= 0xC2 && byte <= 0xDF) {
+      length = 2;
+    } else if (byte >= 0xE0 && byte <= 0xEF) {
+      length = 3;
+      if (byte == 0xE0) low = 0xA0;   // over-long
+      if (byte == 0xED) high = 0x9F;  // surrogates
+    } else if (byte >= 0xF0 && byte <= 0xF4) {
+      length = 4;
+      if (byte == 0xF0) low = 0x90;   // over-long
+      if (byte == 0xF4) high = 0x8F;  // above U+10FFFF
+    }
     if (length == 0 || i + length > text.size()) return i;
-    for (std::size_t k = 1; k < length; ++k) {
+    const auto second = static_cast<unsigned char>(text[i + 1]);
+    if (second < low || second > high) return i;
+    for (std::size_t k = 2; k < length; ++k) {
       if ((static_cast<unsigned char>(text[i + k]) >> 6) != 0x02) return i;
     }
     i += length;
@@ -218,25 +236,61 @@ ConfigError ErrorAtOffset(const std::filesystem::path& file, const std::string& 
   return ConfigError(fmt::format("{}:{}:{}: {}", file.string(), line, column, message));
 }
 
-// Every mapping below `node` has each key once: yaml-cpp keeps a repeated key's entries and
-// reads the first, so `duration_s: 3` then `duration_s: 5` would run 3 s without a word.
-void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& file) {
+// How many nodes a file may expand to through its aliases (a few thousand in the shipped files):
+// a chain of aliases each doubling the one before would otherwise take exponential time.
+constexpr std::size_t kMaxYamlNodes = 1'000'000;
+
+// `where` is the file, or "--set KEY (value)" for a value given on the command line.
+ConfigError ErrorAtMark(const std::string& where, const YAML::Mark& mark,
+                        const std::string& message) {
+  return ConfigError(fmt::format("{}:{}:{}: {}", where, mark.line + 1, mark.column + 1, message));
+}
+
+// Checks the tree below `node` (`ancestors`: the nodes above it): every mapping has each key once
+// and as a plain name (yaml-cpp keeps a repeated key's entries and reads the first, so
+// `duration_s: 3` then `duration_s: 5` would run 3 s without a word); no alias contains itself
+// (`a: &x [*x]` is a cycle every reader would follow forever); the tree stays below kMaxYamlNodes.
+void CheckTree(const YAML::Node& node, const std::string& where, std::vector<YAML::Node>* ancestors,
+               std::size_t* nodes) {
+  if (++*nodes > kMaxYamlNodes) {
+    throw ErrorAtMark(where, node.Mark(),
+                      fmt::format("the file expands to over {} values through its aliases",
+                                  kMaxYamlNodes));
+  }
+  for (const YAML::Node& above : *ancestors) {
+    if (node.is(above)) {
+      throw ErrorAtMark(where, node.Mark(), "an alias refers to a value that contains it (a cycle)");
+    }
+  }
+  ancestors->push_back(node);
   if (node.IsMap()) {
     std::map<std::string, YAML::Mark> seen;
     for (const auto& entry : node) {
+      if (!entry.first.IsScalar()) {
+        throw ErrorAtMark(where, entry.first.Mark(), "a key must be a plain name, got a " +
+                                                        std::string(entry.first.IsMap()
+                                                                        ? "mapping"
+                                                                        : "list or null"));
+      }
       const std::string key = entry.first.Scalar();
       const auto [first, inserted] = seen.emplace(key, entry.first.Mark());
       if (!inserted) {
-        const YAML::Mark mark = entry.first.Mark();
-        throw ConfigError(fmt::format("{}:{}:{}: {}: duplicate key (first at line {})",
-                                      file.string(), mark.line + 1, mark.column + 1, key,
+        throw ErrorAtMark(where, entry.first.Mark(),
+                          fmt::format("{}: duplicate key (first at line {})", key,
                                       first->second.line + 1));
       }
-      CheckUniqueKeys(entry.second, file);
+      CheckTree(entry.second, where, ancestors, nodes);
     }
   } else if (node.IsSequence()) {
-    for (const auto& child : node) CheckUniqueKeys(child, file);
+    for (const auto& child : node) CheckTree(child, where, ancestors, nodes);
   }
+  ancestors->pop_back();
+}
+
+void CheckTree(const YAML::Node& root, const std::string& where) {
+  std::vector<YAML::Node> ancestors;
+  std::size_t nodes = 0;
+  CheckTree(root, where, &ancestors, &nodes);
 }
 
 }  // namespace
@@ -259,7 +313,7 @@ YAML::Node LoadYamlFile(const std::filesystem::path& file) {
   try {
     YAML::Node root = YAML::Load(text);
     if (!root || root.IsNull()) throw ConfigError(file.string() + ": the file is empty");
-    CheckUniqueKeys(root, file);
+    CheckTree(root, file.string());
     return root;
   } catch (const YAML::ParserException& e) {
     throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
@@ -331,6 +385,7 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
   } catch (const YAML::ParserException& e) {
     throw ConfigError("--set " + key + ": cannot parse value '" + text + "': " + e.msg);
   }
+  CheckTree(value, "--set " + key + " (value)");
 
   std::string canonical;
   YAML::Node node;

@@ -65,9 +65,11 @@ fs::path CheckOutputFolder(const std::string& given, bool force) {
   if (given.empty()) throw refuse("empty path");
   std::string trimmed = given;
   while (trimmed.size() > 1 && trimmed.back() == '/') trimmed.pop_back();
-  const fs::path target = fs::absolute(trimmed).lexically_normal();
+  fs::path target = fs::absolute(trimmed).lexically_normal();
+  // "." and ".." normalise to "/work/" style paths: the folder is the one before the slash
+  if (target != target.root_path() && target.filename().empty()) target = target.parent_path();
   const fs::path cwd = fs::current_path();
-  if (target == target.root_path() || target.filename().empty()) {
+  if (target == target.root_path()) {
     throw refuse("the filesystem root is never replaced");
   }
   const auto [first_difference, unused] =

@@ -46,7 +46,13 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
                            depth_image, std::move(hooks));
     if (config.drives_by_stack()) AddStack(agent, suite, topics, &graph);
   }
-  board->Finish(kZeroTime);
+  try {
+    board->Finish(kZeroTime);
+  } catch (const UnknownPlatformName& e) {  // a typo in the scenario: say where
+    if (!loaded.error_at) throw;
+    throw loaded.error_at({"cars", agent_index.at(config.id), "platform", e.field, e.name},
+                          e.detail);
+  }
   return board;
 }
 

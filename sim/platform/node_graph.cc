@@ -41,8 +41,7 @@ void NodeGraph::CheckConfigUsed() const {
       if (HasNode(name)) continue;
       std::string known;
       for (const Node& n : nodes_) known += (known.empty() ? "" : ", ") + n.name;
-      throw ConfigError("platform." + field + "." + name +
-                        ": no node of that name (nodes: " + known + ")");
+      throw UnknownPlatformName(field, name, "no node of that name (nodes: " + known + ")");
     }
   };
   auto keys = [](const auto& map) {
@@ -59,8 +58,7 @@ void NodeGraph::CheckConfigUsed() const {
     if (!found) {
       std::string known;
       for (const Topic& t : topics_) known += (known.empty() ? "" : ", ") + t.spec.name;
-      throw ConfigError("platform.transport." + name + ": no topic of that name (topics: " + known +
-                        ")");
+      throw UnknownPlatformName("transport", name, "no topic of that name (topics: " + known + ")");
     }
   }
 }

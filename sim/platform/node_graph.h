@@ -86,6 +86,19 @@ struct NodeId {
   int index{-1};
 };
 
+// A platform config entry (`field`: mapping, cost_scale, cost_override or transport) that names
+// no node or topic of the board: a ConfigError its caller can place at the scenario's key.
+struct UnknownPlatformName : ConfigError {
+  UnknownPlatformName(std::string field_, std::string name_, const std::string& message)
+      : ConfigError("platform." + field_ + "." + name_ + ": " + message),
+        field(std::move(field_)),
+        name(std::move(name_)),
+        detail(message) {}
+  std::string field;
+  std::string name;
+  std::string detail;  // the message without the key
+};
+
 class NodeGraph;
 
 namespace detail {
@@ -136,7 +149,7 @@ class NodeGraph {
   // A scenario's per-node mapping and per-topic transport, applied to nodes and topics added
   // afterwards (by name).
   void ApplyConfig(const PlatformConfig& config);
-  // ConfigError if a mapping or transport entry of the config named no node or topic.
+  // UnknownPlatformName if a mapping or transport entry of the config named no node or topic.
   void CheckConfigUsed() const;
 
   // ConfigError for a zero-copy topic whose type is not fixed-size or fits no shared-memory chunk.

@@ -15,10 +15,9 @@
 namespace autonomsim::sim {
 namespace {
 
-// A ConfigError located at `path` of the scenario file (line and column when the key is there).
-[[noreturn]] void FailAt(const YAML::Node& root, const ConfigSource& source,
-                         const std::vector<std::variant<std::string, std::size_t>>& keys,
-                         const std::string& message) {
+// A ConfigError located at `keys` of the scenario file (line and column when the key is there).
+ConfigError ErrorAt(const YAML::Node& root, const ConfigSource& source,
+                    const LoadedScenario::KeyPath& keys, const std::string& message) {
   YAML::Node node;
   node.reset(root);
   std::string path;
@@ -37,7 +36,12 @@ namespace {
     if (!child.IsDefined() || child.IsNull()) break;
     node.reset(child);
   }
-  detail::Fail(node, path, source, message);
+  return ConfigError(detail::Where(node, path, source) + message);
+}
+
+[[noreturn]] void FailAt(const YAML::Node& root, const ConfigSource& source,
+                         const LoadedScenario::KeyPath& keys, const std::string& message) {
+  throw ErrorAt(root, source, keys, message);
 }
 
 }  // namespace
@@ -63,9 +67,14 @@ void ObstacleConfig::Validate() const {
   Require(length_m > 0 && width_m > 0 && height_m > 0,
           "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " + Num(width_m) +
               ", " + Num(height_m));
-  Require(appear_s >= 0.0, "appear_s must be >= 0, got " + Num(appear_s));
+  // instants within a run's longest duration (24 h) and then some; beyond, they never come
+  constexpr double kLatest_s = 1e6;
+  Require(appear_s >= 0.0 && appear_s <= kLatest_s,
+          "appear_s must be in [0, " + Num(kLatest_s) + "] s, got " + Num(appear_s));
   Require(!disappear_s || *disappear_s > appear_s,
           "disappear_s must be after appear_s, got " + Num(disappear_s.value_or(0.0)));
+  Require(!disappear_s || *disappear_s <= kLatest_s,
+          "disappear_s must be <= " + Num(kLatest_s) + " s, got " + Num(disappear_s.value_or(0.0)));
 }
 
 void V2IConfig::Validate() const {
@@ -236,6 +245,28 @@ ResolvedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Tra
   return resolved;
 }
 
+// A car without a board (perception off) runs no nodes: platform settings naming nodes or topics
+// would be ignored without a word, typos included. (A board's names are checked when it is built.)
+void CheckPlatformSettingsApply(const Scenario& scenario, const ScenarioSite& site) {
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const CarConfig& car = scenario.cars[i];
+    if (car.has_board()) continue;
+    const PlatformConfig& p = car.platform;
+    for (const auto& [field, name] :
+         {std::pair{"mapping", p.mapping.empty() ? "" : p.mapping.begin()->first},
+          std::pair{"transport", p.transport.empty() ? "" : p.transport.begin()->first},
+          std::pair{"cost_scale", p.cost_scale.empty() ? "" : p.cost_scale.begin()->first},
+          std::pair{"cost_override",
+                    p.cost_override.empty() ? "" : p.cost_override.begin()->first}}) {
+      if (name.empty()) continue;
+      FailAt(site.root, site.source, {"cars", i, "platform", field, name},
+             "car " + std::to_string(car.id) +
+                 " has no board (perception.enabled is false), so it runs no nodes for platform "
+                 "settings to apply to; remove them or enable perception");
+    }
+  }
+}
+
 // Every obstacle on the track's floor and smaller than it, before Box2D sees it (an obstacle at
 // 1e39 m aborted in Box2D's IsValid assertion; one 9 m off a 5 m floor was accepted).
 void CheckObstaclesOnFloor(const Scenario& scenario, double floor_size_m,
@@ -269,6 +300,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                             std::optional<std::uint64_t> seed) {
   YAML::Node root = LoadYamlFile(file);
   ConfigSource source{file.string(), {}};
+  // before any --set: a file that is not a mapping is the file's error, not the override's
+  if (!root.IsMap()) detail::Fail(root, "", source, "expected a mapping, got " + detail::Describe(root));
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
   const ScenarioSite site{root, source};
@@ -289,6 +322,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     loaded.profiles.push_back(std::move(car.profile));
   }
   CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
+  CheckPlatformSettingsApply(scenario, site);
   for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
     const ExpectArgs& args = scenario.expect[i].args();
     if (args.car && car_ids.count(*args.car) == 0) {
@@ -312,6 +346,9 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     }
   }
   loaded.sha256 = Sha256Hex(loaded.resolved.dump());
+  loaded.error_at = [root, source](const LoadedScenario::KeyPath& keys, const std::string& message) {
+    return ErrorAt(root, source, keys, message);
+  };
   return loaded;
 }
 

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <variant>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -234,6 +236,10 @@ struct LoadedScenario {
   std::vector<std::optional<PlatformProfile>> profiles;
   std::string sha256;       // of the resolved scenario and track (canonical JSON)
   nlohmann::json resolved;  // {"scenario": ..., "track": ...} with every default
+  // A ConfigError for `message` at a key of the scenario, located as the loader locates its own
+  // ("file:line:col: key: " or "--set key: "), for errors found once the run is built.
+  using KeyPath = std::vector<std::variant<std::string, std::size_t>>;
+  std::function<ConfigError(const KeyPath& key, const std::string& message)> error_at;
 };
 
 // Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,

@@ -74,6 +74,10 @@ TEST(OutputSafety, TheWorkingFolderAndTheRootAreRefusedAtOnce) {
     const Result r = Cli(std::string("run ") + kQuick + " --force --out " + out);
     EXPECT_EQ(r.exit_code, 2) << out << ": " << r.output;
     EXPECT_THAT(r.output, Not(HasSubstr("simulated in"))) << out;
+    // the reason given is the true one
+    EXPECT_THAT(r.output, HasSubstr(std::string(out) == "/" ? "the filesystem root"
+                                                             : "holds the working folder"))
+        << out;
   }
   EXPECT_TRUE(fs::exists("CMakeLists.txt"));  // still here
 }

@@ -115,7 +115,7 @@ TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
               HasSubstr("--set inner.gain: gain must be >= 0"));
   EXPECT_THAT(ErrorOf("items: []\n", {"items[0].gain=1"}), HasSubstr("index 0 is out of range"));
   EXPECT_THAT(ErrorOf("{}", {"flag.x=1"}),
-              HasSubstr("flag (with --set flag.x): expected true or false"));
+              HasSubstr("--set flag.x: flag: expected true or false"));
   EXPECT_THAT(ErrorOf("flag: true\n", {"flag.x=1"}), HasSubstr("'flag' is not a mapping"));
 }
 
@@ -131,6 +131,8 @@ TEST(ConfigTest, MalformedOverridePathsAreRefusedNamingTheKey) {
               HasSubstr("list index 99999999999999999999 is out of range"));
   EXPECT_THAT(ErrorOf("- 1\n- 2\n", {"seed=1"}), HasSubstr("'(top level)' is not a mapping"));
   EXPECT_THAT(ErrorOf("{}", {"items[0]=1"}), HasSubstr("is not a list"));
+  EXPECT_THAT(ErrorOf("{}", {"inner=&a {gain: *a}"}),
+              HasSubstr("--set inner (value):1:1: an alias refers to a value that contains it"));
 }
 
 TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
@@ -152,7 +154,29 @@ TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
               HasSubstr("nested.yaml:3:3: b: duplicate key"));
   EXPECT_THAT(error_of_file("latin1.yaml", "seed: 1\nname: caf\xE9\n"),
               HasSubstr("latin1.yaml:2:10: not UTF-8 text (byte 0xE9)"));
-  EXPECT_EQ(error_of_file("utf8.yaml", "name: caf\xC3\xA9\n"), "(no error)");
+  EXPECT_EQ(error_of_file("utf8.yaml", "name: caf\xC3\xA9 \xF0\x9F\x9A\x97\n"), "(no error)");
+  // byte sequences shaped like UTF-8 that RFC 3629 forbids (they reached the JSON writer)
+  EXPECT_THAT(error_of_file("overlong.yaml", "name: a\xC0\xAF\n"),
+              HasSubstr("overlong.yaml:1:8: not UTF-8 text (byte 0xC0)"));
+  EXPECT_THAT(error_of_file("surrogate.yaml", "name: \xED\xA0\x80\n"),
+              HasSubstr("surrogate.yaml:1:7: not UTF-8 text (byte 0xED)"));
+  EXPECT_THAT(error_of_file("too_high.yaml", "name: \xF4\x90\x80\x80\n"),
+              HasSubstr("too_high.yaml:1:7: not UTF-8 text (byte 0xF4)"));
+  // an alias inside what it names is a cycle every reader would follow forever (it crashed)
+  EXPECT_THAT(error_of_file("cycle.yaml", "name: x\nseed: &a [*a]\n"),
+              HasSubstr("cycle.yaml:2:7: an alias refers to a value that contains it"));
+  EXPECT_THAT(error_of_file("cycle_map.yaml", "a: &a {b: *a}\n"),
+              HasSubstr("cycle_map.yaml:1:4: an alias refers to a value that contains it"));
+  // aliases that double at every level: 2^21 values from a few lines
+  std::string laughs = "l0: &l0 [x, x]\n";
+  for (int i = 1; i <= 21; ++i) {
+    laughs += "l" + std::to_string(i) + ": &l" + std::to_string(i) + " [*l" +
+              std::to_string(i - 1) + ", *l" + std::to_string(i - 1) + "]\n";
+  }
+  EXPECT_THAT(error_of_file("laughs.yaml", laughs), HasSubstr("values through its aliases"));
+  EXPECT_EQ(error_of_file("shared.yaml", "a: &a {b: 1}\nc: *a\nd: [*a, *a]\n"), "(no error)");
+  EXPECT_THAT(error_of_file("map_key.yaml", "a:\n  {k: v}: 42\n"),
+              HasSubstr("map_key.yaml:2:3: a key must be a plain name, got a mapping"));
   std::filesystem::create_directories(dir / "folder.yaml");
   try {
     LoadYamlFile(dir / "folder.yaml");

@@ -193,6 +193,21 @@ TEST(SimulationBoardTest, ABoardsProfileThatCannotBeLoadedIsAnErrorAtTheCarsKey)
   }
 }
 
+// Issue 15: a mapping that names no node of the board is an error at the car's key (it named
+// neither file, line nor car).
+TEST(SimulationBoardTest, AMappingNamingNoNodeIsAnErrorAtTheCarsKey) {
+  const LoadedScenario scenario =
+      LoadScenario(kDefault, {"cars[1].perception.enabled=true", "duration_s=1", "expect=[]",
+                              "cars[1].platform.mapping.lane_detektion.target=sw"});
+  try {
+    Simulation simulation(scenario);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("--set cars[1].platform.mapping.lane_detektion"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("no node of that name (nodes: color_camera"));
+  }
+}
+
 // driver: stack — the stack's nodes run on the car's board, in place of the background loads that
 // stand in for them, at the real rates, and they drive the car.
 TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
