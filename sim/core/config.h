@@ -37,7 +37,8 @@ struct ConfigSource {
 };
 
 // Parses a YAML file. A ConfigError naming the file (and line where there is one) for a folder,
-// an unreadable file, bytes that are not UTF-8, a syntax error, and a key repeated in a mapping.
+// an unreadable file, one over 16 MiB (a device such as /dev/zero), bytes that are not UTF-8, a
+// syntax error, and a key repeated in a mapping.
 YAML::Node LoadYamlFile(const std::filesystem::path& file);
 
 // Applies `--set path=value`: the path is dot-separated keys with [i] for list elements (e.g.

@@ -162,6 +162,16 @@ TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
   }
 }
 
+// Issue 15 (fuzzing the loaders): `track: /dev/zero` in a scenario read until the memory ran out.
+TEST(ConfigTest, AFileThatNeverEndsIsRefusedBeforeItFillsTheMemory) {
+  try {
+    LoadYamlFile("/dev/zero");
+    ADD_FAILURE() << "/dev/zero was read as YAML";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/dev/zero: larger than 16 MiB, not a config file"));
+  }
+}
+
 TEST(ConfigTest, JsonHasEveryKeyAndRoundTripsThroughTheReader) {
   const Outer o = Read("items: [{gain: 2}]\nmaybe: 3\n");
   const nlohmann::json j = ToJson(o);
