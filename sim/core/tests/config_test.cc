@@ -101,6 +101,11 @@ TEST(ConfigTest, ErrorsNameLineColumnAndKeyPath) {
   EXPECT_THAT(ErrorOf("items: {gain: 1}\n"), HasSubstr("items: expected a list"));
   EXPECT_THAT(ErrorOf("inner: {gain: .nan}\n"), HasSubstr("expected a finite number"));
   EXPECT_THAT(ErrorOf("maybe: 1.5\n"), HasSubstr("maybe: expected an integer"));
+  // issue 15 (fuzzing): a key that is a list or a mapping escaped as yaml-cpp's BadConversion
+  EXPECT_THAT(ErrorOf("named: {[a, b]: {gain: 1}}\n"),
+              HasSubstr("test.yaml:1:9: named: expected a name as key, got a list"));
+  EXPECT_THAT(ErrorOf("named:\n  ? {a: 1}\n"),
+              HasSubstr("test.yaml:2:5: named: expected a name as key, got a mapping"));
 }
 
 TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
