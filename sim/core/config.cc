@@ -213,9 +213,28 @@ ConfigError ErrorAtOffset(const std::filesystem::path& file, const std::string& 
   return ConfigError(fmt::format("{}:{}:{}: {}", file.string(), line, column, message));
 }
 
+// Nodes already walked, by where they start and then by identity (an alias is the very node of
+// its anchor).
+using WalkedNodes = std::multimap<int, YAML::Node>;
+
+// Whether `node` is in `walked`; adds it if not.
+bool WalkedBefore(const YAML::Node& node, WalkedNodes* walked) {
+  const auto [begin, end] = walked->equal_range(node.Mark().pos);
+  for (auto it = begin; it != end; ++it) {
+    if (it->second.is(node)) return true;
+  }
+  walked->emplace(node.Mark().pos, node);
+  return false;
+}
+
 // Every mapping below `node` has each key once: yaml-cpp keeps a repeated key's entries and
 // reads the first, so `duration_s: 3` then `duration_s: 5` would run 3 s without a word.
-void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& file) {
+// Each mapping and list is walked once: aliases make the document a graph, which may hold a node
+// inside itself (`a: &x [*x]`: walked as a tree, that recursed until the stack overflowed) or
+// repeat one exponentially often.
+void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& file,
+                     WalkedNodes* walked) {
+  if (!(node.IsMap() || node.IsSequence()) || WalkedBefore(node, walked)) return;
   if (node.IsMap()) {
     std::map<std::string, YAML::Mark> seen;
     for (const auto& entry : node) {
@@ -227,10 +246,10 @@ void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& file) 
                                       file.string(), mark.line + 1, mark.column + 1, key,
                                       first->second.line + 1));
       }
-      CheckUniqueKeys(entry.second, file);
+      CheckUniqueKeys(entry.second, file, walked);
     }
-  } else if (node.IsSequence()) {
-    for (const auto& child : node) CheckUniqueKeys(child, file);
+  } else {
+    for (const auto& child : node) CheckUniqueKeys(child, file, walked);
   }
 }
 
@@ -260,7 +279,8 @@ YAML::Node LoadYamlFile(const std::filesystem::path& file) {
   try {
     YAML::Node root = YAML::Load(text);
     if (!root || root.IsNull()) throw ConfigError(file.string() + ": the file is empty");
-    CheckUniqueKeys(root, file);
+    WalkedNodes walked;
+    CheckUniqueKeys(root, file, &walked);
     return root;
   } catch (const YAML::ParserException& e) {
     throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 namespace autonomsim::sim {
 namespace {
@@ -158,6 +159,19 @@ TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
   EXPECT_THAT(error_of_file("latin1.yaml", "seed: 1\nname: caf\xE9\n"),
               HasSubstr("latin1.yaml:2:10: not UTF-8 text (byte 0xE9)"));
   EXPECT_EQ(error_of_file("utf8.yaml", "name: caf\xC3\xA9\n"), "(no error)");
+  // issue 15 (fuzzing): an alias inside its own anchor (`platform: &p {x: *p}`) overflowed the
+  // stack; aliases nested 12 deep, 10 to a list, were 10^12 walks. Each node is walked once.
+  EXPECT_EQ(error_of_file("self.yaml", "a: &x {b: 1, c: *x}\n"), "(no error)");
+  std::string laughs = "l0: &l0 [1]\n";
+  for (int level = 1; level <= 12; ++level) {
+    const std::string name = "l" + std::to_string(level);
+    laughs += name + ": &" + name + " [";
+    for (int k = 0; k < 10; ++k) laughs += (k == 0 ? "*l" : ", *l") + std::to_string(level - 1);
+    laughs += "]\n";
+  }
+  EXPECT_EQ(error_of_file("laughs.yaml", laughs), "(no error)");
+  EXPECT_THAT(error_of_file("dup_alias.yaml", "a: &m {k: 1, k: 2}\nb: *m\n"),
+              HasSubstr("dup_alias.yaml:1:14: k: duplicate key"));
   std::filesystem::create_directories(dir / "folder.yaml");
   try {
     LoadYamlFile(dir / "folder.yaml");
