@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
-# tools/fuzz.sh [SECONDS_PER_TARGET] (default 60): builds the libFuzzer targets (preset fuzz: clang,
-# AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds their corpora from the shipped
-# files, and runs each for SECONDS_PER_TARGET. Prints the executions per target; exits 1 when any
-# target finds something (a crash, a sanitizer report, a hang over 10 s, over 2 GB of memory, or
-# an error message that does not say where), with its input in build-fuzz/artifacts/.
-# Corpora grow in build-fuzz/corpus/<target>/ from run to run. README "Fuzzing" says more.
+# tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]] (default 60 s, every target): builds the libFuzzer
+# targets (preset fuzz: clang, AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds
+# their corpora from the shipped files, and runs each for SECONDS_PER_TARGET. Prints the
+# executions per target; exits 1 when any target finds something (a crash, a sanitizer report, a
+# hang over 10 s, over 2 GB of memory, or an error message that does not say where), with its
+# input in build-fuzz/artifacts/. Corpora grow in build-fuzz/corpus/<target>/ from run to run.
+# Naming targets builds and runs only those. README "Fuzzing" says more.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+usage="usage: tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]"
 seconds="${1:-60}"
-[[ $seconds =~ ^[1-9][0-9]*$ ]] || { echo "usage: tools/fuzz.sh [SECONDS_PER_TARGET]" >&2; exit 2; }
+[[ $seconds =~ ^[1-9][0-9]*$ ]] || { echo "$usage" >&2; exit 2; }
+shift $(($# > 0 ? 1 : 0))
+wanted=("$@")
 
 tools/install_deps.sh
 tools/reset_stale_build.sh build-fuzz
 # AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, as in test.sh.
 cmake --preset fuzz -DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}" >/dev/null
-cmake --build --preset fuzz -j "$(nproc)"
 
 build=build-fuzz
 artifacts=$build/artifacts
@@ -47,8 +50,21 @@ targets=(
   "lockstep_decode_fuzz|sim/mqtt/fuzz/lockstep_decode.seeds|sim/mqtt/fuzz/lockstep_decode.dict"
 )
 
+# the targets asked for, or all
+selected=()
+if ((${#wanted[@]} == 0)); then selected=("${targets[@]}"); fi
+for name in "${wanted[@]}"; do
+  found=""
+  for entry in "${targets[@]}"; do [[ ${entry%%|*} == "$name" ]] && found=$entry; done
+  [[ -n $found ]] || { echo "tools/fuzz.sh: no target '$name'; $usage" >&2; exit 2; }
+  selected+=("$found")
+done
+build_targets=()
+for entry in "${selected[@]}"; do build_targets+=("${entry%%|*}"); done
+cmake --build --preset fuzz -j "$(nproc)" --target "${build_targets[@]}"
+
 failed=()
-for entry in "${targets[@]}"; do
+for entry in "${selected[@]}"; do
   IFS='|' read -r target seeds dictionary <<<"$entry"
   corpus=$build/corpus/$target
   mkdir -p "$corpus"
