@@ -9,3 +9,15 @@ function(autonomsim_test name)
                        PROPERTIES ENVIRONMENT "AUTONOMSIM_BIN_DIR=${CMAKE_BINARY_DIR}/bin"
                        DISCOVERY_TIMEOUT 60)
 endfunction()
+
+# autonomsim_fuzzer(NAME SOURCES src... LIBS lib...)
+# One libFuzzer executable (AUTONOMSIM_FUZZ builds only): a member of the fuzz_targets target,
+# never of ctest (tools/fuzz.sh runs it). It knows the source tree, for the shipped files it reads.
+function(autonomsim_fuzzer name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} autonomsim_flags)
+  target_link_options(${name} PRIVATE -fsanitize=fuzzer)
+  target_compile_definitions(${name} PRIVATE AUTONOMSIM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  add_dependencies(fuzz_targets ${name})
+endfunction()

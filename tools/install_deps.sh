@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   openssl  # the TLS test makes its certificates with it
   parallel  # GNU parallel: the sweep test runs shards with it, as the README's recipe does
+  clang libclang-rt-14-dev  # tools/fuzz.sh: libFuzzer and clang's sanitizer runtimes
 )
 
 missing=()

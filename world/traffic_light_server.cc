@@ -65,7 +65,8 @@ void TrafficLightServer::GrantHeadIfFree(Slot* slot, std::vector<Response>* out)
 void TrafficLightServer::Expire(Time now, std::vector<Response>* out) {
   if (!fifo_) return;
   // Drop every dead queued car first, so that an expiry never grants a car that is itself dead.
-  for (auto& [id, slot] : slots_) {
+  for (auto& entry : slots_) {
+    Slot& slot = entry.second;  // not a structured binding: clang < 16 can't capture it
     const auto before = slot.queue.size();
     std::erase_if(slot.queue, [&](int car) {
       if (!IsDead(slot, car, now)) return false;

@@ -3,11 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <fstream>
 #include <limits>
 #include <map>
-#include <sstream>
 
 namespace autonomsim::sim {
 namespace detail {
@@ -191,6 +191,10 @@ void ReadScalar(const YAML::Node& node, Duration& out, const std::string& path,
 
 namespace {
 
+// Config files are kilobytes. The cap stops a path to a device or a stream that never ends
+// (`track: /dev/zero`) before it fills the memory.
+constexpr std::size_t kMaxYamlFileBytes = std::size_t{16} << 20;
+
 // The first byte of `text` that does not belong to well-formed UTF-8 (RFC 3629: no over-long
 // forms, no surrogates, nothing above U+10FFFF), or npos.
 std::size_t FirstInvalidUtf8(const std::string& text) {
@@ -302,9 +306,15 @@ YAML::Node LoadYamlFile(const std::filesystem::path& file) {
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(file.string() + ": cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  std::string text;
+  std::array<char, 1 << 16> chunk;
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxYamlFileBytes) {
+      throw ConfigError(fmt::format("{}: larger than {} MiB, not a config file", file.string(),
+                                    kMaxYamlFileBytes >> 20));
+    }
+  }
   if (const std::size_t bad = FirstInvalidUtf8(text); bad != std::string::npos) {
     throw ErrorAtOffset(file, text, bad,
                         fmt::format("not UTF-8 text (byte 0x{:02X}); save the file as UTF-8",

@@ -37,7 +37,8 @@ struct ConfigSource {
 };
 
 // Parses a YAML file. A ConfigError naming the file (and line where there is one) for a folder,
-// an unreadable file, bytes that are not UTF-8, a syntax error, and a key repeated in a mapping.
+// an unreadable file, one over 16 MiB (a device such as /dev/zero), bytes that are not UTF-8, a
+// syntax error, and a key repeated in a mapping.
 YAML::Node LoadYamlFile(const std::filesystem::path& file);
 
 // Applies `--set path=value`: the path is dot-separated keys with [i] for list elements (e.g.
@@ -142,7 +143,11 @@ void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigS
     if (!node.IsMap()) Fail(node, path, source, "expected a mapping, got " + Describe(node));
     out.clear();
     for (const auto& item : node) {
-      const std::string key = item.first.as<std::string>();
+      // a YAML key may be a list or a mapping (`[a, b]: 1`, `? {x: 1}`); ours are names
+      if (!item.first.IsScalar()) {
+        Fail(item.first, path, source, "expected a name as key, got " + Describe(item.first));
+      }
+      const std::string key = item.first.Scalar();
       typename T::mapped_type value{};
       Read(item.second, value, JoinPath(path, key), source);
       out.emplace(key, std::move(value));

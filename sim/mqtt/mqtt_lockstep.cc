@@ -1,7 +1,10 @@
 #include "sim/mqtt/mqtt_lockstep.h"
 
 #include <charconv>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <utility>
 
 namespace autonomsim::sim {
 namespace {
@@ -41,6 +44,24 @@ std::string Show(std::string_view text) {
   return "'" + out + (text.size() > kMaxShown ? "...'" : "'");
 }
 
+// A JSON integer that T holds exactly, else std::invalid_argument naming `key`. Never get<T>()
+// alone: it casts a float (1e30, 2.5) or an integer too large for T without a word, and a float
+// cast out of T's range is undefined behaviour (found by sim/mqtt/fuzz/lockstep_decode_fuzz.cc).
+template <class T>
+T Integer(const Json& j, const std::string& key) {
+  if (j.is_number_unsigned()) {
+    const auto value = j.get<std::uint64_t>();
+    if (std::in_range<T>(value)) return static_cast<T>(value);
+  } else if (j.is_number_integer()) {
+    const auto value = j.get<std::int64_t>();
+    if (std::in_range<T>(value)) return static_cast<T>(value);
+  }
+  throw std::invalid_argument(key + ": expected an integer in [" +
+                              std::to_string(std::numeric_limits<T>::min()) + ", " +
+                              std::to_string(std::numeric_limits<T>::max()) + "], got " +
+                              (j.is_number() ? j.dump() : std::string(j.type_name())));
+}
+
 Json CountersToJson(const world::TrafficLightServer::Counters& c) {
   return Json{{"requests", c.requests},
               {"grants", c.grants},
@@ -53,13 +74,16 @@ Json CountersToJson(const world::TrafficLightServer::Counters& c) {
 
 world::TrafficLightServer::Counters CountersFromJson(const Json& j) {
   world::TrafficLightServer::Counters c;
-  c.requests = j.at("requests").get<std::uint64_t>();
-  c.grants = j.at("grants").get<std::uint64_t>();
-  c.denials = j.at("denials").get<std::uint64_t>();
-  c.frees = j.at("frees").get<std::uint64_t>();
-  c.lease_expiries = j.at("lease_expiries").get<std::uint64_t>();
-  c.unknown_intersection = j.at("unknown_intersection").get<std::uint64_t>();
-  c.queue_drops = j.at("queue_drops").get<std::uint64_t>();
+  const auto counter = [&j](const char* key) {
+    return Integer<std::uint64_t>(j.at(key), std::string("counters.") + key);
+  };
+  c.requests = counter("requests");
+  c.grants = counter("grants");
+  c.denials = counter("denials");
+  c.frees = counter("frees");
+  c.lease_expiries = counter("lease_expiries");
+  c.unknown_intersection = counter("unknown_intersection");
+  c.queue_drops = counter("queue_drops");
   return c;
 }
 
@@ -124,8 +148,12 @@ world::Decoded<SimReset> DecodeReset(std::string_view json) {
     reset.epoch = j.at("epoch").get<std::string>();
     if (!IsValidEpoch(reset.epoch)) throw std::invalid_argument("bad epoch " + Show(reset.epoch));
     reset.params.policy = j.at("policy").get<std::string>();
-    reset.params.lease = Duration{j.at("lease_ns").get<std::int64_t>()};
-    reset.intersections = j.at("intersections").get<std::vector<int>>();
+    reset.params.lease = Duration{Integer<std::int64_t>(j.at("lease_ns"), "lease_ns")};
+    const Json& intersections = j.at("intersections");
+    if (!intersections.is_array()) throw std::invalid_argument("intersections: expected a list");
+    for (const Json& id : intersections) {
+      reset.intersections.push_back(Integer<int>(id, "intersections[]"));
+    }
     return world::Decoded<SimReset>::Ok(std::move(reset));
   } catch (const std::exception& e) {
     return world::Decoded<SimReset>::Error("reset " + Show(json) + ": " + e.what());
@@ -152,16 +180,17 @@ world::Decoded<SimAck> DecodeAck(std::string_view json) {
     const Json j = Json::parse(json);
     SimAck ack;
     ack.epoch = j.at("epoch").get<std::string>();
-    ack.seq = j.at("seq").get<std::uint64_t>();
+    ack.seq = Integer<std::uint64_t>(j.at("seq"), "seq");
     if (j.contains("error")) ack.error = j.at("error").get<std::string>();
     if (!ack.error.empty()) return world::Decoded<SimAck>::Ok(std::move(ack));
     ack.responses = j.at("responses").get<std::vector<std::string>>();
     const Json& deadline = j.at("deadline_ns");
-    if (!deadline.is_null()) ack.deadline = Time{deadline.get<std::int64_t>()};
+    if (!deadline.is_null()) ack.deadline = Time{Integer<std::int64_t>(deadline, "deadline_ns")};
     for (const Json& h : j.at("holders")) {
       const Json& holder = h.at(1);
-      ack.holders.emplace_back(h.at(0).get<int>(),
-                               holder.is_null() ? std::nullopt : std::optional(holder.get<int>()));
+      ack.holders.emplace_back(
+          Integer<int>(h.at(0), "holders[][0]"),
+          holder.is_null() ? std::nullopt : std::optional(Integer<int>(holder, "holders[][1]")));
     }
     ack.counters = CountersFromJson(j.at("counters"));
     return world::Decoded<SimAck>::Ok(std::move(ack));

@@ -52,7 +52,8 @@ void NodeGraph::CheckConfigUsed() const {
   check_nodes(keys(mapping_config_), "mapping");
   check_nodes(keys(cost_scale_config_), "cost_scale");
   check_nodes(keys(cost_override_config_), "cost_override");
-  for (const auto& [name, unused] : transport_config_) {
+  for (const auto& entry : transport_config_) {
+    const std::string& name = entry.first;  // not a structured binding: clang < 16 can't capture it
     const bool found = std::any_of(topics_.begin(), topics_.end(),
                                    [&name](const Topic& t) { return t.spec.name == name; });
     if (!found) {

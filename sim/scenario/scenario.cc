@@ -175,6 +175,18 @@ struct ScenarioSite {
   const ConfigSource& source;
 };
 
+// The track the scenario names (relative to its folder). An error of the track file's own (a
+// missing file, a bad key in it) is reported at the scenario's `track:` too: the track file's
+// name alone does not say which scenario line chose it.
+world::Track LoadScenarioTrack(const Scenario& scenario, const std::filesystem::path& folder,
+                               const ScenarioSite& site) {
+  try {
+    return LoadTrack(folder / scenario.track);
+  } catch (const ConfigError& e) {
+    FailAt(site.root, site.source, {"track"}, e.what());
+  }
+}
+
 // Where car `i` starts on its route: its named start pose (which must lie on the route, heading
 // along it) or its distance along the route.
 std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i,
@@ -308,7 +320,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
 
   Scenario read = ReadConfig<Scenario>(root, source);
   if (read.name.empty()) read.name = file.stem().string();
-  world::Track track = LoadTrack(file.parent_path() / read.track);
+  world::Track track = LoadScenarioTrack(read, file.parent_path(), site);
   LoadedScenario loaded{.file = file, .scenario = std::move(read), .track = std::move(track)};
   const Scenario& scenario = loaded.scenario;
 

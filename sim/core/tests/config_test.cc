@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 namespace autonomsim::sim {
 namespace {
@@ -101,6 +102,11 @@ TEST(ConfigTest, ErrorsNameLineColumnAndKeyPath) {
   EXPECT_THAT(ErrorOf("items: {gain: 1}\n"), HasSubstr("items: expected a list"));
   EXPECT_THAT(ErrorOf("inner: {gain: .nan}\n"), HasSubstr("expected a finite number"));
   EXPECT_THAT(ErrorOf("maybe: 1.5\n"), HasSubstr("maybe: expected an integer"));
+  // issue 15 (fuzzing): a key that is a list or a mapping escaped as yaml-cpp's BadConversion
+  EXPECT_THAT(ErrorOf("named: {[a, b]: {gain: 1}}\n"),
+              HasSubstr("test.yaml:1:9: named: expected a name as key, got a list"));
+  EXPECT_THAT(ErrorOf("named:\n  ? {a: 1}\n"),
+              HasSubstr("test.yaml:2:5: named: expected a name as key, got a mapping"));
 }
 
 TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
@@ -177,12 +183,24 @@ TEST(ConfigTest, DuplicateKeysNonUtf8TextAndFoldersAreErrorsNamingFileAndLine) {
   EXPECT_EQ(error_of_file("shared.yaml", "a: &a {b: 1}\nc: *a\nd: [*a, *a]\n"), "(no error)");
   EXPECT_THAT(error_of_file("map_key.yaml", "a:\n  {k: v}: 42\n"),
               HasSubstr("map_key.yaml:2:3: a key must be a plain name, got a mapping"));
+  EXPECT_THAT(error_of_file("dup_alias.yaml", "a: &m {k: 1, k: 2}\nb: *m\n"),
+              HasSubstr("dup_alias.yaml:1:14: k: duplicate key"));
   std::filesystem::create_directories(dir / "folder.yaml");
   try {
     LoadYamlFile(dir / "folder.yaml");
     ADD_FAILURE() << "a folder was read as YAML";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("folder.yaml: is a folder, not a YAML file"));
+  }
+}
+
+// Issue 15 (fuzzing the loaders): `track: /dev/zero` in a scenario read until the memory ran out.
+TEST(ConfigTest, AFileThatNeverEndsIsRefusedBeforeItFillsTheMemory) {
+  try {
+    LoadYamlFile("/dev/zero");
+    ADD_FAILURE() << "/dev/zero was read as YAML";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/dev/zero: larger than 16 MiB, not a config file"));
   }
 }
 

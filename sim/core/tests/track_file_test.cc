@@ -99,6 +99,46 @@ TEST(LabTrackFileTest, APointOffTheFloorIsAnErrorNamingIt) {
   }
 }
 
+// The lab track file with the first `from` after `after` replaced by `to`, written to a temporary
+// file `name`.yaml; LoadTrack's error message for it ("" when it loads).
+std::string LoadErrorOfLabTrackWith(const std::string& name, const std::string& after,
+                                    const std::string& from, const std::string& to) {
+  std::ifstream in(kLabTrack);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::size_t at = yaml.find(from, yaml.find(after));
+  if (yaml.find(after) == std::string::npos || at == std::string::npos) {
+    throw std::logic_error("test fixture: '" + from + "' after '" + after + "' not found");
+  }
+  yaml.replace(at, from.size(), to);
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / (name + ".yaml");
+  std::ofstream(file) << yaml;
+  try {
+    LoadTrack(file);
+    return "";
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+}
+
+// Issue 15 (fuzzing): the geometry's errors named the file alone, not the line or the key. (The
+// line numbers are the lab file's: any line will do, the key and entry are exact.)
+TEST(LabTrackFileTest, GeometryErrorsNameTheLineLaneOrRouteWithItsLine) {
+  using ::testing::ContainsRegex;
+  EXPECT_THAT(LoadErrorOfLabTrackWith("corner", "name: island_south", "corner_radius_m: 0.32",
+                                      "corner_radius_m: 0.79"),
+              ContainsRegex("corner\\.yaml:[0-9]+:5: lines\\[4\\]: line 'island_south': corner "
+                            "radius 0\\.79 m does not fit"));
+  EXPECT_THAT(LoadErrorOfLabTrackWith("lane", "name: middle_west", "[0.6, 0.31], [-0.6, 0.31]",
+                                      "[0.6, 0.31], [0.6, 0.31]"),
+              ContainsRegex("lane\\.yaml:[0-9]+:5: lanes\\[6\\]: lane 'middle_west': points 0 and "
+                            "1 coincide"));
+  EXPECT_THAT(LoadErrorOfLabTrackWith("route", "outer_loop:", "j0_outer_straight, ", ""),
+              ContainsRegex("route\\.yaml:[0-9]+:15: routes\\.outer_loop: route 'outer_loop': "
+                            "lane 'outer_south' does not lead into lane 'outer_north'"));
+}
+
 TEST_F(LabTrackTest, ForbiddenLinesAreTheYellowLinesAndTheIslands) {
   std::set<std::string> names;
   for (int l : ForbiddenLines()) names.insert(track().spec().lines[l].name);

@@ -1,7 +1,12 @@
 // The lock-step protocol's messages, the link's config and the private brokers' ACL: no broker.
 #include "sim/mqtt/mqtt_lockstep.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "sim/mqtt/mqtt_client.h"
 #include "sim/mqtt/mqtt_link_config.h"
@@ -78,6 +83,46 @@ TEST(MqttLockstepTest, AcksRoundTripWithNullsAndErrors) {
   EXPECT_EQ(DecodeAck(EncodeAck(error)).value().error, "steps are missing");
   EXPECT_FALSE(DecodeAck("not json"));
   EXPECT_FALSE(DecodeAck(R"({"epoch":"a","seq":1})"));
+}
+
+// Issue 15 (fuzzing): a float or an out-of-range integer reached nlohmann's get<int>() and
+// get<int64_t>(), a cast that is undefined behaviour out of range (UBSan: "1.18447e+20 is outside
+// the range of representable values of type 'int'") and that silently truncated 2.5 to 2.
+TEST(MqttLockstepTest, NumbersMustBeIntegersTheFieldHolds) {
+  const std::string reset_ok = R"({"epoch":"e","policy":"fifo","lease_ns":5,"intersections":[0]})";
+  ASSERT_TRUE(DecodeReset(reset_ok)) << DecodeReset(reset_ok).error();
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"\"lease_ns\":5", "\"lease_ns\":1e30"},
+           {"\"lease_ns\":5", "\"lease_ns\":2.5"},
+           {"\"lease_ns\":5", "\"lease_ns\":9223372036854775808"},
+           {"[0]", "[0,118446744073709551616]"},
+           {"[0]", "[4294967296]"},
+           {"[0]", "{\"a\":0}"}}) {
+    std::string bad = reset_ok;
+    bad.replace(bad.find(from), from.size(), to);
+    const world::Decoded<SimReset> decoded = DecodeReset(bad);
+    EXPECT_FALSE(decoded) << bad;
+    EXPECT_THAT(decoded.error(), ::testing::HasSubstr("expected")) << bad;
+  }
+
+  SimAck ack;
+  ack.epoch = "e";
+  ack.seq = 1;
+  ack.holders = {{0, 1}};
+  const std::string ack_ok = EncodeAck(ack);
+  ASSERT_TRUE(DecodeAck(ack_ok));
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"\"seq\":1", "\"seq\":-1"},
+           {"\"seq\":1", "\"seq\":1e300"},
+           {"\"deadline_ns\":null", "\"deadline_ns\":-1e300"},
+           {"[[0,1]]", "[[0,1e10]]"},
+           {"[[0,1]]", "[[2147483648,1]]"},
+           {"\"requests\":0", "\"requests\":-5"}}) {
+    std::string bad = ack_ok;
+    ASSERT_NE(bad.find(from), std::string::npos) << from << " in " << ack_ok;
+    bad.replace(bad.find(from), from.size(), to);
+    EXPECT_FALSE(DecodeAck(bad)) << bad;
+  }
 }
 
 TEST(MqttLinkConfigTest, ValidatesBrokerCredentialsTlsAndTimeout) {

@@ -1,0 +1,44 @@
+// libFuzzer target: the scenario loader (sim/scenario/scenario.h's LoadScenario) on any scenario
+// file, beside the shipped tracks/ and platforms/ as a scenario in scenarios/ sees them. It may
+// only throw ConfigError (the CLI's exit code 2), and the message must name the file and a line
+// ("file:line:column: key: what") so that a user can find the mistake; the one exception is an
+// empty file, which has no line to name. tools/fuzz.sh runs it with the shipped scenarios as its
+// seed corpus and scenario_loader.dict (their keys).
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+
+#include "sim/core/config.h"
+#include "sim/core/fuzz/fuzz_support.h"
+#include "sim/scenario/scenario.h"
+
+namespace autonomsim::sim {
+namespace {
+
+// A scratch folder laid out like scenarios/: the shipped tracks and profiles, linked.
+struct ScenarioFolder {
+  ScenarioFolder() {
+    for (const char* shipped : {"tracks", "platforms"}) {
+      std::filesystem::create_directory_symlink(fuzz::SourceDir() / "scenarios" / shipped,
+                                                dir.path() / shipped);
+    }
+  }
+  fuzz::ScratchDir dir;
+};
+
+}  // namespace
+}  // namespace autonomsim::sim
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace autonomsim::sim;
+  static const ScenarioFolder folder;
+  const std::filesystem::path file = folder.dir.Write("fuzz.yaml", data, size);
+  try {
+    LoadScenario(file);
+  } catch (const ConfigError& e) {
+    if (!fuzz::SaysWhere(e.what(), file.string())) {
+      fuzz::Finding("a scenario error that names no file and line", e.what());
+    }
+  }
+  return 0;
+}

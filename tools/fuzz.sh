@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]] (default 60 s, every target): builds the libFuzzer
+# targets (preset fuzz: clang, AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds
+# their corpora from the shipped files, and runs each for SECONDS_PER_TARGET. Prints the
+# executions per target; exits 1 when any target finds something (a crash, a sanitizer report, a
+# hang over 10 s, over 2 GB of memory, or an error message that does not say where), with its
+# input in build-fuzz/artifacts/. Corpora grow in build-fuzz/corpus/<target>/ from run to run.
+# Naming targets builds and runs only those. README "Fuzzing" says more.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+usage="usage: tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]"
+seconds="${1:-60}"
+[[ $seconds =~ ^[1-9][0-9]*$ ]] || { echo "$usage" >&2; exit 2; }
+shift $(($# > 0 ? 1 : 0))
+wanted=("$@")
+
+tools/install_deps.sh
+tools/reset_stale_build.sh build-fuzz
+# AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, as in test.sh.
+cmake --preset fuzz -DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}" >/dev/null
+
+build=build-fuzz
+artifacts=$build/artifacts
+mkdir -p "$artifacts" "$build/tmp" "$build/logs"
+# The file-reading targets write their input into a folder of their own under $TMPDIR.
+export TMPDIR=$PWD/$build/tmp
+export UBSAN_OPTIONS=print_stacktrace=1
+
+# Every key a config struct lists in its Describe (the scenario, track and profile schema).
+dict=$build/config_keys.dict
+git ls-files -- '*.h' | xargs grep -ohE '\bv\("[a-z_0-9]+"' | sed -E 's/^v\((.*)/\1/' |
+  sort -u >"$dict"
+
+# seed_lines FILE DIR: one seed file in DIR per line of FILE (# lines are comments).
+seed_lines() {
+  local n=0 line
+  while IFS= read -r line; do
+    [[ -z $line || $line == '#'* ]] && continue
+    n=$((n + 1))
+    printf '%s' "$line" >"$2/seed-$n"
+  done <"$1"
+}
+
+# target|seeds|dictionary: seeds are a .seeds file (one a line) or shipped files.
+targets=(
+  "scenario_loader_fuzz|scenarios/*.yaml|$dict"
+  "track_loader_fuzz|scenarios/tracks/*.yaml|$dict"
+  "set_override_fuzz|sim/core/fuzz/set_override.seeds|$dict"
+  "vtl_codec_fuzz|world/fuzz/vtl_codec.seeds|"
+  "lockstep_decode_fuzz|sim/mqtt/fuzz/lockstep_decode.seeds|sim/mqtt/fuzz/lockstep_decode.dict"
+)
+
+# the targets asked for, or all
+selected=()
+if ((${#wanted[@]} == 0)); then selected=("${targets[@]}"); fi
+for name in "${wanted[@]}"; do
+  found=""
+  for entry in "${targets[@]}"; do [[ ${entry%%|*} == "$name" ]] && found=$entry; done
+  [[ -n $found ]] || { echo "tools/fuzz.sh: no target '$name'; $usage" >&2; exit 2; }
+  selected+=("$found")
+done
+build_targets=()
+for entry in "${selected[@]}"; do build_targets+=("${entry%%|*}"); done
+cmake --build --preset fuzz -j "$(nproc)" --target "${build_targets[@]}"
+
+failed=()
+for entry in "${selected[@]}"; do
+  IFS='|' read -r target seeds dictionary <<<"$entry"
+  corpus=$build/corpus/$target
+  mkdir -p "$corpus"
+  if [[ $seeds == *.seeds ]]; then
+    seed_lines "$seeds" "$corpus"
+  else
+    cp $seeds "$corpus/"  # a glob, unquoted on purpose
+  fi
+  args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+        -artifact_prefix="$artifacts/$target-")
+  [[ -n $dictionary ]] && args+=(-dict="$dictionary")
+  log=$build/logs/$target.log
+  status=0
+  "$build/bin/$target" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+  runs=$(sed -nE 's/^stat::number_of_executed_units: *([0-9]+).*/\1/p' "$log" | tail -1)
+  if ((status == 0)); then
+    echo "fuzz: $target: ${runs:-?} executions in ${seconds} s, corpus $(ls "$corpus" | wc -l)" \
+         "inputs, no finding"
+  else
+    echo "fuzz: $target: FINDING after ${runs:-?} executions (exit $status); log $log:" >&2
+    grep -vE '^(#[0-9]|INFO:|	NEW_FUNC)' "$log" | tail -40 >&2
+    failed+=("$target")
+  fi
+done
+
+if ((${#failed[@]} > 0)); then
+  echo "fuzz: findings in ${failed[*]}; their inputs are in $artifacts/" >&2
+  exit 1
+fi
+echo "fuzz: no findings"
