@@ -175,13 +175,28 @@ struct ScenarioSite {
   const ConfigSource& source;
 };
 
+// A file a scenario names (its track, a board's profile), relative to the scenario's folder; if it
+// is not there, relative to the shipped scenarios/ folder, so that a scenario copied anywhere still
+// finds tracks/lab.yaml and platforms/zcu104.yaml. An absolute path is taken as it is.
+std::filesystem::path ResolveScenarioFile(const std::filesystem::path& folder,
+                                          const std::string& name) {
+  namespace fs = std::filesystem;
+  const fs::path given(name);
+  const fs::path local = folder / given;
+  if (given.is_absolute() || fs::exists(local)) return local;
+  const fs::path shipped = fs::path(AUTONOMSIM_SCENARIOS_DIR) / given;
+  if (!name.empty() && fs::exists(shipped)) return shipped;
+  throw ConfigError(local.string() + ": no such file (nor " + shipped.string() +
+                    " among the shipped ones)");
+}
+
 // The track the scenario names (relative to its folder). An error of the track file's own (a
 // missing file, a bad key in it) is reported at the scenario's `track:` too: the track file's
 // name alone does not say which scenario line chose it.
 world::Track LoadScenarioTrack(const Scenario& scenario, const std::filesystem::path& folder,
                                const ScenarioSite& site) {
   try {
-    return LoadTrack(folder / scenario.track);
+    return LoadTrack(ResolveScenarioFile(folder, scenario.track));
   } catch (const ConfigError& e) {
     FailAt(site.root, site.source, {"track"}, e.what());
   }
@@ -249,7 +264,7 @@ ResolvedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Tra
   }
   if (car.has_board()) {
     try {
-      resolved.profile = LoadPlatformProfile(folder / car.platform.profile);
+      resolved.profile = LoadPlatformProfile(ResolveScenarioFile(folder, car.platform.profile));
     } catch (const ConfigError& e) {
       FailAt(site.root, site.source, {"cars", i, "platform", "profile"}, e.what());
     }

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "sim/mqtt/mqtt_process.h"  // TempDir
+
 namespace autonomsim::sim {
 namespace {
 
@@ -189,8 +191,7 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "tracks/lab.yaml", "tracks/nope.yaml"),
                    {},
                    // issue 15 (fuzzing): once without the scenario's file, line and key
-                   {F("missing_track") + ":4:8: track: scenarios/tracks/nope.yaml: cannot open "
-                                         "file"}},
+                   {F("missing_track") + ":4:8: track: scenarios/tracks/nope.yaml: no such file"}},
         BrokenCase{
             "set_unknown_key",
             kValid,
@@ -246,6 +247,24 @@ INSTANTIATE_TEST_SUITE_P(
                    {"cars[0].driver=stack"},
                    {"cars[0]", "set perception.enabled: true"}}),
     [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
+
+// Issue 15: a scenario kept outside scenarios/ finds the shipped track and profile.
+TEST(ScenarioTest, AScenarioAnywhereFindsTheShippedTrackAndProfile) {
+  const TempDir dir("scenario_test_");
+  const fs::path file = dir.path() / "mine.yaml";
+  std::ofstream(file) << kValid;
+  const LoadedScenario loaded =
+      LoadScenario(file, {"cars[0].perception.enabled=true", "duration_s=5"});
+  EXPECT_EQ(loaded.routes.size(), 2u);
+  EXPECT_TRUE(loaded.profiles[0].has_value());
+  try {
+    LoadScenario(file, {"track=tracks/nope.yaml"});
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--set track: "));
+    EXPECT_THAT(e.what(), HasSubstr("/tracks/nope.yaml: no such file (nor "));
+  }
+}
 
 TEST(ScenarioTest, AMissingFileIsAnError) {
   EXPECT_THROW(LoadScenario("scenarios/does_not_exist.yaml"), ConfigError);
