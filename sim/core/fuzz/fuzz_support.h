@@ -18,6 +18,8 @@
 #include <string_view>
 #include <system_error>
 
+#include "sim/core/config.h"  // ConfigError
+
 namespace autonomsim::sim::fuzz {
 
 // The repository the target was built from (autonomsim_fuzzer in cmake/autonomsim.cmake).
@@ -79,6 +81,17 @@ inline bool NamesFileAndLine(std::string_view message, std::string_view file) {
 // whole file when it is empty (there is no line to name).
 inline bool SaysWhere(std::string_view message, const std::string& file) {
   return NamesFileAndLine(message, file) || message == file + ": the file is empty";
+}
+
+// Loads `file` with `load` (a loader: LoadTrack, LoadScenario); its ConfigError must say where
+// (SaysWhere), else a finding named `what`. ConfigError is the loaders' one documented error.
+template <class Load>
+void LoadSayingWhere(Load load, const std::filesystem::path& file, std::string_view what) {
+  try {
+    load(file);
+  } catch (const ConfigError& e) {
+    if (!SaysWhere(e.what(), file.string())) Finding(what, e.what());
+  }
 }
 
 }  // namespace autonomsim::sim::fuzz

@@ -14,12 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace autonomsim::sim;
   static const fuzz::ScratchDir scratch;
   const std::filesystem::path file = scratch.Write("track.yaml", data, size);
-  try {
-    LoadTrack(file);
-  } catch (const ConfigError& e) {
-    if (!fuzz::SaysWhere(e.what(), file.string())) {
-      fuzz::Finding("a track error that names no file and line", e.what());
-    }
-  }
+  fuzz::LoadSayingWhere([](const auto& f) { LoadTrack(f); }, file,
+                        "a track error that names no file and line");
   return 0;
 }

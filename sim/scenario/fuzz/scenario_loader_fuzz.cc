@@ -33,12 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace autonomsim::sim;
   static const ScenarioFolder folder;
   const std::filesystem::path file = folder.dir.Write("fuzz.yaml", data, size);
-  try {
-    LoadScenario(file);
-  } catch (const ConfigError& e) {
-    if (!fuzz::SaysWhere(e.what(), file.string())) {
-      fuzz::Finding("a scenario error that names no file and line", e.what());
-    }
-  }
+  fuzz::LoadSayingWhere([](const auto& f) { LoadScenario(f); }, file,
+                        "a scenario error that names no file and line");
   return 0;
 }
