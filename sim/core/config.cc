@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <unordered_set>
 #include <array>
 #include <cctype>
 #include <fstream>
@@ -374,6 +375,54 @@ std::vector<std::string> ParseOverridePath(const std::string& key) {
   if (tokens.empty()) throw bad("empty key");
   if (expect_name) throw bad("the path ends with '.'");
   return tokens;
+}
+
+namespace {
+
+// `node`, or a copy of it if an earlier part of the walk reached the same node (an alias), with
+// the same done for everything inside. A map's entry that changes is removed and added again (a
+// node assigned in place would change every alias of it); a sequence with a changed element is
+// built anew. Nodes are told apart by where they start in the file: every node of a freshly
+// parsed file starts at its own position, and an alias is the anchored node itself (copies have
+// no position and are never shared).
+YAML::Node Unshared(YAML::Node node, std::unordered_set<int>* seen) {
+  const int at = node.Mark().pos;
+  const bool shared = at >= 0 && !seen->insert(at).second;
+  YAML::Node result = shared ? YAML::Clone(node) : node;
+  if (result.IsMap()) {
+    std::vector<YAML::Node> keys;
+    for (const auto& entry : result) keys.push_back(entry.first);
+    for (const YAML::Node& key : keys) {
+      YAML::Node child = result[key];
+      YAML::Node fresh = Unshared(child, seen);
+      if (!fresh.is(child)) {
+        result.remove(key);
+        result[key] = fresh;
+      }
+    }
+  } else if (result.IsSequence()) {
+    std::vector<YAML::Node> items;
+    bool changed = false;
+    for (std::size_t i = 0; i < result.size(); ++i) {
+      YAML::Node child = result[i];
+      items.push_back(Unshared(child, seen));
+      changed = changed || !items.back().is(child);
+    }
+    if (changed) {
+      YAML::Node rebuilt(YAML::NodeType::Sequence);
+      for (const YAML::Node& item : items) rebuilt.push_back(item);
+      return rebuilt;
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+void BreakAliases(YAML::Node& root) {
+  std::unordered_set<int> seen;
+  YAML::Node fresh = Unshared(root, &seen);
+  if (!fresh.is(root)) root.reset(fresh);
 }
 
 void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source) {

@@ -47,6 +47,12 @@ YAML::Node LoadYamlFile(const std::filesystem::path& file);
 // reader then rejects those the schema does not know); list indices must exist. Records the path in
 // source.
 void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source);
+// Gives every place an alias (*name) refers to its own copy of the anchored value, so that an
+// override or a preset of one place (cars[1].stack...) leaves the others (cars[0].stack, anchored
+// `&stack`) as the file wrote them. yaml-cpp shares an anchored node among its aliases, and
+// assigning into one changes all of them. Call it on a freshly loaded root, before overrides.
+// A copy keeps the values but not their line numbers.
+void BreakAliases(YAML::Node& root);
 // The tokens of a --set key path: names, and list indices (as digits). ConfigError naming the key
 // for anything but `name(.name|[N])*`.
 std::vector<std::string> ParseOverridePath(const std::string& key);

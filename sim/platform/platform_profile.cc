@@ -129,6 +129,7 @@ PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
                                     const std::vector<std::string>& overrides) {
   YAML::Node root = LoadYamlFile(file);
   ConfigSource source{file.string(), {}};
+  BreakAliases(root);
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   return ReadConfig<PlatformProfile>(root, source);
 }

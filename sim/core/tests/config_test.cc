@@ -52,6 +52,7 @@ struct Outer {
 Outer Read(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
   YAML::Node root = YAML::Load(yaml);
   ConfigSource source{"test.yaml", {}};
+  BreakAliases(root);  // as the scenario and profile loaders do
   for (const std::string& o : overrides) ApplyOverride(root, o, &source);
   return ReadConfig<Outer>(root, source);
 }
@@ -123,6 +124,21 @@ TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
   EXPECT_THAT(ErrorOf("{}", {"flag.x=1"}),
               HasSubstr("--set flag.x: flag: expected true or false"));
   EXPECT_THAT(ErrorOf("flag: true\n", {"flag.x=1"}), HasSubstr("'flag' is not a mapping"));
+}
+
+// Issue 16: yaml-cpp shares an anchored node with its aliases; an override of one alias (a sweep's
+// cars[1].stack...) changed every car that used the anchor.
+TEST(ConfigTest, AnOverrideOfOneAliasLeavesTheAnchorAndTheOtherAliasesAlone) {
+  const std::string text = "items: [&i {gain: 2}, *i, *i]\nnamed: {a: &n {gain: 3}, b: *n}\n";
+  const Outer o = Read(text, {"items[1].gain=5", "named.b.gain=7"});
+  ASSERT_EQ(o.items.size(), 3u);
+  EXPECT_EQ(o.items[0].gain, 2.0);
+  EXPECT_EQ(o.items[1].gain, 5.0);
+  EXPECT_EQ(o.items[2].gain, 2.0);
+  EXPECT_EQ(o.named.at("a").gain, 3.0);
+  EXPECT_EQ(o.named.at("b").gain, 7.0);
+  // and a bad value in the anchor is still reported at its line
+  EXPECT_THAT(ErrorOf("items: [&i {gain: -1}, *i]\n"), HasSubstr("test.yaml:1:"));
 }
 
 // Issue 15: paths the override parser once let through, or answered with a library's message.
