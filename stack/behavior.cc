@@ -119,11 +119,16 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 }
 
 bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
-                   const world::Vec2& p_map) {
+                   const world::Vec2& p_map, double margin_m) {
+  auto within = [&](const world::Box& box) {
+    if (margin_m <= 0.0) return box.Contains(p_map);
+    return p_map.x() > box.x_min_m - margin_m && p_map.x() < box.x_max_m + margin_m &&
+           p_map.y() > box.y_min_m - margin_m && p_map.y() < box.y_max_m + margin_m;
+  };
   for (const world::IntersectionSpec& i : intersections) {
-    if (i.area.Contains(p_map)) return true;
+    if (within(i.area)) return true;
     for (const world::Box& zone : i.stop_zones) {
-      if (zone.Contains(p_map)) return true;
+      if (within(zone)) return true;
     }
   }
   return false;

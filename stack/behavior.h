@@ -101,8 +101,8 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 
 // Which controller the controller server runs (reference §6, /controller_selector): FollowPath
 // inside an intersection's area or stop zones (strict boxes, as the real cars test them),
-// LaneController elsewhere.
+// LaneController elsewhere. With margin_m > 0 (beyond the lab's), also within margin_m of a box.
 bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
-                   const world::Vec2& p_map);
+                   const world::Vec2& p_map, double margin_m = 0.0);
 
 }  // namespace autonomsim::stack

@@ -29,7 +29,8 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   state->stopped = false;
 
   // select and drive
-  const bool follow = UseFollowPath(intersections, input.X_map_base.position());
+  const bool follow =
+      UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
   out.controller = follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
   Twist twist;
   bool collision = false;

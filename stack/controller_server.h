@@ -38,6 +38,9 @@ namespace autonomsim::stack {
 struct ControllerServerParams {
   LaneControllerParams lane_controller;
   PathFollowerParams follow_path;
+  // Beyond the lab's /controller_selector (0: its strict boxes): FollowPath also within this
+  // distance of an intersection's area and stop zones (stack.controller_selector.zone_margin_m).
+  double zone_margin_m{0.0};
 
   void Validate() const;
 };

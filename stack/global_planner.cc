@@ -52,6 +52,8 @@ void GlobalPlannerParams::Validate() const {
   Require(std::isfinite(cost_travel_multiplier) && cost_travel_multiplier >= 0.0,
           "cost_travel_multiplier must be >= 0, got " + Num(cost_travel_multiplier));
   Require(max_expansions > 0, "max_expansions must be > 0, got " + Num(max_expansions));
+  Require(start_escape_m >= 0.0 && start_escape_m <= 2.0,
+          "start_escape_m must be in [0, 2] m, got " + Num(start_escape_m));
 }
 
 std::string ToString(PlanStatus status) {
@@ -92,9 +94,18 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   const int start_index = static_cast<int>(costmap.Index(start_cell->mx, start_cell->my));
   const int goal_index = static_cast<int>(costmap.Index(goal_cell->mx, goal_cell->my));
 
+  const double escape_cells_sq = (params.start_escape_m / resolution_m) *
+                                 (params.start_escape_m / resolution_m);
+  auto near_start = [&](int i) {
+    const double dx = i % nx - static_cast<int>(start_cell->mx);
+    const double dy = i / nx - static_cast<int>(start_cell->my);
+    return dx * dx + dy * dy <= escape_cells_sq;
+  };
   auto traversable = [&](int i) {
     const std::uint8_t c = costs[i];
-    return c == kNoInformation ? params.allow_unknown : c < kInscribedInflatedObstacle;
+    if (c == kNoInformation) return params.allow_unknown;
+    return c < kInscribedInflatedObstacle ||
+           (c == kInscribedInflatedObstacle && params.start_escape_m > 0.0 && near_start(i));
   };
   auto heuristic_m = [&](int mx, int my) {
     const double dx = mx - goal_cell->mx;

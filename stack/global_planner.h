@@ -39,6 +39,11 @@ struct GlobalPlannerParams {
   // assumed: a bound on expanded cells like Smac's max_iterations (default 1000000); the lab's
   // 100 × 100 costmap never comes near it.
   int max_expansions{1000000};
+  // Beyond Smac (0: Smac, the lab's): cells within this distance of the start may be INSCRIBED
+  // (not LETHAL), so a car whose centre came within its inscribed radius of a painted island (a
+  // filled obstacle of the static map) can plan its way out instead of failing until the
+  // navigation gives up. stack.preset: safe sets 0.3 m (assumed: two car half-widths).
+  double start_escape_m{0.0};
 
   template <class V>
   void Describe(V& v) {
@@ -46,6 +51,7 @@ struct GlobalPlannerParams {
     v("cost_travel_multiplier", cost_travel_multiplier);
     v("allow_unknown", allow_unknown);
     v("max_expansions", max_expansions);
+    v("start_escape_m", start_escape_m);
   }
   void Validate() const;
 };

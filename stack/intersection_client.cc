@@ -103,13 +103,31 @@ IntersectionClientOutput StepIntersectionClient(
     s.phase = Phase::kIdle;
     s.intersection = -1;
     s.crossed = false;
+    s.held = false;
   };
+
+  if (s.retired) return out;
+  if (input.navigation_failed && params.release_on_failure) {
+    // A car that died inside an intersection's area blocks it: it keeps its grant alive rather
+    // than let the next car drive into it.
+    const world::IntersectionSpec* held =
+        s.phase == Phase::kIdle ? nullptr : Find(intersections, s.intersection);
+    if (held == nullptr || !ContainsClosed(held->area, input.p_map)) {
+      if (s.phase != Phase::kIdle) send_free();
+      go_idle();
+      s.retired = true;
+      return out;
+    }
+  }
 
   // responses: a response names no intersection, so it answers the pending one
   for (const world::Response& response : input.responses) {
     if (response.car != car_id) continue;
     if (response.granted) {
-      if (s.phase == Phase::kWaiting) s.phase = Phase::kHolding;
+      if (s.phase == Phase::kWaiting) {
+        s.phase = Phase::kHolding;
+        s.held = false;
+      }
       if (s.phase == Phase::kIdle) send_free();  // a grant we no longer want
     } else if (s.phase == Phase::kHolding) {
       s.phase = Phase::kWaiting;  // the server let our lease lapse and queued our keepalive
@@ -131,7 +149,7 @@ IntersectionClientOutput StepIntersectionClient(
     } else {
       const Duration period =
           s.phase == Phase::kHolding ? params.keepalive_period : params.retry_period;
-      if (input.now - s.last_request_sent >= period) send_request();
+      if (params.re_request && input.now - s.last_request_sent >= period) send_request();
     }
   }
   if (s.phase == Phase::kIdle) {
@@ -146,7 +164,9 @@ IntersectionClientOutput StepIntersectionClient(
   if (s.phase == Phase::kWaiting) {
     out.waiting_for = s.intersection;
     const world::IntersectionSpec* spec = Find(intersections, s.intersection);
-    out.may_proceed = !(spec != nullptr && InStopZoneClosed(*spec, input.p_map));
+    const bool in_zone = spec != nullptr && InStopZoneClosed(*spec, input.p_map);
+    if (params.latch_wait && in_zone) s.held = true;
+    out.may_proceed = !(in_zone || s.held);
   }
   return out;
 }

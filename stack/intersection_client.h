@@ -1,7 +1,20 @@
 // The car's side of the /vtl/ protocol (reference §7: vehicle communication + intersection_checker)
-// as a pure step, run every tick_period on the car's estimated position. One improvement over the
-// original client, which requested once and then waited forever: it asks again after a denial or a
-// lost message, and keeps a held intersection alive against the server's lease.
+// as a pure step, run every tick_period on the car's estimated position. Where it departs from the
+// lab's client, a parameter says so and its other value is the lab's behaviour (stack.preset: lab
+// selects all of them, README "The lab's stack and its fixes"):
+//   re_request          the original requests once and then waits forever; ours asks again after
+//                       a denial or a lost message and keeps a held intersection alive against
+//                       the server's lease;
+//   release_margin_m,   the original frees on the first tick outside the boxes (margins 0);
+//   exit_margin_m
+//   latch_wait          the original lets the car go whenever its estimate is outside the stop
+//                       zone, so a waiting car whose estimate jitters across the zone's edge
+//                       creeps forward tick by tick; latched, a car held in a stop zone stays
+//                       held until it is granted;
+//   release_on_failure  the original client runs on when the car's navigation has failed; with
+//                       it, a car that can no longer drive frees what it holds and asks no more
+//                       (unless it stands inside the intersection's area, which it blocks: then
+//                       it keeps its grant alive).
 //
 // State machine (one intersection at a time: a response names no intersection, so it answers the
 // one pending request; a free names none either, so it releases everything the car holds):
@@ -16,6 +29,9 @@
 //                  by exit_margin_m after)
 //   kHolding(i)  --"<car>0" (grant lost: lease expired)----------> kWaiting(i)
 //   kIdle        --"<car>1" (late or stale grant)-----------------> kIdle       send Free
+//   any          --navigation failed (release_on_failure)---------> retired     send Free if
+//                                                    not kIdle (in the area: keeps its grant)
+// Without re_request, the two re-request transitions never fire.
 // Responses are applied first, in arrival order, then the position. Entering a stop zone uses the
 // real cars' strict Box::Contains; being still in i (stop zone or area) uses the closed boxes, so
 // a car sampled exactly on the edge a stop zone shares with its area (lab: y = -0.6) neither frees
@@ -56,6 +72,12 @@ struct IntersectionClientParams {
   // seeds of the default scenario broke intersection_mutex that way). Costs ≈ 0.6 s of lease
   // at 0.25 m/s.
   double exit_margin_m{0.15};
+  // Assumed, beyond the lab's client (which never re-asks, reference §7): retry and keepalive.
+  bool re_request{true};
+  // Beyond the lab's client: once held in a stop zone, stay held until granted (see above).
+  bool latch_wait{false};
+  // Beyond the lab's client: a car whose navigation failed frees its intersection and retires.
+  bool release_on_failure{false};
 
   template <class V>
   void Describe(V& v) {
@@ -64,6 +86,9 @@ struct IntersectionClientParams {
     v("keepalive_period_s", keepalive_period);
     v("release_margin_m", release_margin_m);
     v("exit_margin_m", exit_margin_m);
+    v("re_request", re_request);
+    v("latch_wait", latch_wait);
+    v("release_on_failure", release_on_failure);
   }
   void Validate() const;
 };
@@ -78,6 +103,7 @@ struct IntersectionClientInput {
   // Every /vtl/response broadcast received since the last step, in arrival order; other cars'
   // responses are ignored.
   std::vector<world::Response> responses;
+  bool navigation_failed{false};  // the car's navigation gave up (behaviour mode `failed`)
 };
 
 struct IntersectionClientOutput {
@@ -95,6 +121,8 @@ struct IntersectionClientState {
   int intersection{-1};               // the one waited for or held; -1 in kIdle
   Time last_request_sent{kZeroTime};  // when the last Request for `intersection` went out
   bool crossed{false};                // has been inside `intersection`'s area
+  bool held{false};     // latch_wait: was held in a stop zone while waiting for `intersection`
+  bool retired{false};  // release_on_failure: the navigation failed; nothing more is sent
 };
 
 // car_id must be 0..9 (std::invalid_argument otherwise). `intersections` are the track's, in

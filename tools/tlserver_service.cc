@@ -266,6 +266,8 @@ std::vector<MqttMessage> Service::Outputs(const std::vector<world::Response>& re
                                           const sim::StepTag* tag) {
   std::vector<MqttMessage> out;
   sim::SimAck ack;
+  // taken after every step, lock-step or not, so that the log never grows
+  ack.records = server_.TakeRecords();
   for (std::size_t i = 0; i < responses.size(); ++i) {
     MqttMessage m{.topic = std::string(world::kVtlResponseTopic),
                   .payload = world::Encode(responses[i])};

@@ -1,6 +1,7 @@
 #include "world/traffic_light_server.h"
 
 #include <algorithm>
+#include <utility>
 #include <stdexcept>
 
 namespace autonomsim::world {
@@ -35,7 +36,7 @@ TrafficLightServer::TrafficLightServer(TrafficLightServerParams params,
   }
   for (int id : intersection_ids) {
     CheckId(id, "intersection");
-    if (!slots_.emplace(id, Slot{}).second) {
+    if (!slots_.emplace(id, Slot{.id = id}).second) {
       throw std::invalid_argument("intersection id " + std::to_string(id) + " is repeated");
     }
   }
@@ -59,6 +60,7 @@ void TrafficLightServer::GrantHeadIfFree(Slot* slot, std::vector<Response>* out)
   slot->holder = slot->queue.front();
   slot->queue.pop_front();
   ++counters_.grants;
+  records_.push_back({ServerRecord::Kind::kGrant, *slot->holder, slot->id});
   out->push_back(Response{*slot->holder, true});
 }
 
@@ -71,12 +73,14 @@ void TrafficLightServer::Expire(Time now, std::vector<Response>* out) {
     std::erase_if(slot.queue, [&](int car) {
       if (!IsDead(slot, car, now)) return false;
       slot.last_request.erase(car);
+      records_.push_back({ServerRecord::Kind::kQueueDrop, car, slot.id});
       return true;
     });
     counters_.queue_drops += before - slot.queue.size();
   }
   for (auto& [id, slot] : slots_) {
     if (slot.holder && IsDead(slot, *slot.holder, now)) {
+      records_.push_back({ServerRecord::Kind::kLeaseExpired, *slot.holder, id});
       slot.last_request.erase(*slot.holder);
       slot.holder.reset();
       ++counters_.lease_expiries;
@@ -92,11 +96,13 @@ std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& req
   std::vector<Response> out;
   Expire(now, &out);
   ++counters_.requests;
+  records_.push_back({ServerRecord::Kind::kRequest, request.car, request.intersection});
 
   auto it = slots_.find(request.intersection);
   if (it == slots_.end()) {
     ++counters_.unknown_intersection;
     ++counters_.denials;
+    records_.push_back({ServerRecord::Kind::kDenied, request.car, request.intersection});
     out.push_back(Response{request.car, false});
     return out;
   }
@@ -106,6 +112,7 @@ std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& req
     // Invariant: a free slot has an empty queue (every release grants the head at once).
     slot.holder = request.car;
     ++counters_.grants;
+    records_.push_back({ServerRecord::Kind::kGrant, request.car, request.intersection});
     out.push_back(Response{request.car, true});
   } else if (*slot.holder == request.car) {
     out.push_back(Response{request.car, true});  // renewal
@@ -114,6 +121,7 @@ std::vector<Response> TrafficLightServer::OnRequest(Time now, const Request& req
       slot.queue.push_back(request.car);
     }
     ++counters_.denials;
+    records_.push_back({ServerRecord::Kind::kDenied, request.car, request.intersection});
     out.push_back(Response{request.car, false});
   }
   return out;
@@ -125,6 +133,17 @@ std::vector<Response> TrafficLightServer::OnFree(Time now, const Free& free) {
   std::vector<Response> out;
   Expire(now, &out);
   ++counters_.frees;
+  // the free's record goes before the grants it causes
+  ServerRecord record{ServerRecord::Kind::kFree, free.car, -1};
+  for (const auto& [id, slot] : slots_) {
+    if (slot.holder != free.car) continue;
+    if (record.intersection < 0) {
+      record.intersection = id;
+    } else {
+      record.also_released.push_back(id);
+    }
+  }
+  records_.push_back(std::move(record));
   for (auto& [id, slot] : slots_) {
     std::erase(slot.queue, free.car);
     slot.last_request.erase(free.car);
@@ -141,6 +160,37 @@ std::vector<Response> TrafficLightServer::OnTick(Time now) {
   std::vector<Response> out;
   Expire(now, &out);
   return out;
+}
+
+std::vector<ServerRecord> TrafficLightServer::TakeRecords() {
+  std::vector<ServerRecord> taken;
+  taken.swap(records_);
+  return taken;
+}
+
+namespace {
+constexpr std::array<std::pair<ServerRecord::Kind, const char*>, 6> kRecordNames{{
+    {ServerRecord::Kind::kRequest, "request"},
+    {ServerRecord::Kind::kFree, "free"},
+    {ServerRecord::Kind::kGrant, "grant"},
+    {ServerRecord::Kind::kDenied, "denied"},
+    {ServerRecord::Kind::kLeaseExpired, "lease_expired"},
+    {ServerRecord::Kind::kQueueDrop, "queue_drop"},
+}};
+}  // namespace
+
+const char* ToString(ServerRecord::Kind kind) {
+  for (const auto& [k, name] : kRecordNames) {
+    if (k == kind) return name;
+  }
+  return "?";
+}
+
+std::optional<ServerRecord::Kind> ServerRecordKindFromString(const std::string& name) {
+  for (const auto& [k, n] : kRecordNames) {
+    if (name == n) return k;
+  }
+  return std::nullopt;
 }
 
 std::optional<Time> TrafficLightServer::NextDeadline() const {

@@ -58,6 +58,22 @@ struct TrafficLightServerParams {
   void Validate() const;
 };
 
+// What the server did, one entry per counted action, in order: the run's `request`, `free`,
+// `grant`, `denied`, `lease_expired` and `queue_drop` events (sim/scenario/run_record.h), so the
+// events add up to the counters. A renewal (a holder's request answered "<car>1" again) is a
+// request, not a grant. A free names the intersection it released (-1: none; the lowest when it
+// released several, the others in `also_released`).
+struct ServerRecord {
+  enum class Kind { kRequest, kFree, kGrant, kDenied, kLeaseExpired, kQueueDrop };
+  Kind kind{Kind::kRequest};
+  int car{-1};
+  int intersection{-1};
+  std::vector<int> also_released;  // kFree only
+  friend bool operator==(const ServerRecord&, const ServerRecord&) = default;
+};
+const char* ToString(ServerRecord::Kind kind);  // "request", "free", ... as the events name them
+std::optional<ServerRecord::Kind> ServerRecordKindFromString(const std::string& name);
+
 class TrafficLightServer {
  public:
   struct Counters {
@@ -90,10 +106,13 @@ class TrafficLightServer {
   std::optional<int> Holder(int intersection) const;
   std::vector<int> Queue(int intersection) const;
   Counters counters() const { return counters_; }
+  // The records since the last call, oldest first (see ServerRecord).
+  std::vector<ServerRecord> TakeRecords();
   const TrafficLightServerParams& params() const { return params_; }
 
  private:
   struct Slot {
+    int id{-1};  // the intersection's
     std::optional<int> holder;
     std::deque<int> queue;  // waiting cars, head first; never holds the holder or a duplicate
     // per car (holder and queued): its last request for this intersection
@@ -110,6 +129,7 @@ class TrafficLightServer {
   std::map<int, Slot> slots_;  // ordered by id: iteration order is output order
   std::optional<Time> last_now_;
   Counters counters_;
+  std::vector<ServerRecord> records_;
 };
 
 }  // namespace autonomsim::world

@@ -11,6 +11,12 @@ void PoseFixConfig::Validate() const {
   if (!(yaw_stddev_rad >= 0.0)) throw std::invalid_argument("yaw_stddev_rad must be >= 0");
 }
 
+void ControllerSelectorConfig::Validate() const {
+  if (!(zone_margin_m >= 0.0 && zone_margin_m <= 1.0)) {
+    throw std::invalid_argument("zone_margin_m must be in [0, 1] m");
+  }
+}
+
 void StackConfig::Validate() const {
   if (planner_period <= kZeroTime) throw std::invalid_argument("planner_period_s must be > 0");
   if (controller_period <= kZeroTime) {

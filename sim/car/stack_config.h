@@ -4,10 +4,13 @@
 #pragma once
 
 #include <chrono>
+#include <optional>
+#include <string>
 
 #include "stack/behavior.h"
 #include "stack/costmap.h"
 #include "stack/cruise_control.h"
+#include "stack/emergency_stop.h"
 #include "stack/global_planner.h"
 #include "stack/lane_controller.h"
 #include "stack/localization_ekf.h"
@@ -35,6 +38,23 @@ struct PoseFixConfig {
   void Validate() const;
 };
 
+// Where the controller server runs FollowPath instead of the LaneController (reference §6:
+// /controller_selector, inside the intersections' boxes).
+struct ControllerSelectorConfig {
+  // Beyond the lab's (0: the strict boxes). A car that stopped mid-turn in a stop box at a corner
+  // (the inner lane's, at both intersections) and restarts across it leaves the box sideways,
+  // where the LaneController follows whatever lane its camera sees; within this margin of the
+  // boxes it keeps following its plan. stack.preset: safe sets 0.3 m (assumed: about the car's
+  // width beyond the box).
+  double zone_margin_m{0.0};
+
+  template <class V>
+  void Describe(V& v) {
+    v("zone_margin_m", zone_margin_m);
+  }
+  void Validate() const;  // in [0, 1] m
+};
+
 // The actuator command topic: where the end-to-end latency from the sensor stamp is measured.
 inline constexpr const char* kCarCommandTopic = "/carcontrol/command";
 
@@ -51,10 +71,17 @@ struct StackConfig {
   Duration controller_period{Milliseconds(50)};  // reference §6: controller server at 20 Hz
   stack::LaneControllerParams lane_controller;
   stack::PathFollowerParams follow_path;
+  ControllerSelectorConfig controller_selector;
   stack::CruiseControlParams cruise_control;
+  // Beyond the lab's stack: the ultrasonic ranger stops the car (stack/emergency_stop.h).
+  stack::EmergencyStopParams emergency_stop;
+  // "lab" or "safe": fills every option that departs from the lab's code (the struct's and the
+  // car's intersection_client) that the scenario does not set (sim/scenario/stack_presets.h).
+  std::optional<std::string> preset;
 
   template <class V>
   void Describe(V& v) {
+    v("preset", preset);
     v("localization", localization);
     v("pose_fix", pose_fix);
     v("behavior", behavior);
@@ -66,7 +93,9 @@ struct StackConfig {
     v("controller_period_s", controller_period);
     v("lane_controller", lane_controller);
     v("follow_path", follow_path);
+    v("controller_selector", controller_selector);
     v("cruise_control", cruise_control);
+    v("emergency_stop", emergency_stop);
   }
   void Validate() const;
 };

@@ -24,6 +24,9 @@ struct PathMessage {  // /plan, in the map frame
 struct IntersectionFree {  // /intersection_free
   bool free{true};
 };
+struct EmergencyCall {  // /emergency (the carcontroller's SetBool service, as a topic)
+  bool stop{false};
+};
 // /cmd_vel carries stack::Twist, /controller/status stack::ControllerStatus.
 
 // Message types and sizes (CDR, 4-byte encapsulation header included). Assumed from the ROS 2
@@ -202,21 +205,33 @@ void AddLocalizationNode(NodeGraph& graph, Cache& cache, const StackTopics& topi
                  });
 }
 
-// vehicle_communication: the intersection client every 100 ms on the estimated position.
-void AddVehicleCommunicationNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                                 Duration period,
-                                 std::function<bool(const world::Vec2&)> intersection_client) {
+// vehicle_communication: the intersection client every 100 ms on the estimated position (and,
+// with the client's release_on_failure, on whether the behaviour reported a failed navigation).
+void AddVehicleCommunicationNode(
+    NodeGraph& graph, Cache& cache, const StackTopics& topics, const StackContext& context,
+    std::function<bool(const world::Vec2&, bool)> intersection_client) {
   struct State {
     std::optional<stack::LocalizationEkfOutput> odom;
+    bool navigation_failed{false};
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("vehicle_communication"));
   cache.KeepLatest(node, topics.odometry, state, &State::odom);
+  if (context.intersection_client_watches_navigation) {
+    cache.Keep<stack::BehaviorOutput>(node, topics.behavior,
+                                      [state](const stack::BehaviorOutput& o, Time) {
+                                        if (o.mode == stack::BehaviorMode::kFailed) {
+                                          state->navigation_failed = true;
+                                        }
+                                      });
+  }
   const auto out = graph.AddPublisher(node, topics.intersection_free);
+  const Duration period = context.intersection_client_period;
   graph.AddTimer(node, period, period,
                  [state, out, client = std::move(intersection_client)](Time, Outbox& outbox) {
                    if (!state->odom) return;
-                   const IntersectionFree free{client(state->odom->X_map_base.position())};
+                   const IntersectionFree free{
+                       client(state->odom->X_map_base.position(), state->navigation_failed)};
                    outbox.Publish(out, free, state->odom->stamp);
                  });
 }
@@ -396,8 +411,10 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       [state](const stack::BehaviorOutput& o, Time) { state->hold = o.hold; });
   const auto out = graph.AddPublisher(node, topics.cmd_vel);
   const auto status_out = graph.AddPublisher(node, topics.status);
-  const stack::ControllerServerParams params{.lane_controller = config.lane_controller,
-                                             .follow_path = config.follow_path};
+  const stack::ControllerServerParams params{
+      .lane_controller = config.lane_controller,
+      .follow_path = config.follow_path,
+      .zone_margin_m = config.controller_selector.zone_margin_m};
   graph.AddTimer(
       node, config.controller_period, config.controller_period,
       [state, out, status_out, params, intersections = context.intersections,
@@ -416,11 +433,13 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
 
 // carcontroller: the PID on speed, 30 Hz, with its watchdog (stack/cruise_control.h).
 void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                          const stack::CruiseControlParams& params, const Kernel& kernel) {
+                          const stack::CruiseControlParams& params, const Kernel& kernel,
+                          std::optional<TopicId<EmergencyCall>> emergency) {
   struct State {
     stack::CruiseControlState cruise;
     std::optional<stack::VelocityCommand> command;
     std::optional<stack::OdometrySpeed> odometry;
+    std::optional<bool> set_emergency;
     Time command_stamp{kZeroTime};
   };
   auto state = std::make_shared<State>();
@@ -434,14 +453,24 @@ void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& top
       node, topics.odometry, [state, &kernel](const stack::LocalizationEkfOutput& o, Time) {
         state->odometry = stack::OdometrySpeed{kernel.Now(), o.speed_mps};
       });
+  if (emergency) {
+    cache.Keep<EmergencyCall>(node, *emergency, [state](const EmergencyCall& call, Time) {
+      state->set_emergency = call.stop;
+    });
+  }
   const auto out = graph.AddPublisher(node, topics.command);
   graph.AddTimer(node, params.period, params.period,
                  [state, out, params](Time now, Outbox& outbox) {
                    const stack::CruiseControlOutput r = stack::StepCruiseControl(
-                       params, {.now = now, .command = state->command, .odometry = state->odometry},
+                       params,
+                       {.now = now,
+                        .command = state->command,
+                        .odometry = state->odometry,
+                        .set_emergency = state->set_emergency},
                        &state->cruise);
                    state->command.reset();
                    state->odometry.reset();
+                   state->set_emergency.reset();
                    if (!r.publish) return;  // a stop's zero output goes out once
                    outbox.Publish(out, vehicle::ActuatorCommand{r.throttle, r.curvature_per_m},
                                   state->command_stamp);
@@ -456,6 +485,27 @@ void AddActuatorNode(NodeGraph& graph, const StackTopics& topics,
       node, topics.command,
       [actuate = std::move(actuate)](const vehicle::ActuatorCommand& c, Time, Outbox&) {
         if (actuate) actuate(c);
+      });
+}
+
+// ultrasonic_driver + emergency_stop (stack.emergency_stop.enabled only): each range reading on
+// /ultrasonic; the stop's latch changes go to the carcontroller's /emergency.
+void AddEmergencyStopNodes(NodeGraph& graph, SensorSuite& sensors,
+                           const stack::EmergencyStopParams& params, TopicId<RangeMessage> range,
+                           TopicId<EmergencyCall> emergency) {
+  auto latest = std::make_shared<RangeMessage>();
+  sensors.OnRange([latest](const RangeMessage& m) { *latest = m; });
+  AddSourceNode(graph, SoftwareNode("ultrasonic_driver"), range, sensors.range_stream().first,
+                sensors.range_stream().period, [latest](Time) { return *latest; });
+  const NodeId node = graph.AddNode(SoftwareNode("emergency_stop"));
+  const auto out = graph.AddPublisher(node, emergency);
+  graph.AddSubscription<RangeMessage>(
+      node, range,
+      [params, out, state = std::make_shared<stack::EmergencyStopState>()](
+          const RangeMessage& m, Time stamp, Outbox& outbox) {
+        if (const std::optional<bool> call = stack::StepEmergencyStop(params, m.range_m, state.get())) {
+          outbox.Publish(out, EmergencyCall{*call}, stamp);
+        }
       });
 }
 
@@ -488,14 +538,25 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
   Cache cache(graph);
   AddSensorDrivers(graph, sensors, topics);
   AddLocalizationNode(graph, cache, topics, config, context, std::move(hooks.on_estimate));
-  AddVehicleCommunicationNode(graph, cache, topics, context.intersection_client_period,
-                              std::move(hooks.intersection_client));
+  // the emergency stop's topics come after the stack's, its nodes after the stack's nodes: a car
+  // without it has the same graph as before it existed
+  std::optional<TopicId<RangeMessage>> range;
+  std::optional<TopicId<EmergencyCall>> emergency;
+  if (config.emergency_stop.enabled) {
+    range = Topic<RangeMessage>(graph, sensors.range_stream().topic,
+                                SensorTopicType(sensors.range_stream()));
+    emergency = Topic<EmergencyCall>(graph, "/emergency", BoolType("std_msgs/Bool"));
+  }
+  AddVehicleCommunicationNode(graph, cache, topics, context, std::move(hooks.intersection_client));
   AddBehaviorNode(graph, cache, topics, config.behavior, context.route, hooks);
   AddPlannerNode(graph, cache, topics, config, *context.static_map);
   AddLocalCostmapNode(graph, cache, topics, config, *context.obstacle_grid);
   AddControllerNode(graph, cache, topics, config, context, std::move(hooks.on_control));
-  AddCruiseControlNode(graph, cache, topics, config.cruise_control, kernel);
+  AddCruiseControlNode(graph, cache, topics, config.cruise_control, kernel, emergency);
   AddActuatorNode(graph, topics, std::move(hooks.actuate));
+  if (config.emergency_stop.enabled) {
+    AddEmergencyStopNodes(graph, sensors, config.emergency_stop, *range, *emergency);
+  }
 }
 
 }  // namespace autonomsim::sim

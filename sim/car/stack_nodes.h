@@ -61,6 +61,9 @@ struct StackContext {
   const stack::ObstacleGridParams* obstacle_grid{nullptr};  // the grid's geometry (perception)
   world::Pose2 X_map_odom;  // static map→odom: the start pose (reference §6)
   Duration intersection_client_period{Milliseconds(100)};
+  // Whether the intersection client is told that the navigation failed (its release_on_failure):
+  // vehicle_communication then also subscribes to the behaviour's output.
+  bool intersection_client_watches_navigation{false};
   // For the pose fix (localization.use_pose_fix): the true chassis pose now, and its noise.
   std::function<world::Pose2()> true_pose;
   std::optional<Rng> pose_fix_noise;
@@ -68,9 +71,10 @@ struct StackContext {
 
 // How the stack reaches the car and the simulation around it.
 struct StackHooks {
-  // The intersection client's step on the estimated position; returns may_proceed. It sends its
-  // requests and frees over the V2I link itself.
-  std::function<bool(const world::Vec2& p_map)> intersection_client;
+  // The intersection client's step on the estimated position (and whether the navigation has
+  // failed, as far as the node knows); returns may_proceed. It sends its requests and frees over
+  // the V2I link itself.
+  std::function<bool(const world::Vec2& p_map, bool navigation_failed)> intersection_client;
   // The actuator command, when rt_carcontrol receives it.
   std::function<void(const vehicle::ActuatorCommand&)> actuate;
   // Whether the operator has ended the drive (laps done).

@@ -75,10 +75,13 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
       .obstacle_grid = &config.perception.obstacle_grid,
       .X_map_odom = agent->car->pose(),  // the start pose
       .intersection_client_period = config.intersection_client.tick_period,
+      .intersection_client_watches_navigation = config.intersection_client.release_on_failure,
       .true_pose = [agent] { return agent->car->pose(); },
       .pose_fix_noise = streams.Stream("car" + std::to_string(id) + "/pose_fix/noise")};
   StackHooks hooks{
-      .intersection_client = [this, agent](const world::Vec2& p) { return StepClient(agent, p); },
+      .intersection_client = [this, agent](const world::Vec2& p, bool navigation_failed) {
+        return StepClient(agent, p, navigation_failed);
+      },
       .actuate =
           [agent](const vehicle::ActuatorCommand& command) {
             agent->command = command;

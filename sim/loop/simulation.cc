@@ -174,28 +174,34 @@ void Simulation::Impl::ScheduleWorldStep() {
       kZeroTime, physics.step(), [this] { StepWorld(); }, kPriorityPhysics);
 }
 
-bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map) {
+bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
+                                  bool navigation_failed) {
   const int id = agent->config->id;
   stack::IntersectionClientInput input;
   input.now = kernel.Now();
   input.p_map = p_map;
+  input.navigation_failed = navigation_failed;
   input.responses = std::move(agent->inbox);
   agent->inbox.clear();
   const stack::IntersectionClientOutput out =
       stack::StepIntersectionClient(agent->config->intersection_client, id,
                                     loaded.track.spec().intersections, input, &agent->client);
+  // the server's records of what it received and did are the run's request/free/grant/denied
+  // events (TrafficLightNode); a message the link lost is a v2i_lost event
   for (const world::Request& request : out.requests) {
-    Emit(Event{
-        .t = kernel.Now(), .type = "request", .car = id, .intersection = request.intersection});
     link->SendToServer(id, world::ToMessage(request));
   }
-  for (const world::Free& free : out.frees) {
-    Emit(Event{.t = kernel.Now(), .type = "free", .car = id});
-    link->SendToServer(id, world::ToMessage(free));
-  }
+  for (const world::Free& free : out.frees) link->SendToServer(id, world::ToMessage(free));
   const bool was_waiting = agent->waiting;
   agent->waiting = !out.may_proceed;
-  if (!was_waiting && agent->waiting) agent->wait_started = kernel.Now();
+  if (!was_waiting && agent->waiting) {
+    agent->wait_started = kernel.Now();
+    agent->waiting_for = out.waiting_for.value_or(-1);
+    Emit(Event{.t = kernel.Now(), .type = "wait", .car = id, .intersection = agent->waiting_for});
+  }
+  if (was_waiting && !agent->waiting) {
+    Emit(Event{.t = kernel.Now(), .type = "go", .car = id, .intersection = agent->waiting_for});
+  }
   if (was_waiting && !agent->waiting && agent->wait_started) {
     const double wait_s = ToSeconds(kernel.Now() - *agent->wait_started);
     agent->metrics.total_wait_s += wait_s;
@@ -211,9 +217,7 @@ void Simulation::Impl::ReceiveAtCar(int car_id, const world::V2IMessage& message
   if (!decoded || !std::holds_alternative<world::Response>(decoded.value())) return;
   const world::Response response = std::get<world::Response>(decoded.value());
   if (response.car != car_id) return;  // a broadcast for another car
-  CarAgent& agent = agents[agent_index.at(car_id)];
-  Emit(Event{.t = kernel.Now(), .type = response.granted ? "grant" : "denied", .car = car_id});
-  agent.inbox.push_back(response);
+  agents[agent_index.at(car_id)].inbox.push_back(response);
 }
 
 void Simulation::Impl::StepDriver(CarAgent* agent) {

@@ -52,6 +52,7 @@ struct CarAgent {
   bool parked{false};   // done: laps driven or route ended
   std::vector<ObstacleOnRoute> obstacles_on_lane;
   std::optional<Time> wait_started;
+  int waiting_for{-1};  // the intersection of the current (or last) wait
   // the colour camera's recent frames (stamp, pose), to judge lane detection against ground truth
   std::deque<std::pair<Time, world::Pose2>> color_frames;
   double lane_error_sq_sum{0.0};  // over the judged lane detection results
@@ -90,7 +91,7 @@ struct Simulation::Impl {
   void MeasureObstacleGaps();
   void StepDriver(CarAgent* agent);
   std::optional<double> ObstacleGap(const CarAgent& agent) const;
-  bool StepClient(CarAgent* agent, const world::Vec2& p_map);
+  bool StepClient(CarAgent* agent, const world::Vec2& p_map, bool navigation_failed = false);
   void AddStack(CarAgent* agent, SensorSuite* suite, const PerceptionTopics& perception,
                 NodeGraph* graph);
   void Sample();

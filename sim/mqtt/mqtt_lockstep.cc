@@ -165,12 +165,17 @@ std::string EncodeAck(const SimAck& ack) {
   for (const auto& [intersection, holder] : ack.holders) {
     holders.push_back(Json::array({intersection, holder ? Json(*holder) : Json()}));
   }
+  Json records = Json::array();
+  for (const world::ServerRecord& r : ack.records) {
+    records.push_back(Json::array({world::ToString(r.kind), r.car, r.intersection, r.also_released}));
+  }
   Json j{{"epoch", ack.epoch},
          {"seq", ack.seq},
          {"responses", ack.responses},
          {"deadline_ns", ack.deadline ? Json(ack.deadline->count()) : Json()},
          {"holders", holders},
-         {"counters", CountersToJson(ack.counters)}};
+         {"counters", CountersToJson(ack.counters)},
+         {"records", records}};
   if (!ack.error.empty()) j["error"] = ack.error;
   return j.dump();
 }
@@ -193,6 +198,18 @@ world::Decoded<SimAck> DecodeAck(std::string_view json) {
           holder.is_null() ? std::nullopt : std::optional(Integer<int>(holder, "holders[][1]")));
     }
     ack.counters = CountersFromJson(j.at("counters"));
+    for (const Json& r : j.at("records")) {
+      const std::optional<world::ServerRecord::Kind> kind =
+          world::ServerRecordKindFromString(r.at(0).get<std::string>());
+      if (!kind) throw std::invalid_argument("records[][0]: unknown kind " + r.at(0).dump());
+      world::ServerRecord record{.kind = *kind,
+                                 .car = Integer<int>(r.at(1), "records[][1]"),
+                                 .intersection = Integer<int>(r.at(2), "records[][2]")};
+      for (const Json& id : r.at(3)) {
+        record.also_released.push_back(Integer<int>(id, "records[][3][]"));
+      }
+      ack.records.push_back(std::move(record));
+    }
     return world::Decoded<SimAck>::Ok(std::move(ack));
   } catch (const std::exception& e) {
     return world::Decoded<SimAck>::Error("ack " + Show(json) + ": " + e.what());

@@ -72,6 +72,7 @@ struct SimAck {
   std::optional<Time> deadline;        // TrafficLightServer::NextDeadline after the step
   std::vector<std::pair<int, std::optional<int>>> holders;  // (intersection, holder)
   world::TrafficLightServer::Counters counters;
+  std::vector<world::ServerRecord> records;  // what the server did in this step, in order
   std::string error;  // not empty: the server did not take the step, and why
 };
 

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <map>
 #include <optional>
 
@@ -21,6 +22,9 @@ std::string Name(const ExpectClause& clause) {
   if (a.max_hz) parts.push_back(fmt::format("max_hz={}", *a.max_hz));
   if (a.min_percent) parts.push_back(fmt::format("min_percent={}", *a.min_percent));
   if (a.max_percent) parts.push_back(fmt::format("max_percent={}", *a.max_percent));
+  if (a.max_s) parts.push_back(fmt::format("max_s={}", *a.max_s));
+  if (a.intersection) parts.push_back(fmt::format("intersection={}", *a.intersection));
+  if (a.per_minute) parts.push_back(fmt::format("per_minute={}", *a.per_minute));
   return parts.empty() ? clause.kind()
                        : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
 }
@@ -164,6 +168,161 @@ ExpectationResult CpuDemand(const ExpectArgs& args, const RunRecord& record) {
                       r.cpu_demand_percent, r.cpu_percent, r.cores)};
 }
 
+// A wait at a stop zone: from a `wait` event to the car's next `go` (or the run's end).
+struct Wait {
+  int car{-1};
+  int intersection{-1};
+  Time start{0};
+  Time end{0};
+};
+
+std::vector<Wait> Waits(const RunRecord& record) {
+  std::vector<Wait> waits;
+  std::map<int, std::size_t> open;  // car -> its open wait
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == "wait") {
+      open[e.car] = waits.size();
+      waits.push_back({e.car, e.intersection, e.t, record.sim_duration});
+    } else if (e.type == "go") {
+      if (auto it = open.find(e.car); it != open.end()) {
+        waits[it->second].end = e.t;
+        open.erase(it);
+      }
+    }
+  });
+  return waits;
+}
+
+ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
+  std::optional<Wait> longest;
+  int over = 0;
+  int count = 0;
+  std::string first;
+  for (const Wait& w : Waits(record)) {
+    if (!Concerns(args, w.car) || (args.intersection && *args.intersection != w.intersection)) {
+      continue;
+    }
+    ++count;
+    const double s = ToSeconds(w.end - w.start);
+    if (!longest || s > ToSeconds(longest->end - longest->start)) longest = w;
+    if (s > *args.max_s && over++ == 0) {
+      first = fmt::format("car {} waited {:.1f} s at intersection {} from t={:.3f} s", w.car, s,
+                          w.intersection, ToSeconds(w.start));
+    }
+  }
+  if (!longest) return {"", true, "no waits"};
+  const double s = ToSeconds(longest->end - longest->start);
+  return {"", over == 0,
+          over == 0 ? fmt::format("{} waits, longest {:.1f} s (car {}, intersection {})", count, s,
+                                  longest->car, longest->intersection)
+                    : fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s,
+                                  first)};
+}
+
+// Crossings (enter events) per minute of the run, per intersection: the one given, or each one a
+// car entered or asked for.
+ExpectationResult MinThroughput(const ExpectArgs& args, const RunRecord& record) {
+  std::map<int, int> crossings;  // intersection -> enter events
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == "enter") ++crossings[e.intersection];
+    if (e.type == "request" && e.intersection >= 0) crossings.try_emplace(e.intersection, 0);
+  });
+  const double minutes = ToSeconds(record.sim_duration) / 60.0;
+  bool passed = true;
+  std::vector<std::string> parts;
+  std::vector<int> ids;
+  if (args.intersection) {
+    ids.push_back(*args.intersection);
+  } else {
+    for (const auto& [id, n] : crossings) ids.push_back(id);
+  }
+  for (int id : ids) {
+    const double rate = crossings[id] / minutes;
+    passed = passed && rate >= *args.per_minute;
+    parts.push_back(fmt::format("intersection {}: {} crossings, {:.2f}/min", id, crossings[id], rate));
+  }
+  if (parts.empty()) return {"", *args.per_minute <= 0.0, "no crossings"};
+  return {"", passed, fmt::format("{} (bound {}/min)", fmt::join(parts, "; "), *args.per_minute)};
+}
+
+// no_gridlock: a car stands still (trajectory speed below kStillSpeed_mps) for longer than max_s,
+// counting only the time it is not excused. Excused: after it parked (laps done), and while it
+// waits at a stop zone (`wait` to `go`) for an intersection the server has granted to another car
+// (red light, by the server's grant, free and lease_expired events). Not excused: a wait for an
+// intersection nobody holds (a request lost, or a denial the car never repeats), a car whose
+// navigation failed, a car held by a car ahead that is itself stuck, a car in recovery.
+constexpr double kStillSpeed_mps = 0.02;  // assumed: 2 cm/s, below any driving speed
+constexpr double kDefaultGridlock_s = 30.0;
+
+ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
+  const double bound_s = args.max_s.value_or(kDefaultGridlock_s);
+  // the holder timeline of each intersection, and the parked instants
+  std::map<int, std::vector<std::pair<Time, int>>> holders;  // intersection -> (since, holder)
+  std::map<int, Time> parked;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == "grant") holders[e.intersection].emplace_back(e.t, e.car);
+    if ((e.type == "free" && e.intersection >= 0) || e.type == "lease_expired") {
+      holders[e.intersection].emplace_back(e.t, -1);
+    }
+    if (e.type == "parked" && !parked.count(e.car)) parked[e.car] = e.t;
+  });
+  // per car, the intervals in which it is excused, in time order
+  std::map<int, std::vector<std::pair<Time, Time>>> excused;
+  for (const Wait& w : Waits(record)) {
+    const auto& timeline = holders[w.intersection];
+    int holder = -1;
+    Time since = w.start;
+    auto flush = [&](Time until) {
+      if (holder >= 0 && holder != w.car && until > since) excused[w.car].emplace_back(since, until);
+    };
+    for (const auto& [t, h] : timeline) {
+      if (t <= w.start) {
+        holder = h;
+        continue;
+      }
+      if (t >= w.end) break;
+      flush(t);
+      holder = h;
+      since = t;
+    }
+    flush(w.end);
+  }
+  for (const auto& [car, t] : parked) excused[car].emplace_back(t, record.sim_duration);
+
+  struct Still {
+    std::optional<Time> since;  // unexcused standstill began
+    std::size_t next{0};        // the first excused interval not yet over
+    bool reported{false};
+  };
+  std::map<int, Still> still;
+  int episodes = 0;
+  std::string first;
+  ForEachSample(record, [&](const TrajectorySample& s) {
+    if (!Concerns(args, s.car)) return;
+    Still& c = still[s.car];
+    const auto& intervals = excused[s.car];
+    while (c.next < intervals.size() && intervals[c.next].second <= s.t) ++c.next;
+    const bool is_excused = c.next < intervals.size() && intervals[c.next].first <= s.t;
+    if (std::abs(s.speed_mps) >= kStillSpeed_mps || is_excused) {
+      c.since.reset();
+      c.reported = false;
+      return;
+    }
+    if (!c.since) c.since = s.t;
+    if (!c.reported && ToSeconds(s.t - *c.since) > bound_s) {
+      c.reported = true;
+      if (episodes++ == 0) {
+        first = fmt::format("car {} stood still from t={:.1f} s at ({:.2f}, {:.2f}) m", s.car,
+                            ToSeconds(*c.since), s.x_m, s.y_m);
+      }
+    }
+  });
+  return {"", episodes == 0,
+          episodes == 0
+              ? fmt::format("no car stood still over {} s unless held by a red light", bound_s)
+              : fmt::format("{} standstill(s) over {} s; first: {}", episodes, bound_s, first)};
+}
+
 }  // namespace
 
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
@@ -181,6 +340,9 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
     if (kind == "min_obstacle_gap") result = MinObstacleGap(args, record);
     if (kind == "node_rate") result = NodeRate(args, record);
     if (kind == "cpu_demand") result = CpuDemand(args, record);
+    if (kind == "no_gridlock") result = NoGridlock(args, record);
+    if (kind == "max_wait") result = MaxWait(args, record);
+    if (kind == "min_throughput") result = MinThroughput(args, record);
     result.name = Name(clause);
     results.push_back(std::move(result));
   }

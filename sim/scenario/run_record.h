@@ -16,10 +16,17 @@
 
 namespace autonomsim::sim {
 
-// One line of events.jsonl. Types: request, free (a car sent them), grant, denied (a car received
-// the server's answer), enter, exit (ground truth: the car's chassis centre entered or left an
-// intersection area; `granted` says whether the server held the intersection for it then),
-// collision, lap, parked, obstacle_appear, obstacle_disappear, v2i_lost, v2i_malformed.
+// One line of events.jsonl. Types:
+//   request, free, grant, denied, lease_expired, queue_drop: what the traffic-light server
+//     received and did, with the intersection (world::ServerRecord): one event per count of
+//     summary.json's server counters; a renewal is a request, not a grant; a free names the
+//     intersection it released (-1: none);
+//   wait, go: a car's intersection client stopped it in a stop zone of `intersection` until
+//     granted, and let it go again;
+//   enter, exit: ground truth: the car's chassis centre entered or left an intersection area;
+//     `granted` says whether the server held the intersection for it then;
+//   collision, lap, parked, behavior, obstacle_appear, obstacle_disappear, v2i_lost,
+//   v2i_malformed.
 struct Event {
   Time t{0};
   std::string type;

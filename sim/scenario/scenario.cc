@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "sim/scenario/scenario.h"
 
 #include <cmath>
@@ -97,12 +98,16 @@ std::string ExpectClause::kind() const {
   if (max_lateral_error) return "max_lateral_error";
   if (node_rate) return "node_rate";
   if (cpu_demand) return "cpu_demand";
+  if (no_gridlock) return "no_gridlock";
+  if (max_wait) return "max_wait";
+  if (min_throughput) return "min_throughput";
   return "min_obstacle_gap";
 }
 
 const ExpectArgs& ExpectClause::args() const {
   for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
-                           &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand}) {
+                           &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand,
+                           &no_gridlock, &max_wait, &min_throughput}) {
     if (args->has_value()) return **args;
   }
   throw std::logic_error("ExpectClause::args on an empty clause");
@@ -112,7 +117,8 @@ void ExpectClause::Validate() const {
   const int count = no_collision.has_value() + intersection_mutex.has_value() +
                     no_entry_without_grant.has_value() + completes.has_value() +
                     max_lateral_error.has_value() + min_obstacle_gap.has_value() +
-                    node_rate.has_value() + cpu_demand.has_value();
+                    node_rate.has_value() + cpu_demand.has_value() + no_gridlock.has_value() +
+                    max_wait.has_value() + min_throughput.has_value();
   Require(count == 1,
           "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
           "got " +
@@ -122,7 +128,10 @@ void ExpectClause::Validate() const {
   auto forbid = [&](bool present, const char* key) {
     Require(!present, "'" + k + "' takes no key '" + key + "'");
   };
-  forbid(k == "intersection_mutex" && a.car.has_value(), "car");
+  forbid((k == "intersection_mutex" || k == "min_throughput") && a.car.has_value(), "car");
+  forbid(k != "no_gridlock" && k != "max_wait" && a.max_s.has_value(), "max_s");
+  forbid(k != "max_wait" && k != "min_throughput" && a.intersection.has_value(), "intersection");
+  forbid(k != "min_throughput" && a.per_minute.has_value(), "per_minute");
   forbid(k != "completes" && a.laps.has_value(), "laps");
   forbid(k != "completes" && a.within_s.has_value(), "within_s");
   forbid(k != "max_lateral_error" && a.max_m.has_value(), "max_m");
@@ -151,6 +160,14 @@ void ExpectClause::Validate() const {
   if (k == "min_obstacle_gap") {
     Require(a.min_m.has_value() && *a.min_m >= 0.0, "min_obstacle_gap needs min_m >= 0");
   }
+  if (k == "no_gridlock") Require(!a.max_s || *a.max_s > 0.0, "max_s must be > 0");
+  if (k == "max_wait") Require(a.max_s.has_value() && *a.max_s > 0.0, "max_wait needs max_s > 0");
+  if (k == "min_throughput") {
+    Require(a.per_minute.has_value() && *a.per_minute >= 0.0,
+            "min_throughput needs per_minute >= 0");
+  }
+  Require(!a.intersection || (*a.intersection >= 0 && *a.intersection <= 9),
+          "intersection must be an id 0..9");
 }
 
 void Scenario::Validate() const {
@@ -329,8 +346,10 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   ConfigSource source{file.string(), {}};
   // before any --set: a file that is not a mapping is the file's error, not the override's
   if (!root.IsMap()) detail::Fail(root, "", source, "expected a mapping, got " + detail::Describe(root));
+  BreakAliases(root);
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
+  ApplyStackPresets(root, source);
   const ScenarioSite site{root, source};
 
   Scenario read = ReadConfig<Scenario>(root, source);
@@ -354,6 +373,14 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     const ExpectArgs& args = scenario.expect[i].args();
     if (args.car && car_ids.count(*args.car) == 0) {
       FailAt(root, source, {"expect", i}, "no car with id " + std::to_string(*args.car));
+    }
+    const auto& crossings = loaded.track.spec().intersections;
+    if (args.intersection &&
+        std::none_of(crossings.begin(), crossings.end(), [&](const world::IntersectionSpec& x) {
+          return x.id == *args.intersection;
+        })) {
+      FailAt(root, source, {"expect", i, scenario.expect[i].kind(), "intersection"},
+             "the track has no intersection " + std::to_string(*args.intersection));
     }
     // a deadline past the run's end could never be judged (it would fail, or pass, on less time)
     if (args.within_s && *args.within_s > ToSeconds(scenario.duration)) {

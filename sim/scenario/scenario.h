@@ -17,6 +17,7 @@
 #include "sim/core/config.h"
 #include "sim/mqtt/mqtt_link_config.h"
 #include "sim/platform/platform_profile.h"
+#include "sim/scenario/stack_presets.h"
 #include "stack/intersection_client.h"
 #include "vehicle/car.h"
 #include "vehicle/physics_world.h"
@@ -145,6 +146,9 @@ struct ExpectArgs {
   std::optional<double> max_hz;
   std::optional<double> min_percent;  // cpu_demand: bounds on the board's CPU demand
   std::optional<double> max_percent;  //   (% of one core, summed over its nodes)
+  std::optional<double> max_s;        // no_gridlock: longest standstill; max_wait: longest wait
+  std::optional<int> intersection;    // max_wait, min_throughput: the one it is about (default all)
+  std::optional<double> per_minute;   // min_throughput: least crossings per minute
 
   template <class V>
   void Describe(V& v) {
@@ -158,6 +162,9 @@ struct ExpectArgs {
     v("max_hz", max_hz);
     v("min_percent", min_percent);
     v("max_percent", max_percent);
+    v("max_s", max_s);
+    v("intersection", intersection);
+    v("per_minute", per_minute);
   }
   void Validate() const {}
 };
@@ -172,6 +179,11 @@ struct ExpectClause {
   std::optional<ExpectArgs> min_obstacle_gap;
   std::optional<ExpectArgs> node_rate;   // {car, node, min_hz and/or max_hz}
   std::optional<ExpectArgs> cpu_demand;  // {car, min_percent and/or max_percent}
+  // {car, max_s}: no car stands still longer than max_s (default 30 s) unless a red light holds it
+  // (sim/results/expectations.h says exactly when)
+  std::optional<ExpectArgs> no_gridlock;
+  std::optional<ExpectArgs> max_wait;        // {car, intersection, max_s}: each wait at a stop zone
+  std::optional<ExpectArgs> min_throughput;  // {intersection, per_minute}: crossings per minute
 
   template <class V>
   void Describe(V& v) {
@@ -183,6 +195,9 @@ struct ExpectClause {
     v("min_obstacle_gap", min_obstacle_gap);
     v("node_rate", node_rate);
     v("cpu_demand", cpu_demand);
+    v("no_gridlock", no_gridlock);
+    v("max_wait", max_wait);
+    v("min_throughput", min_throughput);
   }
   void Validate() const;
   std::string kind() const;
@@ -198,6 +213,7 @@ struct Scenario {
   vehicle::PhysicsParams physics;
   world::TrafficLightServerParams traffic_lights;
   V2IConfig v2i;
+  FleetStackConfig stack;  // `stack.preset` for every car and the server (stack_presets.h)
   std::vector<CarConfig> cars;
   std::vector<ObstacleConfig> obstacles;
   std::vector<ExpectClause> expect;
@@ -214,6 +230,7 @@ struct Scenario {
     v("physics", physics);
     v("traffic_lights", traffic_lights);
     v("v2i", v2i);
+    v("stack", stack);
     v("cars", cars);
     v("obstacles", obstacles);
     v("expect", expect);

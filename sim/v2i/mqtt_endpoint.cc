@@ -249,7 +249,14 @@ std::vector<world::Response> MqttTrafficLightEndpoint::Exchange(const MqttMessag
   holders_.clear();
   for (const auto& [intersection, holder] : ack->holders) holders_[intersection] = holder;
   counters_ = ack->counters;
+  records_.insert(records_.end(), ack->records.begin(), ack->records.end());
   return out;
+}
+
+std::vector<world::ServerRecord> MqttTrafficLightEndpoint::TakeRecords() {
+  std::vector<world::ServerRecord> taken;
+  taken.swap(records_);
+  return taken;
 }
 
 namespace {
@@ -311,6 +318,7 @@ class PrivateMqttEndpoint final : public TrafficLightEndpoint {
     return endpoint_->Holder(intersection);
   }
   world::TrafficLightServer::Counters counters() const override { return endpoint_->counters(); }
+  std::vector<world::ServerRecord> TakeRecords() override { return endpoint_->TakeRecords(); }
 
  private:
   std::unique_ptr<LocalBroker> broker_;

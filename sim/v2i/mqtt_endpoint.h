@@ -51,6 +51,7 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
   std::optional<Time> NextDeadline() const override { return deadline_; }
   std::optional<int> Holder(int intersection) const override;
   world::TrafficLightServer::Counters counters() const override { return counters_; }
+  std::vector<world::ServerRecord> TakeRecords() override;
 
   struct Stats {
     std::uint64_t exchanges{0};  // steps answered, the reset included
@@ -71,6 +72,7 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
   std::optional<Time> deadline_;
   std::map<int, std::optional<int>> holders_;
   world::TrafficLightServer::Counters counters_;
+  std::vector<world::ServerRecord> records_;
   Stats stats_;
 };
 

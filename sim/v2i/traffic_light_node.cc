@@ -55,6 +55,16 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
 
 void TrafficLightNode::Publish(const std::vector<world::Response>& responses) {
   if (link_ == nullptr) throw std::logic_error("TrafficLightNode: no V2I link set");
+  for (world::ServerRecord& record : endpoint_->TakeRecords()) {
+    Event event{.t = kernel_->Now(),
+                .type = world::ToString(record.kind),
+                .car = record.car,
+                .intersection = record.intersection};
+    for (int id : record.also_released) {
+      event.detail += (event.detail.empty() ? "also released " : ", ") + std::to_string(id);
+    }
+    sink_(std::move(event));
+  }
   for (const world::Response& response : responses) link_->Broadcast(world::ToMessage(response));
 }
 

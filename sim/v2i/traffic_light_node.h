@@ -30,6 +30,8 @@ class TrafficLightEndpoint {
   virtual std::optional<Time> NextDeadline() const = 0;
   virtual std::optional<int> Holder(int intersection) const = 0;
   virtual world::TrafficLightServer::Counters counters() const = 0;
+  // What the server did since the last call (world::ServerRecord), oldest first.
+  virtual std::vector<world::ServerRecord> TakeRecords() = 0;
 };
 
 class EmbeddedTrafficLightEndpoint final : public TrafficLightEndpoint {
@@ -50,6 +52,7 @@ class EmbeddedTrafficLightEndpoint final : public TrafficLightEndpoint {
     return server_.Holder(intersection);
   }
   world::TrafficLightServer::Counters counters() const override { return server_.counters(); }
+  std::vector<world::ServerRecord> TakeRecords() override { return server_.TakeRecords(); }
 
   const world::TrafficLightServer& server() const { return server_; }
 
@@ -76,6 +79,7 @@ class TrafficLightNode {
   std::uint64_t malformed() const { return malformed_; }
 
  private:
+  // Emits the server's records as events, then broadcasts the responses.
   void Publish(const std::vector<world::Response>& responses);
   void RescheduleTick();
 

@@ -199,6 +199,10 @@ TEST(BehaviorTest, FollowPathInsideIntersectionsAndStopZonesOnly) {
   EXPECT_FALSE(UseFollowPath(all, Vec2(2.3, -1.5)));
   EXPECT_FALSE(UseFollowPath(all, Vec2(1.3, 0.0)));  // on the area's edge: outside (strict)
   EXPECT_FALSE(UseFollowPath({}, Vec2(2.0, 0.0)));
+  // with a margin (stack.controller_selector.zone_margin_m, beyond the lab's): within it too
+  EXPECT_TRUE(UseFollowPath(all, Vec2(2.3, -1.5), 0.3));
+  EXPECT_TRUE(UseFollowPath(all, Vec2(1.3, 0.0), 0.3));
+  EXPECT_FALSE(UseFollowPath(all, Vec2(2.3, -1.75), 0.3));
 }
 
 }  // namespace

@@ -118,6 +118,31 @@ TEST(GlobalPlannerTest, InscribedAndUnknownCellsAreNotTraversed) {
   EXPECT_EQ(PlanGlobalPath({.allow_unknown = false}, map, start, goal).status, PlanStatus::kNoPath);
 }
 
+TEST(GlobalPlannerTest, AStartInsideTheInscribedHaloEscapesOnlyWithStartEscape) {
+  // a car 0.05 m from a filled island: the island (LETHAL) at x = 0, its inscribed halo (two
+  // cells) around it; the car's centre is in the halo
+  Costmap2D map(12, 5, 0.05, Vec2::Zero());
+  for (int my = 0; my < 5; ++my) {
+    map.SetCost(0, my, kLethalObstacle);
+    map.SetCost(1, my, kInscribedInflatedObstacle);
+    map.SetCost(2, my, kInscribedInflatedObstacle);
+  }
+  const Vec2 start = Centre(map, 1, 2);
+  const Vec2 goal = Centre(map, 11, 2);
+  EXPECT_EQ(PlanGlobalPath({}, map, start, goal).status, PlanStatus::kNoPath);  // Smac, the lab's
+  const GlobalPlan out = PlanGlobalPath({.start_escape_m = 0.1}, map, start, goal);
+  ASSERT_TRUE(out.ok());
+  EXPECT_EQ(out.path_m.back(), goal);
+  // only within the escape distance: a halo farther out still blocks
+  for (int my = 0; my < 5; ++my) map.SetCost(6, my, kInscribedInflatedObstacle);
+  EXPECT_EQ(PlanGlobalPath({.start_escape_m = 0.1}, map, start, goal).status, PlanStatus::kNoPath);
+  // and never through LETHAL
+  Costmap2D walled(12, 5, 0.05, Vec2::Zero());
+  for (int my = 0; my < 5; ++my) walled.SetCost(3, my, kLethalObstacle);
+  EXPECT_EQ(PlanGlobalPath({.start_escape_m = 0.3}, walled, Centre(walled, 1, 2), goal).status,
+            PlanStatus::kNoPath);
+}
+
 TEST(GlobalPlannerTest, CostMultiplierTradesLengthForClearance) {
   // A 3-row corridor: the straight middle row costs 200, the rows beside it are free. With the
   // reference's multiplier 2.0 a cell of 200 weighs 2.59: the detour through a free row wins.

@@ -80,7 +80,8 @@ TEST(IntersectionClientParamsTest, DefaultsKeysAndValidation) {
   auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s",
-                                "release_margin_m", "exit_margin_m"));
+                                "release_margin_m", "exit_margin_m", "re_request", "latch_wait",
+                                "release_on_failure"));
 
   params.retry_period = Duration::zero();
   try {
@@ -244,6 +245,86 @@ TEST(IntersectionClientTest, HolderSendsKeepalivesWhileStoppedInTheZone) {
   }
   ASSERT_EQ(times.size(), 4u);
   for (std::size_t n = 0; n < times.size(); ++n) EXPECT_NEAR(times[n], 1.0 + n, 1e-9);
+}
+
+TEST(IntersectionClientTest, WithoutReRequestADeniedCarAsksOnceAndAHolderNeverRenews) {
+  Client client;  // the lab's client (reference §7): one request, then it waits
+  client.params.re_request = false;
+  const Vec2 in_zone{0.9, -0.31};
+  EXPECT_THAT(client.Step(0.0, in_zone).requests, ElementsAre(Request{kCar, 0}));
+  for (int k = 1; k <= 60; ++k) {
+    const auto out = client.Step(0.1 * k, in_zone, k == 1 ? std::vector{Response{kCar, false}}
+                                                          : std::vector<Response>{});
+    EXPECT_THAT(out.requests, IsEmpty()) << "k = " << k;
+    EXPECT_FALSE(out.may_proceed);
+  }
+  EXPECT_TRUE(client.Step(6.1, in_zone, {Response{kCar, true}}).may_proceed);
+  for (int k = 62; k <= 120; ++k) EXPECT_THAT(client.Step(0.1 * k, in_zone).requests, IsEmpty());
+}
+
+TEST(IntersectionClientTest, ALatchedWaitHoldsWhileTheEstimateJittersOutOfTheStopZone) {
+  // Inner lane northbound into intersection 1: the stop zone ends at y = -0.7, the area begins
+  // at y = -0.6. A car held 5 cm before the zone's end whose estimate jitters 7 cm forward is in
+  // the gap: outside the zone, so the unlatched client lets it go.
+  const Vec2 in_zone{-1.55, -0.75};
+  const Vec2 jittered_out{-1.55, -0.68};
+  for (const bool latch : {false, true}) {
+    Client client;
+    client.params.latch_wait = latch;
+    client.Step(0.0, in_zone);
+    EXPECT_FALSE(client.Step(0.1, in_zone, {Response{kCar, false}}).may_proceed);
+    const auto out = client.Step(0.2, jittered_out);
+    EXPECT_EQ(out.may_proceed, !latch) << "latch_wait " << latch;
+    EXPECT_EQ(out.waiting_for, 1);
+    // the grant ends the wait either way
+    EXPECT_TRUE(client.Step(0.3, jittered_out, {Response{kCar, true}}).may_proceed);
+  }
+}
+
+TEST(IntersectionClientTest, AFailedNavigationFreesTheGrantAndRetires) {
+  for (const bool release : {false, true}) {
+    Client client;
+    client.params.release_on_failure = release;
+    const Vec2 in_zone = OuterNorth(-1.0);
+    client.Step(0.0, in_zone);
+    client.Step(0.1, in_zone, {Response{kCar, true}});
+    IntersectionClientInput failed{At(0.2), in_zone, {}};
+    failed.navigation_failed = true;
+    const auto out =
+        StepIntersectionClient(client.params, kCar, client.intersections, failed, &client.state);
+    if (release) {
+      EXPECT_THAT(out.frees, ElementsAre(Free{kCar}));
+      EXPECT_TRUE(client.state.retired);
+      // retired: no keepalive, no request in any stop zone
+      for (int k = 3; k <= 40; ++k) {
+        EXPECT_THAT(client.Step(0.1 * k, in_zone).requests, IsEmpty());
+      }
+    } else {
+      EXPECT_THAT(out.frees, IsEmpty());
+      EXPECT_EQ(client.state.phase, Phase::kHolding);
+    }
+  }
+}
+
+TEST(IntersectionClientTest, ACarThatFailedInsideTheAreaKeepsItsGrantAlive) {
+  Client client;
+  client.params.release_on_failure = true;
+  client.Step(0.0, OuterNorth(-1.0));
+  client.Step(0.1, OuterNorth(-1.0), {Response{kCar, true}});
+  const Vec2 in_area = OuterNorth(0.0);
+  client.Step(0.2, in_area);
+  int keepalives = 0;
+  for (int k = 3; k <= 40; ++k) {
+    IntersectionClientInput failed{At(0.1 * k), in_area, {}};
+    failed.navigation_failed = true;
+    const auto out =
+        StepIntersectionClient(client.params, kCar, client.intersections, failed, &client.state);
+    EXPECT_THAT(out.frees, IsEmpty());
+    keepalives += static_cast<int>(out.requests.size());
+  }
+  EXPECT_EQ(keepalives, 4);  // at 1, 2, 3 and 4 s: the lease never frees it under a dead car
+  EXPECT_EQ(client.state.phase, Phase::kHolding);
+  EXPECT_FALSE(client.state.retired);
 }
 
 TEST(IntersectionClientTest, IgnoresOtherCarsResponses) {

@@ -164,6 +164,36 @@ TEST(TrafficLightServerTest, LeaseExpiryFreesASilentHolderAndGrantsTheNextExactl
   EXPECT_EQ(server.NextDeadline(), At(10.5));  // now car 1's lease
 }
 
+TEST(TrafficLightServerTest, TheRecordsAddUpToTheCountersAndNameTheIntersection) {
+  using K = ServerRecord::Kind;
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(1.0), {0, kI1});  // granted
+  server.OnRequest(At(1.5), {0, kI1});  // a renewal: a request, not a grant
+  server.OnRequest(At(2.0), {1, kI1});  // denied, queued
+  server.OnRequest(At(2.5), {2, kI0});  // granted
+  server.OnFree(At(3.0), {0});          // releases 1, grants it to car 1
+  server.OnFree(At(3.5), {3});          // releases nothing
+  server.OnTick(At(8.0));               // car 1 silent since 2.0: its lease expired at 7.0
+  EXPECT_THAT(server.TakeRecords(),
+              ElementsAre(ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kGrant, 0, kI1},
+                          ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kRequest, 1, kI1},
+                          ServerRecord{K::kDenied, 1, kI1}, ServerRecord{K::kRequest, 2, kI0},
+                          ServerRecord{K::kGrant, 2, kI0}, ServerRecord{K::kFree, 0, kI1},
+                          ServerRecord{K::kGrant, 1, kI1}, ServerRecord{K::kFree, 3, -1},
+                          ServerRecord{K::kLeaseExpired, 2, kI0},
+                          ServerRecord{K::kLeaseExpired, 1, kI1}));
+  EXPECT_THAT(server.TakeRecords(), IsEmpty());  // taken
+  const auto c = server.counters();
+  EXPECT_EQ(c.requests, 4u);
+  EXPECT_EQ(c.grants, 3u);
+  EXPECT_EQ(c.denials, 1u);
+  EXPECT_EQ(c.frees, 2u);
+  EXPECT_EQ(c.lease_expiries, 2u);
+  EXPECT_STREQ(ToString(K::kLeaseExpired), "lease_expired");
+  EXPECT_EQ(ServerRecordKindFromString("queue_drop"), K::kQueueDrop);
+  EXPECT_EQ(ServerRecordKindFromString("renewal"), std::nullopt);
+}
+
 TEST(TrafficLightServerTest, ExpiryIsAppliedByAnyCallEvenWithoutATick) {
   auto server = MakeServer("fifo", 5.0);
   server.OnRequest(At(0.0), {0, kI0});

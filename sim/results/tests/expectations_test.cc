@@ -34,6 +34,9 @@ ExpectClause Clause(const std::string& kind, ExpectArgs args = {}) {
   if (kind == "min_obstacle_gap") c.min_obstacle_gap = args;
   if (kind == "node_rate") c.node_rate = args;
   if (kind == "cpu_demand") c.cpu_demand = args;
+  if (kind == "no_gridlock") c.no_gridlock = args;
+  if (kind == "max_wait") c.max_wait = args;
+  if (kind == "min_throughput") c.min_throughput = args;
   c.Validate();
   return c;
 }
@@ -51,6 +54,80 @@ RunRecord TwoCars() {
   r.cars[0].id = 0;
   r.cars[1].id = 1;
   return r;
+}
+
+// Car `car` standing at (1, 1) from `from_s` to `to_s` (20 Hz), then driving on to the end.
+void StandThenDrive(RunRecord* r, int car, double from_s, double to_s) {
+  for (double t = 0.0; t < ToSeconds(r->sim_duration); t += 0.05) {
+    TrajectorySample s;
+    s.t = FromSeconds(t);
+    s.car = car;
+    s.x_m = 1.0;
+    s.y_m = 1.0;
+    s.speed_mps = (t >= from_s && t < to_s) ? 0.0 : 0.25;
+    r->trajectory.push_back(s);
+  }
+}
+
+TEST(ExpectationsTest, NoGridlockFlagsAStandstillOverTheBoundUnlessARedLightHoldsTheCar) {
+  const ExpectClause clause = Clause("no_gridlock", ExpectArgs{.max_s = 30.0});
+  {  // 40 s still at a stop zone of intersection 0 while car 1 holds it: a red light
+    RunRecord r = TwoCars();
+    StandThenDrive(&r, 0, 10.0, 50.0);
+    r.events = {At(5, "grant", 1, 0), At(10, "wait", 0, 0), At(49, "free", 1, 0),
+                At(49, "grant", 0, 0), At(49.1, "go", 0, 0)};
+    EXPECT_TRUE(Judge(clause, r).passed) << Judge(clause, r).detail;
+  }
+  {  // the same wait, but nobody holds intersection 0 after t = 12 s (a lost request, or the
+     // lab's client that never asks again): 37 s unexcused
+    RunRecord r = TwoCars();
+    StandThenDrive(&r, 0, 10.0, 50.0);
+    r.events = {At(5, "grant", 1, 0), At(10, "wait", 0, 0), At(12, "free", 1, 0),
+                At(49.1, "go", 0, 0)};
+    const ExpectationResult result = Judge(clause, r);
+    EXPECT_FALSE(result.passed);
+    EXPECT_THAT(result.detail, HasSubstr("car 0 stood still from t=12.0 s"));
+  }
+  {  // a car that stands without waiting for anything (navigation failed), 31 s
+    RunRecord r = TwoCars();
+    StandThenDrive(&r, 1, 60.0, 91.0);
+    EXPECT_FALSE(Judge(clause, r).passed);
+    EXPECT_TRUE(Judge(Clause("no_gridlock", ExpectArgs{.max_s = 31.5}), r).passed);
+    EXPECT_TRUE(Judge(Clause("no_gridlock", ExpectArgs{.car = 0, .max_s = 30.0}), r).passed);
+  }
+  {  // parked after its laps: excused to the end
+    RunRecord r = TwoCars();
+    StandThenDrive(&r, 1, 40.0, 100.0);
+    r.events = {At(40, "parked", 1)};
+    EXPECT_TRUE(Judge(clause, r).passed);
+  }
+}
+
+TEST(ExpectationsTest, MaxWaitJudgesEachWaitAndAnUnfinishedOneRunsToTheEnd) {
+  RunRecord r = TwoCars();
+  r.events = {At(10, "wait", 0, 0), At(14, "go", 0, 0), At(20, "wait", 1, 1), At(30, "go", 1, 1),
+              At(95, "wait", 0, 1)};
+  EXPECT_TRUE(Judge(Clause("max_wait", ExpectArgs{.max_s = 10.0}), r).passed);
+  const ExpectationResult tight = Judge(Clause("max_wait", ExpectArgs{.max_s = 9.0}), r);
+  EXPECT_FALSE(tight.passed);
+  EXPECT_THAT(tight.detail, HasSubstr("car 1 waited 10.0 s at intersection 1"));
+  EXPECT_TRUE(Judge(Clause("max_wait", ExpectArgs{.max_s = 9.0, .intersection = 0}), r).passed);
+  EXPECT_TRUE(Judge(Clause("max_wait", ExpectArgs{.car = 0, .max_s = 5.0}), r).passed);
+  EXPECT_FALSE(Judge(Clause("max_wait", ExpectArgs{.car = 0, .max_s = 4.5}), r).passed);
+}
+
+TEST(ExpectationsTest, MinThroughputCountsEntriesPerMinutePerIntersection) {
+  RunRecord r = TwoCars();  // 100 s
+  r.events = {At(1, "request", 0, 1)};
+  for (int k = 0; k < 5; ++k) r.events.push_back(Enter(10.0 + k, k % 2, 0, true));
+  // intersection 0: 5 in 100 s = 3/min; intersection 1: asked for, never entered
+  EXPECT_TRUE(Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.0}), r)
+                  .passed);
+  EXPECT_FALSE(Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.1}), r)
+                   .passed);
+  const ExpectationResult all = Judge(Clause("min_throughput", ExpectArgs{.per_minute = 1.0}), r);
+  EXPECT_FALSE(all.passed);
+  EXPECT_THAT(all.detail, HasSubstr("intersection 1: 0 crossings"));
 }
 
 TEST(ExpectationsTest, IntersectionMutexReplaysEntriesAndExits) {

@@ -5,6 +5,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -125,6 +128,34 @@ TEST(SimulationTest, LostMessagesDelayCarsButNeverBreakTheIntersectionRules) {
       EXPECT_TRUE(r.passed) << r.name << ": " << r.detail;
     }
   }
+}
+
+TEST(SimulationTest, TheServerCountersAreWhatItsEventsAddUpTo) {
+  // a lossy link and a short lease: lost keepalives let leases expire
+  const RunRecord record = RunScenario(
+      LoadScenario(kDefault, {"v2i.loss=0.5", "traffic_lights.lease_s=1.5", "duration_s=120",
+                              "expect=[]"}));
+  std::map<std::string, std::uint64_t> count;
+  std::set<int> intersections;
+  ForEachEvent(record, [&](const Event& e) {
+    ++count[e.type];
+    if (e.type == "grant" || e.type == "denied" || e.type == "lease_expired" ||
+        e.type == "request") {
+      EXPECT_GE(e.intersection, 0) << EventJsonLine(e);
+      intersections.insert(e.intersection);
+    }
+  });
+  EXPECT_EQ(count["request"], record.server.requests);
+  EXPECT_EQ(count["grant"], record.server.grants);
+  EXPECT_EQ(count["denied"], record.server.denials);
+  EXPECT_EQ(count["free"], record.server.frees);
+  EXPECT_EQ(count["lease_expired"], record.server.lease_expiries);
+  // the run exercised all of them, at both intersections
+  EXPECT_GT(record.server.lease_expiries, 0u);
+  EXPECT_GT(record.server.denials, 0u);
+  EXPECT_EQ(intersections, (std::set<int>{0, 1}));
+  // renewals are requests, not grants: a holder renews every second
+  EXPECT_GT(record.server.requests, record.server.grants + record.server.denials);
 }
 
 TEST(SimulationTest, TheOracleStopsForAnObstacleAndDrivesOnWhenItIsGone) {

@@ -1,0 +1,49 @@
+// `stack.preset`: one key that selects the lab's stack as published (`lab`) or every fix this
+// simulator offers (`safe`). A preset is a set of option values beneath what the scenario says:
+// it fills only the keys the scenario (with its --set overrides) leaves out, so single options may
+// still be overridden. README "The lab's stack and its fixes" lists every option, what the lab's
+// code does, what the fix does and why.
+//
+// Where it applies:
+//   cars[i].stack.preset   that car's `stack:` and `intersection_client:` options;
+//   stack.preset           (top level) every car's, unless the car names its own, and the traffic
+//                          light server's policy (the lab's vtl.py: `original`).
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "sim/core/config.h"
+
+namespace autonomsim::sim {
+
+// The scenario's top-level `stack:` entry.
+struct FleetStackConfig {
+  std::optional<std::string> preset;  // "lab" or "safe"; none: each option at its default
+
+  template <class V>
+  void Describe(V& v) {
+    v("preset", preset);
+  }
+  void Validate() const;
+};
+
+// The names a preset may have, in the order README lists them.
+const std::vector<std::string>& StackPresetNames();
+
+// The option values a preset sets, as the YAML a car entry (`car`) or the scenario's root
+// (`scenario`) would carry. Throws std::invalid_argument for an unknown name.
+YAML::Node StackPresetForCar(const std::string& name);
+YAML::Node StackPresetForScenario(const std::string& name);
+
+// Fills `root` (a scenario, overrides applied) from its presets, as described above. A preset
+// that is not a known name is a ConfigError at its key.
+void ApplyStackPresets(YAML::Node& root, const ConfigSource& source);
+
+// Copies into `target` every key of `beneath` it lacks, recursively through mappings; keys
+// `target` has keep their values.
+void MergeBeneath(YAML::Node target, const YAML::Node& beneath);
+
+}  // namespace autonomsim::sim

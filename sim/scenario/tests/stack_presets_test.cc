@@ -1,0 +1,115 @@
+#include "sim/scenario/stack_presets.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "sim/scenario/scenario.h"
+
+namespace autonomsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// A scenario written into scenarios/ (so that tracks/lab.yaml resolves), removed at the end.
+class PresetScenarioFile {
+ public:
+  PresetScenarioFile(const std::string& name, const std::string& text)
+      : path_(fs::path("scenarios") / (".test_preset_" + name + ".yaml")) {
+    std::ofstream(path_) << text;
+  }
+  ~PresetScenarioFile() { fs::remove(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+constexpr const char* kPresetTwoStackCars = R"(name: presets
+duration_s: 10
+track: tracks/lab.yaml
+cars:
+  - {id: 0, route: south_loop, start: real_car, driver: stack, perception: {enabled: true},
+     stack: &s {follow_path: {pursuit: {lookahead_dist_m: 0.5}}}}
+  - {id: 1, route: inner_loop, start: inner_north, driver: stack, perception: {enabled: true},
+     stack: *s}
+)";
+
+TEST(StackPresetsTest, NoPresetLeavesEveryOptionAtItsDefault) {
+  PresetScenarioFile file("none", kPresetTwoStackCars);
+  const Scenario s = LoadScenario(file.path()).scenario;
+  const CarConfig defaults;
+  EXPECT_EQ(s.cars[0].stack.localization.use_pose_fix, defaults.stack.localization.use_pose_fix);
+  EXPECT_EQ(s.cars[0].intersection_client.re_request, defaults.intersection_client.re_request);
+  EXPECT_EQ(s.traffic_lights.policy, "fifo");
+}
+
+TEST(StackPresetsTest, LabSelectsTheLabsCodeAndTheOriginalServerExceptWhatTheScenarioSets) {
+  PresetScenarioFile file("lab", kPresetTwoStackCars);
+  const Scenario s = LoadScenario(file.path(), {"stack.preset=lab"}).scenario;
+  EXPECT_EQ(s.traffic_lights.policy, "original");
+  for (const CarConfig& car : s.cars) {
+    EXPECT_FALSE(car.stack.localization.use_pose_fix);
+    EXPECT_FALSE(car.stack.emergency_stop.enabled);
+    EXPECT_FALSE(car.intersection_client.re_request);
+    EXPECT_FALSE(car.intersection_client.latch_wait);
+    EXPECT_FALSE(car.intersection_client.release_on_failure);
+    EXPECT_EQ(car.intersection_client.release_margin_m, 0.0);
+    EXPECT_EQ(car.intersection_client.exit_margin_m, 0.0);
+    // the scenario's own value beats the preset's 0.6
+    EXPECT_EQ(car.stack.follow_path.pursuit.lookahead_dist_m, 0.5);
+  }
+}
+
+TEST(StackPresetsTest, ACarsOwnPresetBeatsTheFleetsAndAnExplicitPolicyBeatsThePresets) {
+  PresetScenarioFile file("mixed", kPresetTwoStackCars);
+  const Scenario s = LoadScenario(file.path(), {"stack.preset=safe", "cars[1].stack={preset: lab}",
+                                                "traffic_lights.policy=original"})
+                         .scenario;
+  EXPECT_EQ(s.traffic_lights.policy, "original");
+  EXPECT_TRUE(s.cars[0].stack.localization.use_pose_fix);
+  EXPECT_TRUE(s.cars[0].stack.emergency_stop.enabled);
+  EXPECT_TRUE(s.cars[0].intersection_client.latch_wait);
+  EXPECT_TRUE(s.cars[0].intersection_client.release_on_failure);
+  EXPECT_EQ(s.cars[0].stack.follow_path.pursuit.lookahead_dist_m, 0.5);
+  EXPECT_FALSE(s.cars[1].stack.localization.use_pose_fix);
+  EXPECT_FALSE(s.cars[1].intersection_client.re_request);
+  EXPECT_EQ(s.cars[1].stack.follow_path.pursuit.lookahead_dist_m, 0.6);
+}
+
+TEST(StackPresetsTest, AnUnknownPresetIsAnErrorAtItsKey) {
+  PresetScenarioFile file("bad", std::string(kPresetTwoStackCars) + "stack: {preset: fast}\n");
+  try {
+    LoadScenario(file.path());
+    FAIL() << "accepted preset 'fast'";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(".test_preset_bad.yaml:9:"));
+    EXPECT_THAT(e.what(), HasSubstr("stack.preset"));
+    EXPECT_THAT(e.what(), HasSubstr("lab"));
+  }
+  EXPECT_THROW(LoadScenario(file.path(), {"stack.preset=[lab]"}), ConfigError);
+}
+
+TEST(StackPresetsTest, MergeBeneathFillsOnlyMissingKeys) {
+  YAML::Node target = YAML::Load("{a: 1, b: {c: 2}}");
+  MergeBeneath(target, YAML::Load("{a: 9, b: {c: 9, d: 3}, e: {f: 4}}"));
+  EXPECT_EQ(target["a"].as<int>(), 1);
+  EXPECT_EQ(target["b"]["c"].as<int>(), 2);
+  EXPECT_EQ(target["b"]["d"].as<int>(), 3);
+  EXPECT_EQ(target["e"]["f"].as<int>(), 4);
+}
+
+TEST(StackPresetsTest, EveryPresetNamesOnlyKeysTheReaderKnows) {
+  for (const std::string& name : StackPresetNames()) {
+    YAML::Node car = StackPresetForCar(name);
+    car["route"] = "south_loop";
+    EXPECT_NO_THROW(ReadConfig<CarConfig>(car, ConfigSource{name, {}})) << name;
+  }
+  EXPECT_THROW(StackPresetForCar("fast"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace autonomsim::sim
