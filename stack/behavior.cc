@@ -16,6 +16,9 @@ void BehaviorParams::Validate() const {
   if (max_retries < 0) throw std::invalid_argument("max_retries must be >= 0");
   if (!(recovery_reset_m >= 0.0)) throw std::invalid_argument("recovery_reset_m must be >= 0");
   if (!(tracking_window_m > 0.0)) throw std::invalid_argument("tracking_window_m must be > 0");
+  if (!(queue_margin_m >= 0.0 && queue_margin_m <= 5.0)) {
+    throw std::invalid_argument("queue_margin_m must be in [0, 5] m");
+  }
 }
 
 const char* ToString(BehaviorMode mode) {
@@ -91,6 +94,12 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
     if (state->mode != BehaviorMode::kRecovery) {
       if (!input.intersection_free) {
         state->mode = BehaviorMode::kIntersectionWait;
+      } else if (input.collision_ahead && !state->plan_failed && params.patient_in_queue &&
+                 input.near_intersection) {
+        state->mode = BehaviorMode::kRecovery;  // waiting in line: not a failure
+        state->recovery_until = input.now + params.recovery_wait;
+        state->progress_since_recovery_m = 0.0;
+        out.clear_costmaps = true;
       } else if (input.collision_ahead || state->plan_failed) {
         if (state->retries >= params.max_retries) {
           state->mode = BehaviorMode::kFailed;

@@ -44,6 +44,12 @@ struct BehaviorParams {
   // assumed: how far the car's position may move along the route between two ticks (3 Hz at
   // 0.25 m/s: 0.08 m), for tracking it on the route
   double tracking_window_m{1.0};
+  // Beyond the lab's BT (false: every recovery counts): a collision ahead within
+  // queue_margin_m of an intersection's boxes starts a recovery that does not count toward
+  // max_retries. A car queued behind cars waiting at a red light otherwise used up its six
+  // retries in about 35 s and failed for good while it waited in line.
+  bool patient_in_queue{false};
+  double queue_margin_m{1.5};  // assumed: three cars' lengths back from a stop box
 
   template <class V>
   void Describe(V& v) {
@@ -54,6 +60,8 @@ struct BehaviorParams {
     v("max_retries", max_retries);
     v("recovery_reset_m", recovery_reset_m);
     v("tracking_window_m", tracking_window_m);
+    v("patient_in_queue", patient_in_queue);
+    v("queue_margin_m", queue_margin_m);
   }
   void Validate() const;
 };
@@ -75,6 +83,8 @@ struct BehaviorInput {
   // The newest plan reply since the previous tick: true when it failed; none when no reply came.
   std::optional<bool> plan_failed;
   bool mission_done{false};  // the operator ended the drive (laps done)
+  // Whether the estimate is within queue_margin_m of an intersection's boxes (patient_in_queue).
+  bool near_intersection{false};
 };
 
 struct BehaviorOutput {

@@ -238,7 +238,7 @@ void AddVehicleCommunicationNode(
 
 // bt_navigator: the gate, the goals, recovery (3 Hz).
 void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                     const stack::BehaviorParams& params, const world::Polyline* route,
+                     const stack::BehaviorParams& params, const StackContext& context,
                      const StackHooks& hooks) {
   struct State {
     stack::BehaviorState behavior;
@@ -261,15 +261,21 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                           [state](const PathMessage& p, Time) { state->plan_failed = !p.ok; });
   const auto out = graph.AddPublisher(node, topics.behavior);
   graph.AddTimer(node, params.tick_period, params.tick_period,
-                 [state, out, params, route, mission_done = hooks.mission_done,
+                 [state, out, params, route = context.route,
+                  intersections = context.intersections, mission_done = hooks.mission_done,
                   on_behavior = hooks.on_behavior](Time now, Outbox& outbox) {
                    if (!state->odom) return;
-                   const stack::BehaviorInput input{.now = now,
-                                                    .p_map = state->odom->X_map_base.position(),
-                                                    .intersection_free = state->intersection_free,
-                                                    .collision_ahead = state->collision_ahead,
-                                                    .plan_failed = state->plan_failed,
-                                                    .mission_done = mission_done && mission_done()};
+                   const world::Vec2 p = state->odom->X_map_base.position();
+                   const stack::BehaviorInput input{
+                       .now = now,
+                       .p_map = p,
+                       .intersection_free = state->intersection_free,
+                       .collision_ahead = state->collision_ahead,
+                       .plan_failed = state->plan_failed,
+                       .mission_done = mission_done && mission_done(),
+                       .near_intersection =
+                           params.patient_in_queue &&
+                           stack::UseFollowPath(*intersections, p, params.queue_margin_m)};
                    state->plan_failed.reset();
                    stack::BehaviorOutput result =
                        stack::StepBehavior(params, *route, input, &state->behavior);
@@ -548,7 +554,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
     emergency = Topic<EmergencyCall>(graph, "/emergency", BoolType("std_msgs/Bool"));
   }
   AddVehicleCommunicationNode(graph, cache, topics, context, std::move(hooks.intersection_client));
-  AddBehaviorNode(graph, cache, topics, config.behavior, context.route, hooks);
+  AddBehaviorNode(graph, cache, topics, config.behavior, context, hooks);
   AddPlannerNode(graph, cache, topics, config, *context.static_map);
   AddLocalCostmapNode(graph, cache, topics, config, *context.obstacle_grid);
   AddControllerNode(graph, cache, topics, config, context, std::move(hooks.on_control));

@@ -14,6 +14,7 @@ stack:
   follow_path: {pursuit: {lookahead_dist_m: 0.6}}
   planner: {start_escape_m: 0.0}
   controller_selector: {zone_margin_m: 0.0}
+  behavior: {patient_in_queue: false}
   emergency_stop: {enabled: false}
 intersection_client:
   re_request: false
@@ -28,6 +29,7 @@ stack:
   follow_path: {pursuit: {lookahead_dist_m: 0.4}}
   planner: {start_escape_m: 0.3}
   controller_selector: {zone_margin_m: 0.3}
+  behavior: {patient_in_queue: true}
   emergency_stop: {enabled: true}
 intersection_client:
   re_request: true

@@ -71,6 +71,37 @@ TEST(BehaviorTest, WaitsAtTheIntersectionUntilItIsFree) {
   EXPECT_FALSE(out.hold);
 }
 
+TEST(BehaviorTest, APatientCarWaitingInLineNearAnIntersectionNeverUsesUpItsRetries) {
+  for (const bool patient : {false, true}) {
+    const BehaviorParams params{
+        .recovery_wait = std::chrono::seconds(5), .max_retries = 2, .patient_in_queue = patient};
+    BehaviorState state;
+    BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
+    input.near_intersection = true;
+    BehaviorMode last = BehaviorMode::kDrive;
+    // blocked for 60 s: retry every 5 s
+    for (double t = 10.0; t <= 70.0; t += 1.0 / 3.0) {
+      input.now = FromSeconds(t);
+      input.collision_ahead = true;
+      last = StepBehavior(params, Straight(10.0), input, &state).mode;
+    }
+    EXPECT_EQ(last == BehaviorMode::kFailed, !patient) << "patient_in_queue " << patient;
+    EXPECT_EQ(state.retries, patient ? 0 : 2);
+  }
+  // away from intersections a patient car still fails
+  const BehaviorParams params{
+      .recovery_wait = std::chrono::seconds(5), .max_retries = 2, .patient_in_queue = true};
+  BehaviorState state;
+  BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
+  BehaviorMode last = BehaviorMode::kDrive;
+  for (double t = 10.0; t <= 70.0; t += 1.0 / 3.0) {
+    input.now = FromSeconds(t);
+    input.collision_ahead = true;
+    last = StepBehavior(params, Straight(10.0), input, &state).mode;
+  }
+  EXPECT_EQ(last, BehaviorMode::kFailed);
+}
+
 TEST(BehaviorTest, ACollisionAheadClearsTheCostmapsWaitsAndRetries) {
   const BehaviorParams params{.recovery_wait = std::chrono::seconds(5), .max_retries = 2};
   BehaviorState state;
