@@ -6,45 +6,49 @@
 namespace autonomsim::sim {
 namespace {
 
-// Each option's value in the lab's code (reference §5-§7) and with every fix; README "The lab's
-// stack and its fixes" gives the reasons. Keep the two in the same order as the README table.
-constexpr const char* kLabCar = R"(
-stack:
-  localization: {use_pose_fix: false}
-  follow_path: {pursuit: {lookahead_dist_m: 0.6}}
-  planner: {start_escape_m: 0.0}
-  controller_selector: {zone_margin_m: 0.0}
-  behavior: {patient_in_queue: false}
-  emergency_stop: {enabled: false}
-intersection_client:
-  re_request: false
-  release_margin_m: 0.0
-  exit_margin_m: 0.0
-  latch_wait: false
-  release_on_failure: false
-)";
-constexpr const char* kSafeCar = R"(
-stack:
-  localization: {use_pose_fix: true}
-  follow_path: {pursuit: {lookahead_dist_m: 0.4}}
-  planner: {start_escape_m: 0.3}
-  controller_selector: {zone_margin_m: 0.3}
-  behavior: {patient_in_queue: true}
-  emergency_stop: {enabled: true}
-intersection_client:
-  re_request: true
-  release_margin_m: 0.3
-  exit_margin_m: 0.15
-  latch_wait: true
-  release_on_failure: true
-)";
-constexpr const char* kLabScenario = "traffic_lights: {policy: original}";
-constexpr const char* kSafeScenario = "traffic_lights: {policy: fifo}";
-
 const char* Pick(const std::string& name, const char* lab, const char* safe) {
   if (name == "lab") return lab;
   if (name == "safe") return safe;
   throw std::invalid_argument("unknown stack preset '" + name + "' (lab or safe)");
+}
+
+// Each option's value in the lab's code (reference §5-§7) and with every fix, by its key path in
+// a car entry; README "The lab's stack and its fixes" gives the reasons, in the same order.
+struct PresetOption {
+  const char* key;
+  const char* lab;
+  const char* safe;
+};
+constexpr PresetOption kCarOptions[] = {
+    {"stack.localization.use_pose_fix", "false", "true"},
+    {"stack.follow_path.pursuit.lookahead_dist_m", "0.6", "0.4"},
+    {"stack.planner.start_escape_m", "0.0", "0.3"},
+    {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
+    {"stack.behavior.patient_in_queue", "false", "true"},
+    {"stack.emergency_stop.enabled", "false", "true"},
+    {"intersection_client.re_request", "false", "true"},
+    {"intersection_client.release_margin_m", "0.0", "0.3"},
+    {"intersection_client.exit_margin_m", "0.0", "0.15"},
+    {"intersection_client.latch_wait", "false", "true"},
+    {"intersection_client.release_on_failure", "false", "true"},
+};
+// The scenario-level option a top-level preset sets: the lab's vtl.py, or ours.
+constexpr PresetOption kScenarioOptions[] = {{"traffic_lights.policy", "original", "fifo"}};
+
+// A mapping with each option's value for `name` at its dotted key path.
+template <std::size_t N>
+YAML::Node Build(const PresetOption (&options)[N], const std::string& name) {
+  YAML::Node root(YAML::NodeType::Map);
+  for (const PresetOption& option : options) {
+    const std::vector<std::string> parts = ParseOverridePath(option.key);
+    YAML::Node node = root;
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      if (!node[parts[i]]) node[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      node.reset(node[parts[i]]);
+    }
+    node[parts.back()] = YAML::Load(Pick(name, option.lab, option.safe));
+  }
+  return root;
 }
 
 // The preset named at `node[key]` (a mapping entry), checked; none when absent.
@@ -77,12 +81,17 @@ const std::vector<std::string>& StackPresetNames() {
   return names;
 }
 
-YAML::Node StackPresetForCar(const std::string& name) {
-  return YAML::Load(Pick(name, kLabCar, kSafeCar));
-}
+YAML::Node StackPresetForCar(const std::string& name) { return Build(kCarOptions, name); }
 
 YAML::Node StackPresetForScenario(const std::string& name) {
-  return YAML::Load(Pick(name, kLabScenario, kSafeScenario));
+  return Build(kScenarioOptions, name);
+}
+
+std::vector<std::string> StackPresetKeys() {
+  std::vector<std::string> keys;
+  for (const PresetOption& option : kCarOptions) keys.emplace_back(option.key);
+  for (const PresetOption& option : kScenarioOptions) keys.emplace_back(option.key);
+  return keys;
 }
 
 void MergeBeneath(YAML::Node target, const YAML::Node& beneath) {

@@ -38,6 +38,9 @@ const std::vector<std::string>& StackPresetNames();
 YAML::Node StackPresetForCar(const std::string& name);
 YAML::Node StackPresetForScenario(const std::string& name);
 
+// Every option a preset sets, as key paths (a car's, then the scenario's), in README's order.
+std::vector<std::string> StackPresetKeys();
+
 // Fills `root` (a scenario, overrides applied) from its presets, as described above. A preset
 // that is not a known name is a ConfigError at its key.
 void ApplyStackPresets(YAML::Node& root, const ConfigSource& source);

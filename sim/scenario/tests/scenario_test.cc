@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "sim/mqtt/mqtt_process.h"  // TempDir
+#include "sim/scenario/tests/scenario_file.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -16,20 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-// Scenario files written into scenarios/ (so that `track: tracks/lab.yaml` resolves as it does for
-// users), removed again when the test ends.
-class ScenarioFile {
- public:
-  ScenarioFile(const std::string& name, const std::string& text)
-      : path_(fs::path("scenarios") / (".test_" + name + ".yaml")) {
-    std::ofstream(path_) << text;
-  }
-  ~ScenarioFile() { fs::remove(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using testing::ScenarioFile;
 
 const char* kValid = R"(name: valid
 seed: 3

@@ -5,8 +5,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "sim/scenario/scenario.h"
+#include "sim/scenario/tests/scenario_file.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -14,19 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-// A scenario written into scenarios/ (so that tracks/lab.yaml resolves), removed at the end.
-class PresetScenarioFile {
- public:
-  PresetScenarioFile(const std::string& name, const std::string& text)
-      : path_(fs::path("scenarios") / (".test_preset_" + name + ".yaml")) {
-    std::ofstream(path_) << text;
-  }
-  ~PresetScenarioFile() { fs::remove(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using testing::ScenarioFile;
 
 constexpr const char* kPresetTwoStackCars = R"(name: presets
 duration_s: 10
@@ -39,7 +29,7 @@ cars:
 )";
 
 TEST(StackPresetsTest, NoPresetLeavesEveryOptionAtItsDefault) {
-  PresetScenarioFile file("none", kPresetTwoStackCars);
+  ScenarioFile file("preset_none", kPresetTwoStackCars);
   const Scenario s = LoadScenario(file.path()).scenario;
   const CarConfig defaults;
   EXPECT_EQ(s.cars[0].stack.localization.use_pose_fix, defaults.stack.localization.use_pose_fix);
@@ -48,7 +38,7 @@ TEST(StackPresetsTest, NoPresetLeavesEveryOptionAtItsDefault) {
 }
 
 TEST(StackPresetsTest, LabSelectsTheLabsCodeAndTheOriginalServerExceptWhatTheScenarioSets) {
-  PresetScenarioFile file("lab", kPresetTwoStackCars);
+  ScenarioFile file("preset_lab", kPresetTwoStackCars);
   const Scenario s = LoadScenario(file.path(), {"stack.preset=lab"}).scenario;
   EXPECT_EQ(s.traffic_lights.policy, "original");
   for (const CarConfig& car : s.cars) {
@@ -65,7 +55,7 @@ TEST(StackPresetsTest, LabSelectsTheLabsCodeAndTheOriginalServerExceptWhatTheSce
 }
 
 TEST(StackPresetsTest, ACarsOwnPresetBeatsTheFleetsAndAnExplicitPolicyBeatsThePresets) {
-  PresetScenarioFile file("mixed", kPresetTwoStackCars);
+  ScenarioFile file("preset_mixed", kPresetTwoStackCars);
   const Scenario s = LoadScenario(file.path(), {"stack.preset=safe", "cars[1].stack={preset: lab}",
                                                 "traffic_lights.policy=original"})
                          .scenario;
@@ -81,7 +71,7 @@ TEST(StackPresetsTest, ACarsOwnPresetBeatsTheFleetsAndAnExplicitPolicyBeatsThePr
 }
 
 TEST(StackPresetsTest, AnUnknownPresetIsAnErrorAtItsKey) {
-  PresetScenarioFile file("bad", std::string(kPresetTwoStackCars) + "stack: {preset: fast}\n");
+  ScenarioFile file("preset_bad", std::string(kPresetTwoStackCars) + "stack: {preset: fast}\n");
   try {
     LoadScenario(file.path());
     FAIL() << "accepted preset 'fast'";
@@ -100,6 +90,17 @@ TEST(StackPresetsTest, MergeBeneathFillsOnlyMissingKeys) {
   EXPECT_EQ(target["b"]["c"].as<int>(), 2);
   EXPECT_EQ(target["b"]["d"].as<int>(), 3);
   EXPECT_EQ(target["e"]["f"].as<int>(), 4);
+}
+
+TEST(StackPresetsTest, ReadmeListsEveryOptionAPresetSets) {
+  std::ifstream readme("README.md");
+  ASSERT_TRUE(readme) << "run from the repository root";
+  const std::string text((std::istreambuf_iterator<char>(readme)), {});
+  const std::size_t section = text.find("## The lab's stack and its fixes");
+  ASSERT_NE(section, std::string::npos);
+  for (const std::string& key : StackPresetKeys()) {
+    EXPECT_NE(text.find("| `" + key + "`", section), std::string::npos) << key;
+  }
 }
 
 TEST(StackPresetsTest, EveryPresetNamesOnlyKeysTheReaderKnows) {
