@@ -89,7 +89,8 @@ OccupancyMap BuildStaticMap(const Track& track, double resolution_m) {
   OccupancyMap map;
   map.resolution_m = resolution_m;
   // 1e-9 absorbs the rounding of size / resolution so that 5 m at 5 cm is 100 cells, not 101.
-  const int side = static_cast<int>(std::ceil(spec.size_m / resolution_m - 1e-9));
+  const double map_size_m = spec.planner_map_size_m.value_or(spec.size_m);
+  const int side = static_cast<int>(std::ceil(map_size_m / resolution_m - 1e-9));
   map.width_cells = side;
   map.height_cells = side;
   map.origin_m = Vec2(-0.5 * side * resolution_m, -0.5 * side * resolution_m);

@@ -35,7 +35,8 @@ struct OccupancyMap {
   Vec2 CellCentre(int col, int row) const;                            // map coords
 };
 
-// Covers spec.size_m × size_m centred on the origin (rounded up to whole cells). Lines with planner
+// Covers a square of side spec.planner_map_size_m (absent: spec.size_m) centred on the origin
+// (rounded up to whole cells). Lines with planner
 // "line": every cell the painted stroke overlaps with positive area (some point of the sampled
 // centreline closer than width/2 to the cell; round ends) is occupied; "filled": also every cell
 // whose centre is inside the closed outline; "none": ignored. Throws std::invalid_argument if the

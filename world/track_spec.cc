@@ -59,6 +59,9 @@ Pose2 StartPoseSpec::ToPose() const { return Pose2{x_m, y_m, yaw_deg * std::numb
 
 void TrackSpec::Validate() const {
   Require(size_m > 0.0, "size_m must be > 0, got " + std::to_string(size_m));
+  Require(!planner_map_size_m || *planner_map_size_m >= size_m,
+          "planner_map_size_m must be >= size_m (" + Num(size_m) + " m), got " +
+              (planner_map_size_m ? Num(*planner_map_size_m) : std::string()));
   for (const TrackLineSpec& line : lines) {
     for (std::size_t i = 0; i < line.points_m.size(); ++i) {
       RequireOnFloor(line.points_m[i][0], line.points_m[i][1], size_m,

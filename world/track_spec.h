@@ -8,6 +8,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,9 @@ struct TrackSpec {
   std::string name;
   std::string source;  // provenance of the geometry
   double size_m{5.0};  // the floor is a square of this side, centred on the origin
+  // The planner's static map is a square of this side centred on the origin; absent: the floor's.
+  // A map smaller than the floor would put reachable poses outside it ("start outside the map").
+  std::optional<double> planner_map_size_m;
   Rgb floor_rgb{0, 0, 0};
   std::map<std::string, Rgb> colors_rgb;
   std::vector<TrackLineSpec> lines;
@@ -110,6 +114,7 @@ struct TrackSpec {
     v("name", name);
     v("source", source);
     v("size_m", size_m);
+    v("planner_map_size_m", planner_map_size_m);
     v("floor_rgb", floor_rgb);
     v("colors_rgb", colors_rgb);
     v("lines", lines);

@@ -178,8 +178,8 @@ world::OccupancyMap* CostmapLabTest::map_ = nullptr;
 TEST_F(CostmapLabTest, StaticLayerAndInflationOfTheLabMap) {
   const GlobalCostmap global(GlobalCostmapParams{}, *map_);
   const Costmap2D& costmap = global.costmap();
-  EXPECT_EQ(costmap.size_x_cells(), 100);  // 5 m at 0.05 m (reference §1, §6)
-  EXPECT_EQ(costmap.size_y_cells(), 100);
+  EXPECT_EQ(costmap.size_x_cells(), 200);  // the 10 m map at 0.05 m (reference §1, §6)
+  EXPECT_EQ(costmap.size_y_cells(), 200);
   int lethal = 0;
   for (std::size_t i = 0; i < map_->cells.size(); ++i) {
     const bool occupied = map_->cells[i] != world::OccupancyMap::kFree;
@@ -196,6 +196,7 @@ TEST_F(CostmapLabTest, StaticLayerAndInflationOfTheLabMap) {
   EXPECT_GT(lane, 50);
   EXPECT_LT(lane, kInscribedInflatedObstacle);
   EXPECT_EQ(costmap.CostAt(Vec2(0.0, -2.45)), kFreeSpace);
+  EXPECT_EQ(costmap.CostAt(Vec2(0.0, -2.6)), kFreeSpace);  // beyond the floor, on the map
   // Inside an island: lethal (filled).
   EXPECT_EQ(costmap.CostAt(Vec2(0.0, 0.93)), kLethalObstacle);
 }

@@ -313,6 +313,15 @@ TEST_F(GlobalPlannerLabTest, OuterRingGoalsGoRoundTheRingAtTheMapEdge) {
   EXPECT_GT(outside_lane_centre, static_cast<int>(plan.path_m.size() * 3 / 4));
 }
 
+// The right intersection's southern stop box reaches x = 2.6 m, past the floor's edge (2.5 m;
+// reference §1). The real planner's map is 10 m × 10 m (reference §1), so a car pushed wide
+// there, as cars queued in the corner were in the fleet study (x = 2.53 m), can still plan back.
+TEST_F(GlobalPlannerLabTest, TheStopBoxPastTheFloorEdgeIsOnTheMap) {
+  const GlobalPlan plan = Plan(Vec2(2.53, -1.03), Vec2(2.17, 0.3));
+  ExpectConnectedAndTraversable(*costmap_, plan);
+  EXPECT_TRUE(plan.exact_goal);
+}
+
 TEST_F(GlobalPlannerLabTest, LongGoalsIgnoreLaneDirection) {
   // Between two points of one middle-road lane the yellow line keeps the path in that lane.
   const GlobalPlan eastbound_lane = Plan(Vec2(-0.6, -0.31), Vec2(0.6, -0.31));
@@ -375,8 +384,10 @@ TEST_F(GlobalPlannerLabTest, PlanThroughLaneGoalsStaysNearTheRoute) {
         }
       }
     }
-    // measured: south_loop 0.112 m, inner_loop 0.075 m (at 0.5 m spacing: 0.157 m, 0.175 m)
-    EXPECT_LT(worst, 0.12) << name << ": worst at s " << worst_s;
+    // measured: south_loop 0.112 m, inner_loop 0.125 m (0.075 m on a 5 m map: lane centres such
+    // as y = 1.55 m lie on cell boundaries, and which cell a goal falls in is the rounding of its
+    // offset from the map's origin; at 0.5 m spacing: 0.157 m, 0.175 m)
+    EXPECT_LT(worst, 0.13) << name << ": worst at s " << worst_s;
   }
 }
 
