@@ -26,6 +26,8 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
     {"stack.behavior.patient_in_queue", "false", "true"},
     {"stack.emergency_stop.enabled", "false", "true"},
+    {"stack.lane_controller.collision.horizon_s", "1.0", "2.0"},
+    {"stack.follow_path.collision.horizon_s", "1.0", "2.0"},
     {"intersection_client.re_request", "false", "true"},
     {"intersection_client.release_margin_m", "0.0", "0.3"},
     {"intersection_client.exit_margin_m", "0.0", "0.15"},
