@@ -213,8 +213,10 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
       if (params.imu_yaw_relative && !s.imu_yaw_origin_rad) s.imu_yaw_origin_rad = m.yaw_rad;
       const double yaw_odom =
           params.imu_yaw_relative ? m.yaw_rad - *s.imu_yaw_origin_rad : m.yaw_rad;
-      CorrectScalar(kEkfYaw, world::WrapAngle(yaw_odom - s.mean(kEkfYaw)),
-                    params.imu_yaw_variance_rad2, &s);
+      if (params.fuse_imu_yaw) {
+        CorrectScalar(kEkfYaw, world::WrapAngle(yaw_odom - s.mean(kEkfYaw)),
+                      params.imu_yaw_variance_rad2, &s);
+      }
       CorrectScalar(kEkfYawRate, m.yaw_rate_rad_per_s - s.mean(kEkfYawRate),
                     params.imu_yaw_rate_variance_rad2_per_s2, &s);
       s.last_imu = m.stamp;

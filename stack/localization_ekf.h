@@ -57,6 +57,11 @@ struct LocalizationEkfParams {
   // variance to 1e-9, so the filter takes the Hall speed almost as is.
   double wheel_speed_variance_m2_per_s2{1e-9};
   bool use_pose_fix{false};  // beyond the real car (see above)
+  // Whether the IMU's heading is fused (the car's config: imu0 yaw true). False fuses its yaw rate
+  // only, as robot_localization users do when another source owns the heading: the BNO055's
+  // heading drifts with its gyro bias, and with σ 0.01 rad the filter trusts it over a pose fix's
+  // 0.02 rad, so the estimate follows the drift however good the fixes are.
+  bool fuse_imu_yaw{true};
 
   template <class V>
   void Describe(V& v) {
@@ -72,6 +77,7 @@ struct LocalizationEkfParams {
     v("imu_yaw_rate_variance_rad2_per_s2", imu_yaw_rate_variance_rad2_per_s2);
     v("wheel_speed_variance_m2_per_s2", wheel_speed_variance_m2_per_s2);
     v("use_pose_fix", use_pose_fix);
+    v("fuse_imu_yaw", fuse_imu_yaw);
   }
   void Validate() const;
 };

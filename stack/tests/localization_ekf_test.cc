@@ -99,6 +99,7 @@ TEST(LocalizationEkfParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.sensor_timeout, Milliseconds(100));
   EXPECT_TRUE(params.imu_yaw_relative);
   EXPECT_FALSE(params.use_pose_fix);
+  EXPECT_TRUE(params.fuse_imu_yaw);  // the car's config fuses the IMU's heading
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
   auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
@@ -107,7 +108,7 @@ TEST(LocalizationEkfParamsTest, DefaultsKeysAndValidation) {
                                 "q_position_m2_per_s", "q_yaw_rad2_per_s", "q_speed_m2_per_s3",
                                 "q_yaw_rate_rad2_per_s3", "initial_variance",
                                 "imu_yaw_variance_rad2", "imu_yaw_rate_variance_rad2_per_s2",
-                                "wheel_speed_variance_m2_per_s2", "use_pose_fix"));
+                                "wheel_speed_variance_m2_per_s2", "use_pose_fix", "fuse_imu_yaw"));
   params.imu_yaw_variance_rad2 = 0.0;
   try {
     params.Validate();
@@ -231,6 +232,34 @@ TEST(LocalizationEkfTest, PoseFixPullsTheEstimate) {
   const double weak_error = PositionError(weak.X_map_base, truth.At(ToSeconds(weak.stamp)));
   EXPECT_LT(weak_error, drift);
   EXPECT_GT(weak_error, 0.5 * drift);
+}
+
+// With pose fixes that carry the heading, a drifting IMU heading still wins while it is fused:
+// its variance (0.01 rad)² is a quarter of the fixes' (0.02 rad)² and it comes 20 times as often.
+// Fusing only its yaw rate leaves the heading to the fixes (stack.localization.fuse_imu_yaw).
+TEST(LocalizationEkfTest, WithoutTheImuHeadingTheFixesHoldTheYaw) {
+  const double b = 0.005;  // rad/s: 0.3 rad of drift in 60 s
+  const Truth truth;       // straight along +x
+  auto yaw_error_after_60_s = [&](bool fuse_imu_yaw) {
+    LocalizationEkfParams params;
+    params.use_pose_fix = true;
+    params.fuse_imu_yaw = fuse_imu_yaw;
+    Drive drive(truth, params);
+    drive.imu_yaw = [&](double t) { return b * t; };
+    drive.imu_rate = [&](double) { return b; };
+    std::vector<PoseFix> fixes;
+    for (int ms = 200; ms <= 60000; ms += 200) {  // 5 Hz, at the truth, σ 0.02 m and 0.02 rad
+      PoseFix fix;
+      fix.stamp = Milliseconds(ms);
+      fix.X_map_base = truth.At(ms / 1000.0);
+      fix.covariance = Eigen::Vector3d(4e-4, 4e-4, 4e-4).asDiagonal();
+      fixes.push_back(fix);
+    }
+    const LocalizationEkfOutput out = drive.Run(60.0, fixes);
+    return std::abs(world::WrapAngle(out.X_map_base.yaw_rad - truth.At(ToSeconds(out.stamp)).yaw_rad));
+  };
+  EXPECT_GT(yaw_error_after_60_s(true), 0.15);  // the estimate follows the drift
+  EXPECT_LT(yaw_error_after_60_s(false), 0.02);
 }
 
 TEST(LocalizationEkfTest, CovarianceStaysSymmetricPositiveDefinite) {
