@@ -79,6 +79,9 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   Outcome outcome;
   outcome.file = loaded.file.string();
   outcome.scenario_name = loaded.scenario.name;
+  outcome.seed = loaded.scenario.seed;
+  outcome.scenario_sha256 = loaded.sha256;
+  outcome.result_dir = out_dir;
   // The run streams its trajectory and events into its folder, or without one into a scratch
   // folder that goes with the run: memory stays bounded however long it runs.
   std::optional<sim::RunFolder> folder;

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -59,6 +60,9 @@ struct Outcome {
   std::string scenario_name;
   std::string file;
   std::optional<std::string> input_error;  // unusable input: nothing ran
+  std::uint64_t seed{0};
+  std::string scenario_sha256;                      // of the resolved scenario and track
+  std::optional<std::filesystem::path> result_dir;  // where its folder was written, if anywhere
   std::vector<sim::ExpectationResult> expectations;
   double wall_seconds{0.0};
   double sim_seconds{0.0};

@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <fstream>
 
 #include "sim/core/config.h"
 #include "sim/core/files.h"
@@ -40,46 +39,63 @@ std::string XmlEscape(const std::string& text) {
   return out;
 }
 
-void WriteJunit(const fs::path& file, const std::vector<Outcome>& outcomes) {
+// JUnit XML as CI servers read it (Jenkins, GitLab): one testsuite per scenario, carrying the
+// scenario's wall time and its identity as properties; one testcase per expectation. A testcase
+// has no time of its own: the expectations are judged together after one run.
+std::string JunitXml(const std::vector<Outcome>& outcomes) {
   int tests = 0, failures = 0, errors = 0;
-  std::string cases;
+  double seconds = 0.0;
+  std::string suites;
   for (const Outcome& o : outcomes) {
-    const std::string suite = XmlEscape(o.scenario_name);
+    const std::string name = XmlEscape(o.scenario_name);
+    std::string properties = fmt::format(
+        "      <property name=\"scenario_file\" value=\"{}\"/>\n", XmlEscape(o.file));
+    std::string cases;
+    int suite_failures = 0;
     if (o.input_error) {
-      ++tests;
-      ++errors;
-      cases += fmt::format(
-          "    <testcase classname=\"{}\" name=\"load\" time=\"0\">\n"
+      cases = fmt::format(
+          "    <testcase classname=\"{}\" name=\"load\">\n"
           "      <error message=\"unusable input\">{}</error>\n    </testcase>\n",
-          suite, XmlEscape(*o.input_error));
-      continue;
-    }
-    const double per_case =
-        o.expectations.empty() ? 0.0 : o.wall_seconds / static_cast<double>(o.expectations.size());
-    for (const sim::ExpectationResult& e : o.expectations) {
-      ++tests;
-      cases += fmt::format("    <testcase classname=\"{}\" name=\"{}\" time=\"{:.3f}\">\n", suite,
-                           XmlEscape(e.name), per_case);
-      if (!e.passed) {
-        ++failures;
-        cases += fmt::format("      <failure message=\"{}\">{}</failure>\n", XmlEscape(e.detail),
-                             XmlEscape(e.detail));
-      } else {
-        cases += fmt::format("      <system-out>{}</system-out>\n", XmlEscape(e.detail));
+          name, XmlEscape(*o.input_error));
+    } else {
+      properties += fmt::format(
+          "      <property name=\"seed\" value=\"{}\"/>\n"
+          "      <property name=\"scenario_sha256\" value=\"{}\"/>\n",
+          o.seed, o.scenario_sha256);
+      if (o.result_dir) {
+        properties += fmt::format("      <property name=\"result_folder\" value=\"{}\"/>\n",
+                                  XmlEscape(o.result_dir->string()));
       }
-      cases += "    </testcase>\n";
+      for (const sim::ExpectationResult& e : o.expectations) {
+        cases += fmt::format("    <testcase classname=\"{}\" name=\"{}\">\n", name,
+                             XmlEscape(e.name));
+        if (!e.passed) {
+          ++suite_failures;
+          cases += fmt::format("      <failure message=\"{}\">{}</failure>\n",
+                               XmlEscape(e.detail), XmlEscape(e.detail));
+        } else {
+          cases += fmt::format("      <system-out>{}</system-out>\n", XmlEscape(e.detail));
+        }
+        cases += "    </testcase>\n";
+      }
     }
+    const int suite_tests = o.input_error ? 1 : static_cast<int>(o.expectations.size());
+    const int suite_errors = o.input_error ? 1 : 0;
+    tests += suite_tests;
+    failures += suite_failures;
+    errors += suite_errors;
+    seconds += o.wall_seconds;
+    suites += fmt::format(
+        "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" "
+        "time=\"{:.3f}\">\n    <properties>\n{}    </properties>\n{}  </testsuite>\n",
+        name, suite_tests, suite_failures, suite_errors, o.wall_seconds, properties, cases);
   }
-  std::ofstream out(file);
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << fmt::format("<testsuites tests=\"{}\" failures=\"{}\" errors=\"{}\">\n", tests, failures,
-                     errors)
-      << fmt::format(
-             "  <testsuite name=\"autonomsim check\" tests=\"{}\" failures=\"{}\" "
-             "errors=\"{}\">\n",
-             tests, failures, errors)
-      << cases << "  </testsuite>\n</testsuites>\n";
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" +
+         fmt::format(
+             "<testsuites name=\"autonomsim check\" tests=\"{}\" failures=\"{}\" "
+             "errors=\"{}\" time=\"{:.3f}\">\n",
+             tests, failures, errors, seconds) +
+         suites + "</testsuites>\n";
 }
 
 // SCENARIO|DIR... -> scenario files; a folder contributes the *.yaml files directly inside it,
@@ -160,7 +176,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
              outcomes.size(), outcomes.size() - static_cast<std::size_t>(failed + unusable), failed,
              failed_expectations, unusable);
   if (junit) {
-    WriteJunit(*junit, outcomes);
+    sim::WriteFileAtomically(*junit, JunitXml(outcomes));
     fmt::print("JUnit XML: {}\n", *junit);
   }
   if (unusable > 0) return kExitUnusableInput;
@@ -185,7 +201,7 @@ Command AddCheckCommand(CLI::App& parent) {
       ->add_option("SCENARIO_OR_DIR", o->args,
                    "Scenario files, or folders whose *.yaml files are scenarios")
       ->required();
-  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML")->type_name("FILE");
+  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; properties scenario_file, seed, scenario_sha256, result_folder with --out), a testcase per expectation")->type_name("FILE");
   check
       ->add_option("--out", o->out,
                    "Keep each run's result folder under DIR/<scenario> (each replaced only if "

@@ -24,6 +24,12 @@ using testing::Shell;
 
 fs::path Scratch() { return testing::Scratch("autonomsim_cli"); }
 
+int Count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 TEST(CliTest, HelpAnswers) {
   const Result top = Cli("--help");
   EXPECT_EQ(top.exit_code, 0);
@@ -104,6 +110,15 @@ TEST(CliTest, CheckPassesTheShippedScenariosAndWritesJunit) {
   EXPECT_THAT(xml, HasSubstr("failures=\"0\""));
   EXPECT_THAT(xml, HasSubstr("classname=\"lab_two_cars\" name=\"intersection_mutex\""));
   EXPECT_THAT(xml, ::testing::Not(HasSubstr("<failure")));
+  // One testsuite per scenario, named after it, with its seed among its properties.
+  int scenarios = 0;
+  for (const auto& entry : fs::directory_iterator("scenarios")) {
+    scenarios += entry.path().extension() == ".yaml";
+  }
+  EXPECT_EQ(Count(xml, "<testsuite "), scenarios);
+  EXPECT_EQ(Count(xml, "<property name=\"seed\""), scenarios);
+  EXPECT_THAT(xml, HasSubstr("<testsuite name=\"lab_two_cars\" tests=\"5\" failures=\"0\""));
+  EXPECT_THAT(xml, HasSubstr("<property name=\"seed\" value=\"42\"/>"));
 }
 
 // Three scenarios (one driven by the stack on a board) are enough to show that --jobs changes
@@ -137,6 +152,34 @@ TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
   EXPECT_THAT(r.output, HasSubstr("FAIL completes(laps=9"));
   EXPECT_THAT(r.output, HasSubstr("1 scenario(s): 0 passed, 1 failed (1 expectation(s) failed)"));
   EXPECT_THAT(Read(junit), HasSubstr("<failure message="));
+}
+
+// The suite carries what a CI page shows next to a failure: where the run's folder is and which
+// resolved scenario (seed, hash) gave it; the time is the scenario's, not split over its cases.
+TEST(CliTest, CheckJunitSuitesCarryTheRunsIdentityAndTime) {
+  const fs::path dir = Scratch();
+  const fs::path junit = dir / "check.xml";
+  const Result r = Cli("check scenarios/intersection_conflict.yaml --set seed=7 --set "
+                       "expect[3].completes.laps=9 --out " +
+                       (dir / "out").string() + " --junit " + junit.string());
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  const std::string xml = Read(junit);
+  const nlohmann::json summary =
+      nlohmann::json::parse(Read(dir / "out" / "intersection_conflict" / "summary.json"));
+  EXPECT_EQ(Count(xml, "<testsuite "), 1);
+  EXPECT_THAT(xml, HasSubstr("<testsuite name=\"intersection_conflict\" tests=\"" +
+                             std::to_string(summary["expectations"].size()) +
+                             "\" failures=\"1\" errors=\"0\""));
+  EXPECT_THAT(xml, HasSubstr("<property name=\"seed\" value=\"7\"/>"));
+  EXPECT_THAT(xml, HasSubstr("<property name=\"scenario_sha256\" value=\"" +
+                             summary["scenario_sha256"].get<std::string>() + "\"/>"));
+  EXPECT_THAT(xml, HasSubstr("<property name=\"result_folder\" value=\"" +
+                             (dir / "out" / "intersection_conflict").string() + "\"/>"));
+  EXPECT_EQ(Count(xml, "<testcase "), static_cast<int>(summary["expectations"].size()));
+  EXPECT_EQ(Count(xml, "<testcase classname=\"intersection_conflict\" name=\"completes(laps=9"),
+            1);
+  EXPECT_THAT(xml, ::testing::Not(HasSubstr("<testcase classname=\"intersection_conflict\" "
+                                            "name=\"no_collision\" time=")));
 }
 
 TEST(CliTest, UnusableInputExitsTwo) {
