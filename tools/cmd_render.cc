@@ -82,7 +82,9 @@ Command AddRenderCommand(CLI::App& parent) {
   CLI::App* render = parent.add_subcommand(
       "render",
       "Run a scenario up to an instant and write what one car's cameras see then: "
-      "DIR/<camera>/color.png, depth.png (uint16 mm), depth_preview.png, camera_info.json");
+      "DIR/<camera>/ with what that camera publishes: color_camera/color.png; "
+      "depth_camera/depth.png (uint16 mm) and depth_preview.png (false colour, with a colour "
+      "bar); camera_info.json for each");
   render->add_option("SCENARIO", o->scenario, "Scenario file (YAML)")->required();
   render->add_option("--car", o->car, "The car's id")->required()->type_name("ID");
   render->add_option("--at", o->at_s, "The instant, seconds of simulated time")

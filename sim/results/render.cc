@@ -1,5 +1,6 @@
 #include "sim/results/render.h"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -96,6 +97,8 @@ std::vector<RenderedCamera> RenderCameras(const world::Track& track, const World
     RenderedCamera camera;
     camera.name = stream->camera.name;
     camera.topic = stream->topic;
+    camera.has_color = stream->publish_color;
+    camera.has_depth = stream->publish_depth;
     camera.params = stream->camera;
     camera.info = model.Info();
     camera.X_map_camera = model.X_map_camera(self->pose);
@@ -115,7 +118,7 @@ nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) 
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) X.push_back(m(r, c));
   }
-  return {
+  nlohmann::json info = {
       {"camera", camera.name},
       {"car", car_id},
       {"t_s", ToSeconds(t)},
@@ -132,10 +135,16 @@ nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) 
        "map: x east, y north, z up; camera: optical, z forward, x right, y down; matrices "
        "row-major"},
       {"lens_distortion", camera.params.lens_distortion},
-      {"depth", "depth.png: uint16 millimetres of optical z (not ray length), 0 = no return"},
-      {"clip_near_m", camera.params.clip_near_m},
-      {"clip_far_m", camera.params.clip_far_m},
   };
+  if (camera.has_depth) {
+    info["depth"] = "depth.png: uint16 millimetres of optical z (not ray length), 0 = no return";
+    info["clip_near_m"] = camera.params.clip_near_m;
+    info["clip_far_m"] = camera.params.clip_far_m;
+  }
+  info["images"] = nlohmann::json::array();
+  if (camera.has_color) info["images"].push_back("color.png");
+  if (camera.has_depth) info["images"].push_back("depth.png");
+  return info;
 }
 
 std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double near_m,
@@ -160,6 +169,51 @@ std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double 
   return bgr;
 }
 
+cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_m,
+                                  double far_m) {
+  std::vector<std::uint8_t> preview = DepthPreview(depth, near_m, far_m);
+  cv::Mat out(depth.height, depth.width + kColourBarPanelWidthPx, CV_8UC3, cv::Scalar(40, 40, 40));
+  cv::Mat(depth.height, depth.width, CV_8UC3, preview.data())
+      .copyTo(out(cv::Rect(0, 0, depth.width, depth.height)));
+  // the bar: the preview's own mapping of each row's depth, near at the top
+  const int bar_x = depth.width + 10, bar_w = 22, top = 30, bottom = depth.height - 60;
+  vehicle::DepthImage ramp;
+  ramp.width = 1;
+  ramp.height = bottom - top + 1;
+  for (int r = 0; r < ramp.height; ++r) {
+    const double m = near_m + (far_m - near_m) * r / std::max(1, ramp.height - 1);
+    ramp.mm.push_back(static_cast<std::uint16_t>(std::lround(1000.0 * m)));
+  }
+  const std::vector<std::uint8_t> colours = DepthPreview(ramp, near_m, far_m);
+  for (int r = 0; r < ramp.height; ++r) {
+    const cv::Vec3b c(colours[3 * r], colours[3 * r + 1], colours[3 * r + 2]);
+    out(cv::Rect(bar_x, top + r, bar_w, 1)).setTo(cv::Scalar(c[0], c[1], c[2]));
+  }
+  const cv::Scalar white(255, 255, 255);
+  const int font = cv::FONT_HERSHEY_SIMPLEX;
+  cv::putText(out, "depth (m)", {depth.width + 6, 18}, font, 0.45, white, 1, cv::LINE_AA);
+  // ticks every metre (every 0.5 m under 3 m of range), and the clip limits
+  const double step = far_m - near_m < 3.0 ? 0.5 : 1.0;
+  auto tick = [&](double m) {
+    const int y = top + static_cast<int>(std::lround((m - near_m) / (far_m - near_m) *
+                                                     (bottom - top)));
+    cv::line(out, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, white, 1);
+    cv::putText(out, fmt::format("{:g}", m), {bar_x + bar_w + 8, y + 4}, font, 0.4, white, 1,
+                cv::LINE_AA);
+  };
+  tick(near_m);
+  for (double m = std::ceil(near_m / step) * step; m < far_m - 0.5 * step; m += step) {
+    if (m > near_m + 0.5 * step) tick(m);  // not crowding the limits
+  }
+  tick(far_m);
+  // no return
+  out(cv::Rect(bar_x, depth.height - 40, bar_w, 14)).setTo(cv::Scalar(0, 0, 0));
+  cv::rectangle(out, cv::Rect(bar_x, depth.height - 40, bar_w, 14), white, 1);
+  cv::putText(out, "no return", {bar_x + bar_w + 6, depth.height - 29}, font, 0.4, white, 1,
+              cv::LINE_AA);
+  return out;
+}
+
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
                        const fs::path& out_dir, bool force) {
   WriteFolderAtomically(
@@ -169,14 +223,19 @@ void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int c
           const fs::path dir = partial / camera.name;
           fs::create_directory(dir);
           // OpenCV only reads through the Mats: the const_casts lend it our buffers
-          WritePng(dir / "color.png", cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
-                                              const_cast<std::uint8_t*>(camera.color.bgr.data())));
-          WritePng(dir / "depth.png", cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
-                                              const_cast<std::uint16_t*>(camera.depth.mm.data())));
-          std::vector<std::uint8_t> preview =
-              DepthPreview(camera.depth, camera.params.clip_near_m, camera.params.clip_far_m);
-          WritePng(dir / "depth_preview.png",
-                   cv::Mat(camera.depth.height, camera.depth.width, CV_8UC3, preview.data()));
+          if (camera.has_color) {
+            WritePng(dir / "color.png",
+                     cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
+                             const_cast<std::uint8_t*>(camera.color.bgr.data())));
+          }
+          if (camera.has_depth) {
+            WritePng(dir / "depth.png",
+                     cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
+                             const_cast<std::uint16_t*>(camera.depth.mm.data())));
+            WritePng(dir / "depth_preview.png",
+                     DepthPreviewWithColourBar(camera.depth, camera.params.clip_near_m,
+                                               camera.params.clip_far_m));
+          }
           WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
         }
       },

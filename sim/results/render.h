@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,8 @@ WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t);
 struct RenderedCamera {
   std::string name;
   std::string topic;
+  bool has_color{false};  // what its stream publishes (CameraStreamParams::publish_color / _depth):
+  bool has_depth{false};  // the folder holds only those images
   vehicle::CameraParams params;
   vehicle::CameraInfo info;
   Eigen::Isometry3d X_map_camera{Eigen::Isometry3d::Identity()};  // optical frame
@@ -64,6 +67,11 @@ nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id);
 // is black. BGR8, row-major.
 std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double near_m,
                                        double far_m);
+
+// DepthPreview with a colour bar on its right: the false colours from near (top) to far
+// (bottom) with metre ticks, a black "no return" swatch, and the title "depth (m)". BGR8.
+cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_m, double far_m);
+inline constexpr int kColourBarPanelWidthPx = 110;  // the panel added to the right
 
 // Writes the folder (under a temporary name, renamed when complete; a previous folder there is
 // replaced). std::runtime_error if a file cannot be written.

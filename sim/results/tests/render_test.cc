@@ -88,17 +88,26 @@ TEST(RenderTest, TheFolderHoldsEachCamerasFilesAndTheyReadBack) {
   WriteRenderFolder(cameras, t, 1, out);
   for (const RenderedCamera& camera : cameras) {
     const fs::path dir = out / camera.name;
-    for (const char* file : {"color.png", "depth.png", "depth_preview.png", "camera_info.json"}) {
-      EXPECT_TRUE(fs::exists(dir / file)) << dir / file;
+    // Only what the camera's stream publishes: the colour camera's /image, the depth camera's
+    // /depth/image_raw (with its preview).
+    EXPECT_EQ(camera.has_color, camera.name == "color_camera") << camera.name;
+    EXPECT_EQ(camera.has_depth, camera.name == "depth_camera") << camera.name;
+    EXPECT_EQ(fs::exists(dir / "color.png"), camera.has_color) << dir;
+    EXPECT_EQ(fs::exists(dir / "depth.png"), camera.has_depth) << dir;
+    EXPECT_EQ(fs::exists(dir / "depth_preview.png"), camera.has_depth) << dir;
+    EXPECT_TRUE(fs::exists(dir / "camera_info.json")) << dir;
+    if (camera.has_depth) {
+      const cv::Mat depth = cv::imread((dir / "depth.png").string(), cv::IMREAD_UNCHANGED);
+      ASSERT_EQ(depth.type(), CV_16UC1);
+      ASSERT_EQ(depth.cols, 640);
+      ASSERT_EQ(depth.rows, 480);
+      EXPECT_EQ(std::memcmp(depth.data, camera.depth.mm.data(), camera.depth.mm.size() * 2), 0);
     }
-    const cv::Mat depth = cv::imread((dir / "depth.png").string(), cv::IMREAD_UNCHANGED);
-    ASSERT_EQ(depth.type(), CV_16UC1);
-    ASSERT_EQ(depth.cols, 640);
-    ASSERT_EQ(depth.rows, 480);
-    EXPECT_EQ(std::memcmp(depth.data, camera.depth.mm.data(), camera.depth.mm.size() * 2), 0);
-    const cv::Mat color = cv::imread((dir / "color.png").string(), cv::IMREAD_COLOR);
-    ASSERT_EQ(color.type(), CV_8UC3);
-    EXPECT_EQ(std::memcmp(color.data, camera.color.bgr.data(), camera.color.bgr.size()), 0);
+    if (camera.has_color) {
+      const cv::Mat color = cv::imread((dir / "color.png").string(), cv::IMREAD_COLOR);
+      ASSERT_EQ(color.type(), CV_8UC3);
+      EXPECT_EQ(std::memcmp(color.data, camera.color.bgr.data(), camera.color.bgr.size()), 0);
+    }
 
     std::ifstream in(dir / "camera_info.json");
     const nlohmann::json info = nlohmann::json::parse(in);
@@ -120,6 +129,35 @@ TEST(RenderTest, TheFolderHoldsEachCamerasFilesAndTheyReadBack) {
     }
   }
   fs::remove_all(out);
+}
+
+// The preview's colour bar: the picture unchanged on the left, the bar's top in the nearest
+// colour and its bottom in the farthest, the "no return" swatch black.
+TEST(RenderTest, TheDepthPreviewCarriesAColourBar) {
+  vehicle::DepthImage depth;
+  depth.width = 64;
+  depth.height = 200;
+  depth.mm.assign(64 * 200, 0);
+  for (std::size_t i = 0; i < depth.mm.size(); ++i) depth.mm[i] = static_cast<std::uint16_t>(600 + i);
+  const cv::Mat out = DepthPreviewWithColourBar(depth, 0.6, 8.0);
+  ASSERT_EQ(out.type(), CV_8UC3);
+  ASSERT_EQ(out.cols, 64 + kColourBarPanelWidthPx);
+  ASSERT_EQ(out.rows, 200);
+  const std::vector<std::uint8_t> preview = DepthPreview(depth, 0.6, 8.0);
+  for (int r = 0; r < 200; ++r) {
+    ASSERT_EQ(std::memcmp(out.ptr<std::uint8_t>(r), preview.data() + 3 * 64 * r, 3 * 64), 0) << r;
+  }
+  auto colour_of = [](double m) {
+    vehicle::DepthImage one;
+    one.width = one.height = 1;
+    one.mm = {static_cast<std::uint16_t>(std::lround(1000 * m))};
+    const std::vector<std::uint8_t> c = DepthPreview(one, 0.6, 8.0);
+    return cv::Vec3b(c[0], c[1], c[2]);
+  };
+  const int bar_x = 64 + 10 + 5;
+  EXPECT_EQ(out.at<cv::Vec3b>(30, bar_x), colour_of(0.6));
+  EXPECT_EQ(out.at<cv::Vec3b>(200 - 60, bar_x), colour_of(8.0));
+  EXPECT_EQ(out.at<cv::Vec3b>(200 - 34, bar_x), cv::Vec3b(0, 0, 0));
 }
 
 TEST(RenderTest, TheDepthPreviewIsBlackWithoutReturnAndRedNear) {
