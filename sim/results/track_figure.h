@@ -1,0 +1,33 @@
+// track.png: the run seen from above, readable without the code. The floor drawn to scale with
+// metre axes and a 1 m scale bar; a title naming the scenario, its seed and duration; the zone
+// boxes (each intersection's area labelled with its id, its stop boxes thinner); the obstacles;
+// each car's path in its colour with its start (a filled dot) and arrows every 2 m of its first
+// 12 m showing the direction of travel; collisions as red crosses where the car was; a legend.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "sim/scenario/run_record.h"
+#include "sim/scenario/scenario.h"
+
+namespace autonomsim::sim {
+
+// Where the floor sits on the figure: the figure's pixel of a map point (metres).
+struct TrackFigureLayout {
+  double m_per_px{0.005};
+  double x0_m{0.0};  // map x of the floor's left edge
+  double y0_m{0.0};  // map y of the floor's top edge
+  int left_px{0};    // the floor's top-left corner on the figure
+  int top_px{0};
+  cv::Point ToPixel(double x_m, double y_m) const;
+};
+
+TrackFigureLayout TrackFigureLayoutOf(const LoadedScenario& loaded);
+
+// The figure, BGR8. Reads the record's samples and events once each.
+cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record);
+
+// The colour of collision markers (BGR).
+inline const cv::Scalar kCollisionMarkerBgr(0, 0, 255);
+
+}  // namespace autonomsim::sim
