@@ -1,20 +1,11 @@
 #include "sim/results/outputs.h"
 
-#include <fmt/format.h>
-
-#include <array>
-#include <map>
-#include <stdexcept>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/platform/node_metrics.h"
 #include "sim/results/png.h"
 #include "sim/results/summary.h"
 #include "sim/results/track_figure.h"
-#include "world/floor_raster.h"
 
 namespace autonomsim::sim {
 namespace {

@@ -70,16 +70,19 @@ cv::Point TrackFigureLayout::ToPixel(double x_m, double y_m) const {
           top_px + static_cast<int>(std::lround((y0_m - y_m) / m_per_px - 0.5))};
 }
 
+namespace {
+TrackFigureLayout LayoutOf(const world::FloorRaster& raster) {
+  return {raster.m_per_px, raster.origin_m.x(), raster.origin_m.y(), kLeftPx, kTopPx};
+}
+}  // namespace
+
 TrackFigureLayout TrackFigureLayoutOf(const LoadedScenario& loaded) {
-  const double half = 0.5 * loaded.track.spec().size_m;
-  const double m_per_px = world::RasterizeFloor(loaded.track).m_per_px;
-  return {m_per_px, -half, half, kLeftPx, kTopPx};
+  return LayoutOf(world::RasterizeFloor(loaded.track));
 }
 
 cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
   const world::FloorRaster raster = world::RasterizeFloor(loaded.track);
-  const TrackFigureLayout at{raster.m_per_px, raster.origin_m.x(), raster.origin_m.y(), kLeftPx,
-                             kTopPx};
+  const TrackFigureLayout at = LayoutOf(raster);
   cv::Mat image(kTopPx + raster.height_px + kBottomPx, kLeftPx + raster.width_px + kRightPx,
                 CV_8UC3, kBackground);
   cv::Mat(raster.height_px, raster.width_px, CV_8UC3, const_cast<std::uint8_t*>(raster.bgr.data()))
