@@ -120,8 +120,18 @@ void RunMetrics::TimerOverrun(int node, Time t) {
 }
 
 void RunMetrics::Published(int /*node*/, int topic, Time t, Time stamp) {
-  if (!Measured(t)) return;
   TopicData& d = topics_.at(static_cast<std::size_t>(topic));
+  const std::size_t bin = static_cast<std::size_t>(t.count() / options_.load_bin.count());
+  if (d.bin_count.size() <= bin) {
+    d.bin_count.resize(bin + 1, 0);
+    d.bin_sum_ns.resize(bin + 1, 0.0);
+    d.bin_max_ns.resize(bin + 1, 0.0);
+  }
+  const double latency_ns = static_cast<double>((t - stamp).count());
+  ++d.bin_count[bin];
+  d.bin_sum_ns[bin] += latency_ns;
+  d.bin_max_ns[bin] = std::max(d.bin_max_ns[bin], latency_ns);
+  if (!Measured(t)) return;
   ++d.published;
   d.latency.Add(t - stamp);
 }
@@ -216,6 +226,15 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     r.loan_failures = t.loan_failures;
     r.rate_hz = static_cast<double>(t.published) / window;
     r.latency_ms = t.latency.ComputeStats();
+    for (std::size_t bin = 0; bin < t.bin_count.size(); ++bin) {
+      if (t.bin_count[bin] == 0) {
+        r.latency_mean_ms_per_bin.emplace_back();
+        r.latency_max_ms_per_bin.emplace_back();
+        continue;
+      }
+      r.latency_mean_ms_per_bin.emplace_back(t.bin_sum_ns[bin] / t.bin_count[bin] * 1e-6);
+      r.latency_max_ms_per_bin.emplace_back(t.bin_max_ns[bin] * 1e-6);
+    }
     report.topics.push_back(std::move(r));
   }
   return report;
@@ -237,6 +256,14 @@ std::string NodesCsv(const std::vector<BoardReport>& boards) {
   }
   return csv;
 }
+
+namespace {
+nlohmann::json OptionalSeries(const std::vector<std::optional<double>>& series) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const std::optional<double>& v : series) out.push_back(v ? nlohmann::json(*v) : nullptr);
+  return out;
+}
+}  // namespace
 
 nlohmann::json ReportJson(const MetricsReport& report) {
   nlohmann::json nodes = nlohmann::json::array();
@@ -265,6 +292,9 @@ nlohmann::json ReportJson(const MetricsReport& report) {
                       {"published", t.published},
                       {"rate_hz", t.rate_hz},
                       {"latency_ms", StatsJson(t.latency_ms)},
+                      {"latency_per_bin_ms",
+                       {{"mean", OptionalSeries(t.latency_mean_ms_per_bin)},
+                        {"max", OptionalSeries(t.latency_max_ms_per_bin)}}},
                       {"drops", t.drops},
                       {"loan_failures", t.loan_failures}});
   }

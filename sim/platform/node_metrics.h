@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,9 @@ class RunMetrics {
     std::int64_t bytes{0};
     std::uint64_t published{0}, drops{0}, loan_failures{0};
     DurationHistogram latency;  // publish time minus the sensor stamp
+    // Latency over time, per load bin from t = 0 (whole run): count, sum and max in ns.
+    std::vector<std::uint32_t> bin_count;
+    std::vector<double> bin_sum_ns, bin_max_ns;
   };
   struct TraceEvent {
     char phase;  // 'X' span, 'C' counter
@@ -146,6 +150,9 @@ struct TopicReport {
   std::uint64_t published{0}, drops{0}, loan_failures{0};
   double rate_hz{0.0};
   Stats latency_ms;  // publish time minus the sensor stamp it derives from
+  // Latency over time, per load bin from t = 0 (the whole run, as cpu_load_percent): mean and
+  // max of the messages published in the bin; empty where none was.
+  std::vector<std::optional<double>> latency_mean_ms_per_bin, latency_max_ms_per_bin;
 };
 
 struct MetricsReport {
@@ -183,7 +190,8 @@ std::string NodesCsv(const std::vector<BoardReport>& boards);
 // cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
 // min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
 // arrivals, timer_ticks, drops, loan_failures, timer_overruns}], topics: [{name, transport, bytes,
-// published, rate_hz, latency_ms: {...}, drops, loan_failures}]}.
+// published, rate_hz, latency_ms: {...}, latency_per_bin_ms: {mean: [...], max: [...]} (null for a
+// bin without messages), drops, loan_failures}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -33,21 +34,33 @@ bool Concerns(const ExpectArgs& args, int car) { return !args.car || *args.car =
 
 std::string At(const Event& e) { return fmt::format("t={:.3f} s", ToSeconds(e.t)); }
 
+// A failed verdict pinned to the instant and car of its first violation.
+ExpectationResult Failed(std::string detail, const std::optional<Event>& first) {
+  ExpectationResult r{"", false, std::move(detail)};
+  if (first) {
+    r.at_s = ToSeconds(first->t);
+    r.car = first->car;
+  }
+  return r;
+}
+
 ExpectationResult NoCollision(const ExpectArgs& args, const RunRecord& record) {
   int count = 0;
   std::string first;
+  std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
     if (e.type != "collision") return;
     if (!Concerns(args, e.car) && !(e.other_car >= 0 && Concerns(args, e.other_car))) return;
     if (count++ == 0) {
+      first_event = e;
       first = fmt::format("car {} hit {} at {}", e.car,
                           e.other_car >= 0 ? fmt::format("car {}", e.other_car)
                                            : fmt::format("obstacle '{}'", e.obstacle),
                           At(e));
     }
   });
-  return {"", count == 0,
-          count == 0 ? "no collision" : fmt::format("{} collision(s); first: {}", count, first)};
+  if (count == 0) return {"", true, "no collision"};
+  return Failed(fmt::format("{} collision(s); first: {}", count, first), first_event);
 }
 
 // Never two cars inside one intersection area: replays the enter/exit events.
@@ -55,12 +68,14 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
   std::map<int, std::map<int, bool>> inside;  // intersection -> car -> inside
   int violations = 0;
   std::string first;
+  std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
     if (e.type == "exit") inside[e.intersection][e.car] = false;
     if (e.type != "enter") return;
     for (const auto& [other, in] : inside[e.intersection]) {
       if (in && other != e.car) {
         if (violations++ == 0) {
+          first_event = e;
           first = fmt::format("car {} entered intersection {} at {} while car {} was inside", e.car,
                               e.intersection, At(e), other);
         }
@@ -68,28 +83,29 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
     }
     inside[e.intersection][e.car] = true;
   });
-  return {"", violations == 0,
-          violations == 0 ? "never two cars in one intersection area"
-                          : fmt::format("{} violation(s); first: {}", violations, first)};
+  if (violations == 0) return {"", true, "never two cars in one intersection area"};
+  return Failed(fmt::format("{} violation(s); first: {}", violations, first), first_event);
 }
 
 ExpectationResult NoEntryWithoutGrant(const ExpectArgs& args, const RunRecord& record) {
   int entries = 0;
   int violations = 0;
   std::string first;
+  std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
     if (e.type != "enter" || !Concerns(args, e.car)) return;
     ++entries;
     if (e.granted.value_or(false)) return;
     if (violations++ == 0) {
+      first_event = e;
       first = fmt::format("car {} entered intersection {} at {} without holding it", e.car,
                           e.intersection, At(e));
     }
   });
-  return {"", violations == 0,
-          violations == 0 ? fmt::format("{} entries, all granted", entries)
-                          : fmt::format("{} of {} entries without grant; first: {}", violations,
-                                        entries, first)};
+  if (violations == 0) return {"", true, fmt::format("{} entries, all granted", entries)};
+  return Failed(
+      fmt::format("{} of {} entries without grant; first: {}", violations, entries, first),
+      first_event);
 }
 
 ExpectationResult Completes(const ExpectArgs& args, const RunRecord& record) {
@@ -97,16 +113,24 @@ ExpectationResult Completes(const ExpectArgs& args, const RunRecord& record) {
   const double within_s = args.within_s.value_or(ToSeconds(record.sim_duration));
   std::vector<std::string> misses;
   std::vector<std::string> times;
+  std::optional<int> first_miss;
   for (const CarMetrics& car : record.cars) {
     if (!Concerns(args, car.id)) continue;
     if (car.laps >= laps && car.lap_times_s[static_cast<std::size_t>(laps - 1)] <= within_s) {
       times.push_back(fmt::format("car {}: lap {} at {:.1f} s", car.id, laps,
                                   car.lap_times_s[static_cast<std::size_t>(laps - 1)]));
     } else {
+      if (!first_miss) first_miss = car.id;
       misses.push_back(fmt::format("car {}: {} lap(s) by {:.1f} s", car.id, car.laps, within_s));
     }
   }
-  return {"", misses.empty(), fmt::format("{}", fmt::join(misses.empty() ? times : misses, "; "))};
+  ExpectationResult r{"", misses.empty(),
+                      fmt::format("{}", fmt::join(misses.empty() ? times : misses, "; "))};
+  if (first_miss) {  // the deadline it missed
+    r.at_s = std::min(within_s, ToSeconds(record.sim_duration));
+    r.car = first_miss;
+  }
+  return r;
 }
 
 ExpectationResult MaxLateralError(const ExpectArgs& args, const RunRecord& record) {
@@ -117,7 +141,16 @@ ExpectationResult MaxLateralError(const ExpectArgs& args, const RunRecord& recor
     passed = passed && car.max_lateral_error_m <= *args.max_m;
     parts.push_back(fmt::format("car {}: max {:.3f} m", car.id, car.max_lateral_error_m));
   }
-  return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.max_m)};
+  ExpectationResult r{"", passed,
+                      fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.max_m)};
+  if (!passed) {  // the first sample over the bound
+    ForEachSample(record, [&](const TrajectorySample& s) {
+      if (r.at_s || !Concerns(args, s.car) || std::abs(s.lateral_error_m) <= *args.max_m) return;
+      r.at_s = ToSeconds(s.t);
+      r.car = s.car;
+    });
+  }
+  return r;
 }
 
 ExpectationResult MinObstacleGap(const ExpectArgs& args, const RunRecord& record) {
@@ -195,6 +228,7 @@ std::vector<Wait> Waits(const RunRecord& record) {
 
 ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
   std::optional<Wait> longest;
+  std::optional<Wait> first_over;
   int over = 0;
   int count = 0;
   std::string first;
@@ -206,17 +240,24 @@ ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
     const double s = ToSeconds(w.end - w.start);
     if (!longest || s > ToSeconds(longest->end - longest->start)) longest = w;
     if (s > *args.max_s && over++ == 0) {
+      first_over = w;
       first = fmt::format("car {} waited {:.1f} s at intersection {} from t={:.3f} s", w.car, s,
                           w.intersection, ToSeconds(w.start));
     }
   }
   if (!longest) return {"", true, "no waits"};
   const double s = ToSeconds(longest->end - longest->start);
-  return {"", over == 0,
-          over == 0 ? fmt::format("{} waits, longest {:.1f} s (car {}, intersection {})", count, s,
-                                  longest->car, longest->intersection)
-                    : fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s,
+  if (over == 0) {
+    return {"", true,
+            fmt::format("{} waits, longest {:.1f} s (car {}, intersection {})", count, s,
+                        longest->car, longest->intersection)};
+  }
+  ExpectationResult r{"", false,
+                      fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s,
                                   first)};
+  r.at_s = ToSeconds(first_over->start) + *args.max_s;  // when the wait passed its bound
+  r.car = first_over->car;
+  return r;
 }
 
 // Crossings (enter events) per minute of the run, per intersection: the one given, or each one a
@@ -297,6 +338,7 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
   std::map<int, Still> still;
   int episodes = 0;
   std::string first;
+  std::optional<std::pair<Time, int>> first_at;
   ForEachSample(record, [&](const TrajectorySample& s) {
     if (!Concerns(args, s.car)) return;
     Still& c = still[s.car];
@@ -312,15 +354,21 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
     if (!c.reported && ToSeconds(s.t - *c.since) > bound_s) {
       c.reported = true;
       if (episodes++ == 0) {
+        first_at = {*c.since, s.car};
         first = fmt::format("car {} stood still from t={:.1f} s at ({:.2f}, {:.2f}) m", s.car,
                             ToSeconds(*c.since), s.x_m, s.y_m);
       }
     }
   });
-  return {"", episodes == 0,
-          episodes == 0
-              ? fmt::format("no car stood still over {} s unless held by a red light", bound_s)
-              : fmt::format("{} standstill(s) over {} s; first: {}", episodes, bound_s, first)};
+  if (episodes == 0) {
+    return {"", true,
+            fmt::format("no car stood still over {} s unless held by a red light", bound_s)};
+  }
+  ExpectationResult r{"", false,
+                      fmt::format("{} standstill(s) over {} s; first: {}", episodes, bound_s, first)};
+  r.at_s = ToSeconds(first_at->first);  // when the standstill began
+  r.car = first_at->second;
+  return r;
 }
 
 }  // namespace

@@ -77,6 +77,8 @@ void Describe(V& v, ExpectationResult& e) {
   v("name", e.name);
   v("passed", e.passed);
   v("detail", e.detail);
+  v("at_s", e.at_s, IfEmpty::kLeftOut);  // the first violation's instant, where there is one
+  v("car", e.car, IfEmpty::kLeftOut);    // and its car
 }
 
 template <class V>

@@ -108,6 +108,28 @@ TEST(Cpu, AccountsBusyCoreSecondsPerOwnerAndOverTime) {
   EXPECT_NEAR(report.cpu_load_percent[0], 200.0, 1e-6);  // both cores busy in the first second
 }
 
+TEST(Metrics, LatencyOverTimeIsBinnedOverTheWholeRun) {
+  MetricsOptions options;
+  options.measure_from = std::chrono::seconds(1);  // the bins ignore the warm-up window
+  RunMetrics metrics(options);
+  const int topic = metrics.AddTopic("/cmd", "dds", 16);
+  using std::chrono::milliseconds;
+  metrics.Published(0, topic, milliseconds(500), milliseconds(480));    // bin 0: 20 ms
+  metrics.Published(0, topic, milliseconds(2100), milliseconds(2090));  // bin 2: 10 ms
+  metrics.Published(0, topic, milliseconds(2900), milliseconds(2870));  // bin 2: 30 ms
+  const MetricsReport report = BuildReport(metrics, std::chrono::seconds(3));
+  const TopicReport& t = report.topics.at(0);
+  EXPECT_EQ(t.published, 2u);  // the window's count
+  ASSERT_EQ(t.latency_max_ms_per_bin.size(), 3u);
+  EXPECT_NEAR(t.latency_max_ms_per_bin[0].value(), 20.0, 1e-9);
+  EXPECT_FALSE(t.latency_max_ms_per_bin[1].has_value());  // nothing published in the second bin
+  EXPECT_NEAR(t.latency_max_ms_per_bin[2].value(), 30.0, 1e-9);
+  EXPECT_NEAR(t.latency_mean_ms_per_bin[2].value(), 20.0, 1e-9);
+  const nlohmann::json json = ReportJson(report)["topics"][0]["latency_per_bin_ms"];
+  EXPECT_TRUE(json["max"][1].is_null());
+  EXPECT_NEAR(json["mean"][0].get<double>(), 20.0, 1e-9);
+}
+
 TEST(Cpu, RejectsNonsense) {
   CpuRig rig(1);
   EXPECT_THROW(rig.cpu.Start(0, -1.0, 1.0, [] {}), std::invalid_argument);

@@ -116,6 +116,38 @@ TEST(ExpectationsTest, MaxWaitJudgesEachWaitAndAnUnfinishedOneRunsToTheEnd) {
   EXPECT_FALSE(Judge(Clause("max_wait", ExpectArgs{.car = 0, .max_s = 4.5}), r).passed);
 }
 
+TEST(ExpectationsTest, AFailureIsPinnedToItsFirstViolationsInstantAndCar) {
+  RunRecord r = TwoCars();
+  Event hit = At(4, "collision", 1);
+  hit.other_car = 0;
+  r.events = {At(10, "wait", 0, 0), At(14, "go", 0, 0), hit, Enter(20, 0, 1, false)};
+  const ExpectationResult collision = Judge(Clause("no_collision"), r);
+  EXPECT_EQ(collision.at_s, 4.0);
+  EXPECT_EQ(collision.car, 1);
+  const ExpectationResult entry = Judge(Clause("no_entry_without_grant"), r);
+  EXPECT_EQ(entry.at_s, 20.0);
+  EXPECT_EQ(entry.car, 0);
+  const ExpectationResult wait = Judge(Clause("max_wait", ExpectArgs{.max_s = 3.0}), r);
+  EXPECT_EQ(wait.at_s, 13.0);  // the wait began at 10 s and passed 3 s at 13 s
+  EXPECT_EQ(wait.car, 0);
+  for (int i = 0; i < 100; ++i) {
+    TrajectorySample s;
+    s.t = FromSeconds(i * 0.5);
+    s.car = 1;
+    s.lateral_error_m = i == 30 ? -0.3 : 0.01;
+    r.trajectory.push_back(s);
+  }
+  r.cars[1].max_lateral_error_m = 0.3;
+  const ExpectationResult lateral = Judge(Clause("max_lateral_error", {.max_m = 0.2}), r);
+  EXPECT_EQ(lateral.at_s, 15.0);
+  EXPECT_EQ(lateral.car, 1);
+  const ExpectationResult laps = Judge(Clause("completes", {.laps = 1, .within_s = 60.0}), r);
+  EXPECT_EQ(laps.at_s, 60.0);  // the deadline the first car missed
+  EXPECT_EQ(laps.car, 0);
+  // a pass has no instant
+  EXPECT_FALSE(Judge(Clause("intersection_mutex"), r).at_s.has_value());
+}
+
 TEST(ExpectationsTest, MinThroughputCountsEntriesPerMinutePerIntersection) {
   RunRecord r = TwoCars();  // 100 s
   r.events = {At(1, "request", 0, 1)};
