@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app),
                                          AddTable1Command(app), AddRenderCommand(app),
-                                         AddSweepCommand(app)};
+                                         AddSweepCommand(app), AddReportCommand(app)};
 
   try {
     app.parse(argc, argv);

@@ -31,6 +31,7 @@ Command AddCheckCommand(CLI::App& parent);
 Command AddTable1Command(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
+Command AddReportCommand(CLI::App& parent);
 
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);

@@ -53,15 +53,6 @@ cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch) {
   return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
 }
 
-stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {
-  const vehicle::CameraInfo info = camera.Info();
-  stack::LaneCameraCalibration calibration;
-  calibration.K = info.K;
-  calibration.D = info.D;
-  calibration.X_base_camera = camera.X_base_camera();
-  return calibration;
-}
-
 // The input-independent part of a perception step: the component's params and the camera data.
 struct GridParams {
   stack::PointCloudParams cloud;
@@ -169,6 +160,15 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
 }
 
 }  // namespace
+
+stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {
+  const vehicle::CameraInfo info = camera.Info();
+  stack::LaneCameraCalibration calibration;
+  calibration.K = info.K;
+  calibration.D = info.D;
+  calibration.X_base_camera = camera.X_base_camera();
+  return calibration;
+}
 
 PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
                                     const std::map<std::string, NodeMappingConfig>& mapping,

@@ -44,6 +44,10 @@ struct PerceptionHooks {
   std::function<void(const stack::LanePoints&, Time stamp)> on_lanes;
 };
 
+// The lane detector's view of a camera: its intrinsics, distortion and mount (the node and the
+// report's lane overlay both build their LaneDetector from it).
+stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera);
+
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a
 // mapping the shape cannot take (e.g. lane_detection in hardware: map lane_planner and poly_fit).

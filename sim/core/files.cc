@@ -116,6 +116,45 @@ fs::path PrepareOutputFolder(const std::string& given, bool force) {
   return target;
 }
 
+fs::path CheckOutputFile(const std::string& given, bool force, const std::string& signature) {
+  const auto refuse = [&](const std::string& why) -> ConfigError {
+    return ConfigError("--out " + given + ": " + why);
+  };
+  if (given.empty()) throw refuse("empty path");
+  const fs::path target = fs::absolute(given).lexically_normal();
+  if (target.filename().empty()) throw refuse("names a folder; give a file name");
+  for (fs::path ancestor = target.parent_path(); !ancestor.empty();
+       ancestor = ancestor.parent_path()) {
+    const fs::file_status status = fs::status(ancestor);
+    if (fs::is_directory(status)) break;
+    if (fs::exists(status)) throw refuse(ancestor.string() + " is " + KindOf(status));
+    if (ancestor == ancestor.root_path()) break;
+  }
+  const fs::file_status status = fs::symlink_status(target);
+  const std::string kind = KindOf(status);
+  if (kind.empty()) {
+    fs::create_directories(target.parent_path());
+    return target;
+  }
+  if (fs::is_directory(status) || fs::is_block_file(status) || fs::is_character_file(status) ||
+      fs::is_fifo(status) || fs::is_socket(status)) {
+    throw refuse("is " + kind + ", never replaced by a file");
+  }
+  if (force) return target;
+  if (fs::is_regular_file(status)) {
+    if (fs::exists(target.parent_path() / kOutputMarker)) return target;
+    if (!signature.empty()) {
+      std::ifstream in(target, std::ios::binary);
+      std::string head(4096, '\0');
+      in.read(head.data(), static_cast<std::streamsize>(head.size()));
+      head.resize(static_cast<std::size_t>(in.gcount()));
+      if (head.find(signature) != std::string::npos) return target;
+    }
+  }
+  throw refuse("is " + kind +
+               " this program did not write; choose another --out, or add --force to replace it");
+}
+
 PartialFolder::PartialFolder(const fs::path& target, bool force)
     : target_(CheckOutputFolder(target.string(), force)),
       partial_(target_.string() + ".partial-" + std::to_string(::getpid())) {

@@ -28,6 +28,15 @@ inline constexpr const char* kOutputMarker = ".autonomsim";
 // file or a symbolic link. Returns the path to use.
 std::filesystem::path CheckOutputFolder(const std::string& given, bool force);
 
+// The file `given` checked as the target of an output written over it (a report, a video): it may
+// be absent (its parent folder is created), or a plain file this program wrote — one inside a
+// folder with the marker, or one whose first 4 KiB hold `signature` (when not empty). Throws
+// ConfigError (exit 2), before anything is made, for a folder, a device node, FIFO or socket
+// (never replaced), and — unless `force` — any other existing file or symbolic link. Returns the
+// path to use.
+std::filesystem::path CheckOutputFile(const std::string& given, bool force,
+                                      const std::string& signature = "");
+
 // A folder that outputs accumulate in (a sweep's: it is resumed, never replaced): created if
 // absent and given the marker. An empty folder is taken; one that holds anything without the
 // marker is refused unless `force`; otherwise CheckOutputFolder's rules, except that a file is

@@ -33,19 +33,33 @@ bool Present(const ObstacleConfig& o, Time t) {
 
 }  // namespace
 
+WorldSnapshot SnapshotWithPoses(const Scenario& scenario, const std::vector<world::Pose2>& poses,
+                                Time t) {
+  if (poses.size() != scenario.cars.size()) {
+    throw std::invalid_argument("SnapshotWithPoses: " + std::to_string(poses.size()) +
+                                " poses for " + std::to_string(scenario.cars.size()) + " cars");
+  }
+  WorldSnapshot snapshot;
+  snapshot.t = t;
+  for (const ObstacleConfig& o : scenario.obstacles) {
+    if (!Present(o, t)) continue;
+    snapshot.obstacles.push_back(vehicle::ObstacleBox{
+        o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0}, o.length_m,
+        o.width_m, o.height_m});
+  }
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const CarConfig& car = scenario.cars[i];
+    snapshot.cars.push_back(
+        CarBody{car.id, poses[i], car.vehicle.length_m, car.vehicle.width_m, car.vehicle.height_m});
+  }
+  return snapshot;
+}
+
 WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
   if (t < kZeroTime || t > scenario.scenario.duration) {
     throw std::invalid_argument("the instant " + std::to_string(ToSeconds(t)) +
                                 " s is outside the scenario's [0, " +
                                 std::to_string(ToSeconds(scenario.scenario.duration)) + "] s");
-  }
-  WorldSnapshot snapshot;
-  snapshot.t = t;
-  for (const ObstacleConfig& o : scenario.scenario.obstacles) {
-    if (!Present(o, t)) continue;
-    snapshot.obstacles.push_back(vehicle::ObstacleBox{
-        o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0}, o.length_m,
-        o.width_m, o.height_m});
   }
   std::vector<world::Pose2> poses = scenario.start_poses;
   if (t > kZeroTime) {
@@ -66,50 +80,59 @@ WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
       poses[i] = world::Pose2{sample->x_m, sample->y_m, sample->yaw_rad};
     }
   }
-  for (std::size_t i = 0; i < scenario.scenario.cars.size(); ++i) {
-    const CarConfig& car = scenario.scenario.cars[i];
-    snapshot.cars.push_back(
-        CarBody{car.id, poses[i], car.vehicle.length_m, car.vehicle.width_m, car.vehicle.height_m});
-  }
-  return snapshot;
+  return SnapshotWithPoses(scenario.scenario, poses, t);
 }
 
-std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
-                                          int car_id, const SensorSuiteParams& sensors,
-                                          const vehicle::SceneAppearance& appearance,
-                                          const RngStreams& streams) {
-  sensors.Validate();
-  appearance.Validate();
+CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& sensors,
+                       const vehicle::SceneAppearance& appearance)
+    : sensors_(sensors), appearance_(appearance) {
+  sensors_.Validate();
+  appearance_.Validate();
+  const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
+  for (const CameraStreamParams* stream : {&sensors_.color_camera, &sensors_.depth_camera}) {
+    const vehicle::CameraModel model(stream->camera);
+    cameras_.push_back(
+        {stream, std::make_unique<vehicle::CameraRenderer>(
+                     std::make_shared<const vehicle::CameraRays>(model), floor,
+                     appearance_.surround())});
+  }
+}
+
+std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, int car_id,
+                                               const RngStreams& streams) const {
   const auto self = std::find_if(snapshot.cars.begin(), snapshot.cars.end(),
                                  [&](const CarBody& c) { return c.id == car_id; });
   if (self == snapshot.cars.end()) {
     throw std::invalid_argument("no car " + std::to_string(car_id) + " in the scenario");
   }
   const std::vector<vehicle::Prism> prisms =
-      ScenePrisms(snapshot.cars, snapshot.obstacles, appearance, car_id);
-  const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
-
+      ScenePrisms(snapshot.cars, snapshot.obstacles, appearance_, car_id);
   std::vector<RenderedCamera> out;
-  for (const CameraStreamParams* stream : {&sensors.color_camera, &sensors.depth_camera}) {
-    const vehicle::CameraModel model(stream->camera);
-    vehicle::CameraRenderer renderer(std::make_shared<const vehicle::CameraRays>(model), floor,
-                                     appearance.surround());
+  for (const Camera& c : cameras_) {
+    const vehicle::CameraModel& model = c.renderer->camera();
     RenderedCamera camera;
-    camera.name = stream->camera.name;
-    camera.topic = stream->topic;
-    camera.has_color = stream->publish_color;
-    camera.has_depth = stream->publish_depth;
-    camera.params = stream->camera;
+    camera.name = c.stream->camera.name;
+    camera.topic = c.stream->topic;
+    camera.has_color = c.stream->publish_color;
+    camera.has_depth = c.stream->publish_depth;
+    camera.params = c.stream->camera;
     camera.info = model.Info();
     camera.X_map_camera = model.X_map_camera(self->pose);
-    renderer.Render(self->pose, prisms, &camera.color, &camera.depth);
+    c.renderer->Render(self->pose, prisms, &camera.color, &camera.depth);
     const std::uint64_t seed =
         streams.Stream("car" + std::to_string(car_id) + "/" + camera.name + "/render_noise")
             .NextU64();
-    vehicle::AddCameraNoise(stream->noise, stream->camera, seed, &camera.color, &camera.depth);
+    vehicle::AddCameraNoise(c.stream->noise, c.stream->camera, seed, &camera.color, &camera.depth);
     out.push_back(std::move(camera));
   }
   return out;
+}
+
+std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
+                                          int car_id, const SensorSuiteParams& sensors,
+                                          const vehicle::SceneAppearance& appearance,
+                                          const RngStreams& streams) {
+  return CarCameras(track, sensors, appearance).Render(snapshot, car_id, streams);
 }
 
 nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) {

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
@@ -38,6 +39,11 @@ struct WorldSnapshot {
 // nothing before t depends on the duration or the sampling period.
 WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t);
 
+// The world at t with the cars (in scenario order) at `poses`: their bodies from the scenario, and
+// the obstacles present at t.
+WorldSnapshot SnapshotWithPoses(const Scenario& scenario, const std::vector<world::Pose2>& poses,
+                                Time t);
+
 // One camera's picture.
 struct RenderedCamera {
   std::string name;
@@ -51,9 +57,29 @@ struct RenderedCamera {
   vehicle::DepthImage depth;
 };
 
-// Renders every camera of `sensors` on car `car_id` in the snapshot (the car's own body is left
-// out). Noise follows each camera's noise params, seeded from the stream
-// "car<id>/<camera name>/render_noise". std::invalid_argument if the car is not in the snapshot.
+// One car's cameras (the colour and the depth camera of `sensors`) over a track, made once and
+// rendered at any number of snapshots (a video's frames).
+class CarCameras {
+ public:
+  CarCameras(const world::Track& track, const SensorSuiteParams& sensors,
+             const vehicle::SceneAppearance& appearance);
+  // Every camera on car `car_id` in the snapshot (the car's own body is left out). Noise follows
+  // each camera's noise params, seeded from the stream "car<id>/<camera name>/render_noise".
+  // std::invalid_argument if the car is not in the snapshot.
+  std::vector<RenderedCamera> Render(const WorldSnapshot& snapshot, int car_id,
+                                     const RngStreams& streams) const;
+
+ private:
+  struct Camera {
+    const CameraStreamParams* stream;
+    std::unique_ptr<vehicle::CameraRenderer> renderer;
+  };
+  SensorSuiteParams sensors_;
+  vehicle::SceneAppearance appearance_;
+  std::vector<Camera> cameras_;
+};
+
+// CarCameras(track, sensors, appearance).Render(snapshot, car_id, streams).
 std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
                                           int car_id, const SensorSuiteParams& sensors,
                                           const vehicle::SceneAppearance& appearance,

@@ -65,6 +65,13 @@ void DrawAxes(cv::Mat& image, const TrackFigureLayout& at, double size_m) {
 
 }  // namespace
 
+cv::Scalar CarColourBgr(const Scenario& scenario, int car_id) {
+  std::size_t c = 0;
+  while (c < scenario.cars.size() && scenario.cars[c].id != car_id) ++c;
+  const auto& bgr = kCarColours[c % kCarColours.size()];
+  return cv::Scalar(bgr[0], bgr[1], bgr[2]);
+}
+
 cv::Point TrackFigureLayout::ToPixel(double x_m, double y_m) const {
   return {left_px + static_cast<int>(std::lround((x_m - x0_m) / m_per_px - 0.5)),
           top_px + static_cast<int>(std::lround((y0_m - y_m) / m_per_px - 0.5))};
@@ -128,12 +135,7 @@ cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
     std::vector<std::pair<cv::Point, cv::Point>> arrows;
   };
   std::map<int, CarPath> paths;
-  auto colour_of = [&](int id) {
-    std::size_t c = 0;
-    while (c < loaded.scenario.cars.size() && loaded.scenario.cars[c].id != id) ++c;
-    const auto& rgb = kCarColours[c % kCarColours.size()];
-    return cv::Scalar(rgb[0], rgb[1], rgb[2]);
-  };
+  auto colour_of = [&](int id) { return CarColourBgr(loaded.scenario, id); };
   auto draw = [&](int id, std::vector<cv::Point>& points) {
     cv::polylines(image, points, false, colour_of(id), 2, cv::LINE_AA);
     points.erase(points.begin(), points.end() - 1);  // the next piece starts where this one ends

@@ -27,6 +27,10 @@ TrackFigureLayout TrackFigureLayoutOf(const LoadedScenario& loaded);
 // The figure, BGR8. Reads the record's samples and events once each.
 cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record);
 
+// Car `car_id`'s colour in every figure of a run (track.png, the report, the video), BGR: by the
+// car's place in the scenario, from a palette that stands out on black, white and yellow.
+cv::Scalar CarColourBgr(const Scenario& scenario, int car_id);
+
 // The colour of collision markers (BGR).
 inline const cv::Scalar kCollisionMarkerBgr(0, 0, 255);
 

@@ -1,6 +1,8 @@
 // Atomic files and folders: a reader finds the old content or the new, and nothing is left behind.
 #include "sim/core/files.h"
 
+#include "sim/core/config.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -64,6 +66,32 @@ TEST(Files, AFailedAtomicWriteThrowsNamingTheFileAndKeepsTheOldOne) {
   EXPECT_EQ(ReadText(file), "old");
   EXPECT_EQ(Entries(dir.path), 2u);  // sweep.json and the folder, no temporary
   EXPECT_THROW(WriteFileAtomically(dir.path / "no" / "such" / "folder", "x"), std::runtime_error);
+}
+
+TEST(Files, AnOutputFileReplacesOnlyWhatThisProgramWrote) {
+  TempDir dir;
+  const fs::path fresh = dir.path / "new" / "report.html";
+  EXPECT_EQ(CheckOutputFile(fresh.string(), false), fresh);
+  EXPECT_TRUE(fs::is_directory(fresh.parent_path()));  // made for the file
+  WriteFile(dir.path / "notes.html", "<p>my notes</p>");
+  EXPECT_THROW(CheckOutputFile((dir.path / "notes.html").string(), false, "autonomsim report"),
+               ConfigError);
+  EXPECT_NO_THROW(CheckOutputFile((dir.path / "notes.html").string(), true));  // --force
+  WriteFile(dir.path / "old.html", "<meta name=generator content=\"autonomsim report\">");
+  EXPECT_NO_THROW(CheckOutputFile((dir.path / "old.html").string(), false, "autonomsim report"));
+  EXPECT_THROW(CheckOutputFile((dir.path / "old.html").string(), false), ConfigError);
+  try {  // a folder is never replaced by a file, even with --force
+    CheckOutputFile(dir.path.string(), true);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("a folder, never replaced"), std::string::npos)
+        << e.what();
+  }
+  fs::create_directory(dir.path / "run");
+  WriteFile(dir.path / "run" / kOutputMarker, "");
+  WriteFile(dir.path / "run" / "video.mp4", "x");
+  EXPECT_NO_THROW(CheckOutputFile((dir.path / "run" / "video.mp4").string(), false));
+  EXPECT_THROW(CheckOutputFile((dir.path / "notes.html" / "x").string(), true), ConfigError);
 }
 
 TEST(Files, AFolderWrittenAtomicallyAppearsWhole) {

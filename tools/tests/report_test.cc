@@ -1,0 +1,190 @@
+// `autonomsim report` as a user sees it: the file it writes, what it refuses to overwrite, and the
+// page in a real browser (Debian's chromium, headless): it loads from a temporary folder with no
+// error and no network request, and after seeking the time slider the cars are drawn where
+// trajectory.csv has them.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sim/results/report.h"
+#include "sim/scenario/run_record.h"
+#include "tools/tests/cli_testing.h"
+
+namespace autonomsim {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using testing::Cli;
+using testing::Read;
+using testing::Result;
+using testing::Shell;
+
+// One run shared by the tests: the default scenario cut to 30 s, with an expectation it fails (a
+// lateral error bound tighter than the cars hold), so the report has a failure and snapshots.
+class ReportTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // one folder per process: ctest runs these tests in parallel processes
+    root_ = new fs::path(fs::path(::testing::TempDir()) /
+                         ("autonomsim_report_" + std::to_string(::getpid())));
+    fs::remove_all(*root_);
+    run_dir_ = new fs::path(*root_ / "run");
+    const Result r = Cli(
+        "run scenarios/lab_two_cars.yaml -q --set duration_s=30 "
+        "--set 'expect=[{max_lateral_error: {max_m: 0.05}}, {no_collision: {}}]' --out " +
+        run_dir_->string());
+    run_output_ = new std::string(r.output);
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*root_);
+    delete root_;
+    delete run_dir_;
+    delete run_output_;
+  }
+  static fs::path* root_;
+  static fs::path* run_dir_;
+  static std::string* run_output_;
+};
+fs::path* ReportTest::root_ = nullptr;
+fs::path* ReportTest::run_dir_ = nullptr;
+std::string* ReportTest::run_output_ = nullptr;
+
+TEST_F(ReportTest, WritesOneSelfContainedFileBesideTheRun) {
+  ASSERT_TRUE(fs::exists(*run_dir_ / "summary.json")) << *run_output_;
+  const Result r = Cli("report " + run_dir_->string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path file = *run_dir_ / "report.html";
+  EXPECT_THAT(r.output, HasSubstr("report: " + fs::absolute(file).lexically_normal().string()));
+  const std::string html = Read(file);
+  EXPECT_THAT(html.substr(0, 4096), HasSubstr(sim::kReportSignature));
+  // nothing it would fetch: no address outside the page (uPlot's and our code name none)
+  for (const char* fetch : {"src=\"http", "href=\"http", "url(http", "@import"}) {
+    EXPECT_EQ(html.find(fetch), std::string::npos) << fetch;
+  }
+  EXPECT_THAT(html, HasSubstr("default-src 'none'"));  // the page may load nothing at all
+  EXPECT_LT(fs::file_size(file), 5u * 1000 * 1000);
+}
+
+TEST_F(ReportTest, ReplacesOnlyItsOwnReports) {
+  const fs::path elsewhere = *root_ / "notes.html";
+  testing::Shell("echo '<p>my notes</p>' > " + elsewhere.string());
+  const Result refused = Cli("report " + run_dir_->string() + " --out " + elsewhere.string());
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_THAT(refused.output, HasSubstr("--force"));
+  EXPECT_EQ(Read(elsewhere), "<p>my notes</p>\n");
+  EXPECT_EQ(Cli("report " + run_dir_->string() + " --out " + elsewhere.string() + " --force")
+                .exit_code,
+            0);
+  // now it is a report: replaced without --force
+  EXPECT_EQ(Cli("report " + run_dir_->string() + " --out " + elsewhere.string()).exit_code, 0);
+  const Result not_a_run = Cli("report " + elsewhere.parent_path().string());
+  EXPECT_EQ(not_a_run.exit_code, 2);
+  EXPECT_THAT(not_a_run.output, HasSubstr("not a finished run"));
+}
+
+TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
+  const sim::FinishedRun run = sim::ReadFinishedRun(*run_dir_);
+  const nlohmann::json data = sim::ReportData(run);
+  ASSERT_EQ(data["expectations"].size(), 2u);
+  const nlohmann::json& lateral = data["expectations"][0];
+  EXPECT_FALSE(lateral["passed"].get<bool>());
+  ASSERT_TRUE(lateral.contains("at_s"));
+  ASSERT_EQ(data["snapshots"].size(), 1u);
+  const nlohmann::json& snapshot = data["snapshots"][0];
+  EXPECT_EQ(snapshot["car"], lateral["car"]);
+  EXPECT_LE(snapshot["t"].get<double>(), lateral["at_s"].get<double>());
+  EXPECT_GT(snapshot["t"].get<double>(), lateral["at_s"].get<double>() - 0.051);  // its sample
+  EXPECT_THAT(snapshot["color"].get<std::string>(), ::testing::StartsWith("data:image/jpeg;base64,"));
+  EXPECT_THAT(snapshot["lane"].get<std::string>(), HasSubstr("lane detection:"));
+  // every sample of every car, in order
+  std::size_t samples = 0;
+  for (const auto& [car, columns] : data["trajectory"].items()) samples += columns["t"].size();
+  EXPECT_EQ(samples, run.record.trajectory.size());
+  EXPECT_EQ(data["events"].size(), run.record.events.size());
+  EXPECT_TRUE(data["boards"]["car0"].contains("e2e_max_ms"));
+}
+
+// trajectory.csv: car -> t (ms) -> (x, y)
+std::map<int, std::map<long, std::pair<double, double>>> Trajectory(const fs::path& file) {
+  std::map<int, std::map<long, std::pair<double, double>>> out;
+  std::istringstream in(Read(file));
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    const sim::TrajectorySample s = sim::ParseTrajectoryCsvLine(line);
+    out[s.car][std::lround(ToSeconds(s.t) * 1000.0)] = {s.x_m, s.y_m};
+  }
+  return out;
+}
+
+std::string Unescape(std::string text) {
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}}) {
+    for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + 1)) {
+      text.replace(at, from.size(), to);
+    }
+  }
+  return text;
+}
+
+TEST_F(ReportTest, InChromiumTheSliderDrawsTheCarsWhereTheTrajectoryHasThem) {
+  const Result which = Shell("command -v chromium");
+  ASSERT_EQ(which.exit_code, 0)
+      << "chromium is not installed: tools/install_deps.sh installs it (Debian's chromium)";
+  // the report alone in a fresh folder: nothing beside it to lean on
+  const fs::path folder = *root_ / "browser";
+  fs::remove_all(folder);
+  fs::create_directories(folder / "profile");
+  const fs::path page = folder / "replay.html";
+  ASSERT_EQ(Cli("report " + run_dir_->string() + " --out " + page.string()).exit_code, 0);
+
+  // ten instants, sampled ones (the slider's step is the 0.05 s sample period)
+  const std::vector<double> instants{0.0, 2.5, 5.05, 8.0, 11.35, 14.2, 17.9, 21.0, 25.55, 29.95};
+  std::string probe;
+  for (double t : instants) probe += (probe.empty() ? "" : ",") + std::to_string(t);
+  const Result browser = Shell(
+      "timeout 120 chromium --headless=new --no-sandbox --disable-gpu --no-first-run "
+      "--user-data-dir=" + (folder / "profile").string() +
+      " --window-size=1400,1800 --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
+      "--dump-dom 'file://" + page.string() + "#probe=" + probe + "'");
+  ASSERT_EQ(browser.exit_code, 0) << browser.output;
+  EXPECT_EQ(browser.output.find("Uncaught"), std::string::npos) << browser.output;
+  EXPECT_EQ(browser.output.find("Refused to"), std::string::npos) << browser.output;  // CSP
+  // the last one: the page's script names the element too
+  const std::size_t begin = browser.output.rfind("<pre id=\"probe\">");
+  ASSERT_NE(begin, std::string::npos) << "the page wrote no probe: " << browser.output;
+  const std::size_t from = begin + std::string("<pre id=\"probe\">").size();
+  const nlohmann::json result = nlohmann::json::parse(
+      Unescape(browser.output.substr(from, browser.output.find("</pre>", from) - from)));
+
+  EXPECT_TRUE(result["errors"].empty()) << result["errors"];
+  EXPECT_TRUE(result["resources"].empty()) << "network requests: " << result["resources"];
+  for (int width : result["images"]) EXPECT_GT(width, 0) << "an image did not decode";
+  ::testing::Test::RecordProperty("load_ms", std::to_string(result["load_ms"].get<double>()));
+  std::printf("report ready in %.0f ms in headless chromium\n", result["load_ms"].get<double>());
+
+  const auto trajectory = Trajectory(*run_dir_ / "trajectory.csv");
+  ASSERT_EQ(result["samples"].size(), instants.size());
+  for (const nlohmann::json& sample : result["samples"]) {
+    const long t_ms = std::lround(sample["t"].get<double>() * 1000.0);
+    for (const nlohmann::json& car : sample["cars"]) {
+      const auto& [x, y] = trajectory.at(car["car"].get<int>()).at(t_ms);
+      SCOPED_TRACE("car " + car["car"].dump() + " at t = " + sample["t"].dump() + " s");
+      ASSERT_GT(car["pixels"].get<int>(), 200) << "the car is not drawn";
+      EXPECT_NEAR(car["drawn_x_m"].get<double>(), x, 0.01);
+      EXPECT_NEAR(car["drawn_y_m"].get<double>(), y, 0.01);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace autonomsim
