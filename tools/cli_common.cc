@@ -12,6 +12,7 @@
 #include "sim/mqtt/mqtt_client.h"
 #include "sim/mqtt/mqtt_process.h"  // TempDir
 #include "sim/results/outputs.h"
+#include "sim/results/report.h"
 
 namespace autonomsim::cli {
 
@@ -134,6 +135,29 @@ Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
 void PrintVerdicts(const Outcome& outcome) {
   for (const sim::ExpectationResult& e : outcome.expectations) {
     fmt::print("  {} {}: {}\n", e.passed ? "pass" : "FAIL", e.name, e.detail);
+  }
+}
+
+void WriteOutcomeReport(Outcome* outcome) {
+  if (!outcome->result_dir || outcome->input_error) return;
+  try {
+    outcome->report = sim::WriteReport(*outcome->result_dir);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "warning: no report for {}: {}\n", outcome->file, e.what());
+  }
+}
+
+void PrintReportPath(const Outcome& outcome) {
+  if (!outcome.report) return;
+  const auto first_failure =
+      std::find_if(outcome.expectations.begin(), outcome.expectations.end(),
+                   [](const sim::ExpectationResult& e) { return !e.passed && e.at_s; });
+  if (first_failure == outcome.expectations.end()) {
+    fmt::print("  report: {}\n", outcome.report->string());
+  } else {
+    fmt::print("  report: {} (at the first failure: file://{}#t={:.2f})\n",
+               outcome.report->string(), fs::absolute(*outcome.report).string(),
+               *first_failure->at_s);
   }
 }
 

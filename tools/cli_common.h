@@ -65,6 +65,7 @@ struct Outcome {
   std::string scenario_sha256;                      // of the resolved scenario and track
   std::optional<std::filesystem::path> result_dir;  // where its folder was written, if anywhere
   std::vector<sim::ExpectationResult> expectations;
+  std::optional<std::filesystem::path> report;  // its replay report, when one was written
   double wall_seconds{0.0};
   double sim_seconds{0.0};
   bool passed() const;
@@ -80,5 +81,11 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded,
 Outcome RunFile(const std::filesystem::path& file, const std::vector<std::string>& overrides,
                 const std::optional<std::filesystem::path>& out_dir, bool force = false);
 void PrintVerdicts(const Outcome& outcome);
+
+// Writes the replay report of the run folder of `outcome` (RUN_DIR/report.html) and records it
+// in the outcome; a report that cannot be written is a warning on stderr, not a failed run.
+void WriteOutcomeReport(Outcome* outcome);
+// "report: PATH", and for a failed run the address that opens it at the first failure.
+void PrintReportPath(const Outcome& outcome);
 
 }  // namespace autonomsim::cli

@@ -40,7 +40,8 @@ std::string XmlEscape(const std::string& text) {
 }
 
 // JUnit XML as CI servers read it (Jenkins, GitLab): one testsuite per scenario, carrying the
-// scenario's wall time and its identity as properties; one testcase per expectation. A testcase
+// scenario's wall time and its identity as properties (with its result folder and replay report
+// when written); one testcase per expectation. A testcase
 // has no time of its own: the expectations are judged together after one run.
 std::string JunitXml(const std::vector<Outcome>& outcomes) {
   int tests = 0, failures = 0, errors = 0;
@@ -65,6 +66,10 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
       if (o.result_dir) {
         properties += fmt::format("      <property name=\"result_folder\" value=\"{}\"/>\n",
                                   XmlEscape(o.result_dir->string()));
+      }
+      if (o.report) {
+        properties += fmt::format("      <property name=\"report\" value=\"{}\"/>\n",
+                                  XmlEscape(o.report->string()));
       }
       for (const sim::ExpectationResult& e : o.expectations) {
         cases += fmt::format("    <testcase classname=\"{}\" name=\"{}\">\n", name,
@@ -124,7 +129,7 @@ std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
 
 int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
                  const std::optional<std::string>& out, const std::vector<std::string>& overrides,
-                 int jobs, bool force) {
+                 int jobs, bool force, bool report) {
   std::vector<fs::path> files;
   try {
     files = ExpandScenarioArgs(args);
@@ -150,6 +155,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
     if (out) dir = fs::path(*out) / files[i].stem();
     try {
       outcomes[i] = RunFile(files[i], overrides, dir, force);
+      if (report) WriteOutcomeReport(&outcomes[i]);
     } catch (const std::exception& e) {
       outcomes[i].file = files[i].string();
       outcomes[i].scenario_name = files[i].stem().string();
@@ -171,6 +177,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
                o.wall_seconds);
     if (o.expectations.empty()) fmt::print("  warning: this scenario has no expectations\n");
     if (!o.passed()) PrintVerdicts(o);
+    if (!o.passed()) PrintReportPath(o);
   }
   fmt::print("{} scenario(s): {} passed, {} failed ({} expectation(s) failed), {} unusable\n",
              outcomes.size(), outcomes.size() - static_cast<std::size_t>(failed + unusable), failed,
@@ -193,6 +200,7 @@ Command AddCheckCommand(CLI::App& parent) {
     std::vector<std::string> overrides;
     int jobs = DefaultJobs();
     bool force{false};
+    bool report{false};
   };
   auto o = std::make_shared<Options>();
   CLI::App* check = parent.add_subcommand(
@@ -201,19 +209,27 @@ Command AddCheckCommand(CLI::App& parent) {
       ->add_option("SCENARIO_OR_DIR", o->args,
                    "Scenario files, or folders whose *.yaml files are scenarios")
       ->required();
-  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; properties scenario_file, seed, scenario_sha256, result_folder with --out), a testcase per expectation")->type_name("FILE");
-  check
+  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; properties scenario_file, seed, scenario_sha256, result_folder with --out, report with --report), a testcase per expectation")->type_name("FILE");
+  CLI::Option* out = check
       ->add_option("--out", o->out,
                    "Keep each run's result folder under DIR/<scenario> (each replaced only if "
                    "this program wrote it, else refused: see --force)")
       ->type_name("DIR");
   check->add_flag("--force", o->force,
                   "Replace DIR/<scenario> even if this program did not write it (never a device)");
+  check
+      ->add_flag("--report", o->report,
+                 "Also write each run's replay report, DIR/<scenario>/report.html (see "
+                 "`autonomsim report`); a failed scenario prints its path")
+      ->needs(out);
   check->add_option("--jobs,-j", o->jobs, "Scenarios run in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
   AddSetOption(check, &o->overrides);
   return {check,
-          [o] { return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs, o->force); }};
+          [o] {
+            return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs, o->force,
+                                o->report);
+          }};
 }
 
 }  // namespace autonomsim::cli

@@ -13,7 +13,7 @@ namespace fs = std::filesystem;
 
 int RunCommand(const std::string& scenario_file, const std::optional<std::string>& out,
                std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
-               bool quiet, bool force) {
+               bool quiet, bool force, bool report) {
   std::optional<sim::LoadedScenario> loaded;
   try {
     loaded.emplace(sim::LoadScenario(scenario_file, overrides, seed));
@@ -43,10 +43,12 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
     return kExitUnusableInput;
   }
   PrintVerdicts(outcome);
+  if (report) WriteOutcomeReport(&outcome);
   fmt::print("{:.1f} s simulated in {:.2f} s wall ({:.1f}x real time)\n", outcome.sim_seconds,
              outcome.wall_seconds,
              outcome.wall_seconds > 0 ? outcome.sim_seconds / outcome.wall_seconds : 0.0);
   fmt::print("results: {}\n", out_dir.string());
+  PrintReportPath(outcome);
   return outcome.passed() ? kExitOk : kExitExpectationFailed;
 }
 
@@ -61,6 +63,7 @@ Command AddRunCommand(CLI::App& parent) {
     std::optional<std::string> broker;
     bool quiet{false};
     bool force{false};
+    bool report{false};
   };
   auto o = std::make_shared<Options>();
   CLI::App* run = parent.add_subcommand(
@@ -84,13 +87,16 @@ Command AddRunCommand(CLI::App& parent) {
                   "v2i.mqtt.broker=HOST:PORT); credentials and TLS via --set v2i.mqtt.*")
       ->type_name("HOST:PORT");
   run->add_flag("--quiet,-q", o->quiet, "No progress output");
+  run->add_flag("--report", o->report,
+                "Also write the replay report, RESULTS/report.html (see `autonomsim report`)");
   return {run, [o] {
             std::vector<std::string> overrides = o->overrides;
             if (o->broker) {
               overrides.push_back("v2i.link=mqtt");
               overrides.push_back("v2i.mqtt.broker=" + *o->broker);
             }
-            return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet, o->force);
+            return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet, o->force,
+                              o->report);
           }};
 }
 

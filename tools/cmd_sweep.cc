@@ -121,6 +121,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
   for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
   fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
+  fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
   if (!summary.failures.empty()) {
     return summary.input_error ? kExitUnusableInput : kExitExpectationFailed;
   }
@@ -145,6 +146,7 @@ int MergeCommand(const SweepOptions& o) {
   fmt::print("{} run(s) with failed expectations\n", merged.failed_expectations.size());
   for (const std::string& f : merged.failed_expectations) fmt::print("  FAIL {}\n", f);
   fmt::print("results: {}\n", (out / "results.csv").string());
+  fmt::print("index: {}\n", (out / "index.html").string());
   return merged.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
 }
 
@@ -155,7 +157,9 @@ Command AddSweepCommand(CLI::App& parent) {
   CLI::App* sweep = parent.add_subcommand(
       "sweep",
       "Run a grid of scenario variants (a latency what-if study) in parallel: one run folder per "
-      "variant under DIR/runs/<id>, DIR/results.csv (one row per run, grid order) and DIR/plots. "
+      "variant under DIR/runs/<id> (with its replay report, report.html), DIR/results.csv (one "
+      "row per run, grid order), DIR/plots and DIR/index.html (the table in the browser, "
+      "sortable, each run linking its report). "
       "Resumes: runs already complete in DIR are not redone.");
   sweep->add_option("SCENARIO", o->scenario,
                     "Scenario file, or a study file (scenarios/studies/*.yaml: scenario, set, "

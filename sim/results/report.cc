@@ -267,14 +267,6 @@ json SnapshotsJson(const FinishedRun& run, const ReportOptions& options) {
   return out;
 }
 
-void ReplaceOnce(std::string& text, std::string_view placeholder, std::string_view with) {
-  const std::size_t at = text.find(placeholder);
-  if (at == std::string::npos) {
-    throw std::logic_error("report template: no " + std::string(placeholder));
-  }
-  text.replace(at, placeholder.size(), with);
-}
-
 }  // namespace
 
 json ReportData(const FinishedRun& run, const ReportOptions& options) {
@@ -290,24 +282,36 @@ json ReportData(const FinishedRun& run, const ReportOptions& options) {
           {"snapshots", SnapshotsJson(run, options)}};
 }
 
+std::string JsonForScript(const json& data) {
+  // inside <script>, "</" would end the element early: JSON allows "<\\/" for it
+  std::string text = data.dump();
+  for (std::size_t at = text.find("</"); at != std::string::npos; at = text.find("</", at + 3)) {
+    text.replace(at, 2, "<\\/");
+  }
+  return text;
+}
+
+void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::string_view with) {
+  const std::size_t at = page.find(placeholder);
+  if (at == std::string::npos) {
+    throw std::logic_error("page template: no " + std::string(placeholder));
+  }
+  page.replace(at, placeholder.size(), with);
+}
+
 std::string ReportHtml(const json& data) {
   std::string page = report_assets::kHtml;
-  // inside <script>, "</" would end the element early: JSON allows "<\/" for it
-  std::string data_text = data.dump();
-  for (std::size_t at = data_text.find("</"); at != std::string::npos;
-       at = data_text.find("</", at + 3)) {
-    data_text.replace(at, 2, "<\\/");
-  }
+  const std::string data_text = JsonForScript(data);
   std::string title = data["meta"].value("scenario", "run");
   for (char& c : title) {
     if (c == '<' || c == '>' || c == '&') c = '_';
   }
-  ReplaceOnce(page, "@TITLE@", title);
-  ReplaceOnce(page, "/*@UPLOT_CSS@*/", report_assets::kUplotCss);
-  ReplaceOnce(page, "/*@REPORT_CSS@*/", report_assets::kCss);
-  ReplaceOnce(page, "/*@UPLOT_JS@*/", report_assets::kUplotJs);
-  ReplaceOnce(page, "/*@REPORT_JS@*/", report_assets::kJs);
-  ReplaceOnce(page, "@DATA@", data_text);
+  ReplacePlaceholder(page, "@TITLE@", title);
+  ReplacePlaceholder(page, "/*@UPLOT_CSS@*/", report_assets::kUplotCss);
+  ReplacePlaceholder(page, "/*@REPORT_CSS@*/", report_assets::kCss);
+  ReplacePlaceholder(page, "/*@UPLOT_JS@*/", report_assets::kUplotJs);
+  ReplacePlaceholder(page, "/*@REPORT_JS@*/", report_assets::kJs);
+  ReplacePlaceholder(page, "@DATA@", data_text);
   return page;
 }
 

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "sim/results/finished_run.h"
 
@@ -29,6 +30,12 @@ nlohmann::json ReportData(const FinishedRun& run, const ReportOptions& options =
 
 // The page: the template with its styles, scripts and `data` inlined.
 std::string ReportHtml(const nlohmann::json& data);
+
+// For pages built from a template with their data inlined (this report, a sweep's index.html):
+// `json` as text that may stand inside a <script> element ("</" written "<\/"), and the one
+// occurrence of `placeholder` in `page` replaced (std::logic_error when it has none).
+std::string JsonForScript(const nlohmann::json& json);
+void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::string_view with);
 
 // What every report carries in its first bytes, so that an earlier report may be replaced
 // (CheckOutputFile) and nothing else is.

@@ -18,6 +18,8 @@
 #include "sim/results/outputs.h"
 #include "sim/results/summary.h"
 #include "sim/scenario/scenario.h"
+#include "sim/results/report.h"
+#include "sim/study/sweep_index.h"
 #include "sim/study/sweep_plots.h"
 
 namespace autonomsim::sim {
@@ -88,6 +90,38 @@ std::vector<std::string> AxisKeys(const SweepSpec& spec) {
   return keys;
 }
 
+// index.html: the table with a link to each run's report, written now for a run that has none (a
+// run from before reports, or one whose report failed), and the plots.
+void WriteIndex(const SweepSpec& spec, const ResultsTable& table,
+                const std::map<std::string, fs::path>& folders, const fs::path& out_dir,
+                std::size_t missing, std::size_t failed) {
+  SweepIndexInput index{.title = spec.scenario.stem().string() + " sweep",
+                        .axis_keys = AxisKeys(spec),
+                        .table = &table,
+                        .missing = missing};
+  index.failed = failed;
+  for (const auto& [id, folder] : folders) {
+    fs::path target = folder / kReportFileName;
+    if (!fs::exists(target)) {
+      try {
+        WriteReport(folder);
+      } catch (const std::exception&) {
+        target = folder;  // no report: the index links the folder
+      }
+    }
+    index.links[id] = fs::relative(target, out_dir).generic_string();
+  }
+  if (fs::is_directory(out_dir / "plots")) {
+    for (const auto& entry : fs::directory_iterator(out_dir / "plots")) {
+      if (entry.path().extension() == ".png") {
+        index.plots.push_back(fs::relative(entry.path(), out_dir).generic_string());
+      }
+    }
+    std::sort(index.plots.begin(), index.plots.end());
+  }
+  WriteFileAtomically(out_dir / "index.html", SweepIndexHtml(index));
+}
+
 // results.csv and the plots of `points` (grid order), reading summaries from the first of `dirs`
 // that has each run.
 SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
@@ -96,13 +130,14 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
   std::vector<PointRecord> complete;
   std::vector<RunSummary> summaries;
   std::map<std::string, RunSummary> cache;  // points may share a run
+  std::map<std::string, fs::path> folders;  // run id -> its folder
   for (const PointRecord& p : points) {
     auto it = cache.find(p.run_id);
     if (it == cache.end()) {
       for (const fs::path& dir : dirs) {
         if (RunComplete(dir, p.run_id)) {
-          it = cache.emplace(p.run_id, ReadSummaryFile(RunFolderOf(dir, p.run_id) / "summary.json"))
-                   .first;
+          folders[p.run_id] = RunFolderOf(dir, p.run_id);
+          it = cache.emplace(p.run_id, ReadSummaryFile(folders[p.run_id] / "summary.json")).first;
           break;
         }
       }
@@ -116,6 +151,9 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
   WriteFileAtomically(out_dir / "results.csv", table.Csv());
   if (plots) WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
   SweepTableSummary result{.missing = points.size() - complete.size()};
+  WriteIndex(spec, table, folders, out_dir, result.missing,
+             static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
+                                                    [](const RunSummary& r) { return !r.passed; })));
   for (std::size_t i = 0; i < complete.size(); ++i) {
     if (summaries[i].passed) continue;
     std::vector<std::string> names;
@@ -223,6 +261,7 @@ void RunPoint(const LoadedScenario& loaded, const WallClock& clock, const fs::pa
   const double wall_s = SecondsSince(start, clock);
   const auto expectations = EvaluateExpectations(loaded.scenario, simulation.record());
   run_folder.Complete(loaded, simulation.record(), expectations, wall_s);
+  WriteReport(folder);
 }
 
 // Runs the points `todo` (indices into `loaded` and `records`) on options.jobs threads, counting

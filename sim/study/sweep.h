@@ -8,10 +8,12 @@
 //
 // Layout of a sweep folder DIR:
 //   DIR/sweep.json       the sweep's spec and its points (this shard's), with their run ids
-//   DIR/runs/<id>/       one run folder per point (sim/results/outputs.h), id = the first 16 hex
+//   DIR/runs/<id>/       one run folder per point (sim/results/outputs.h) with its replay report
+//                        (report.html, sim/results/report.h), id = the first 16 hex
 //                        digits of the run's resolved-scenario hash (LoadedScenario::sha256): two
 //                        points that resolve to the same scenario share one run
 //   DIR/results.csv      one row per point in grid order; DIR/plots/*.png
+//   DIR/index.html       the table in the browser, sortable, each run linking its report
 #pragma once
 
 #include <chrono>

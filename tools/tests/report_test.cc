@@ -113,6 +113,25 @@ TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
   EXPECT_TRUE(data["boards"]["car0"].contains("e2e_max_ms"));
 }
 
+TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
+  const fs::path out = *root_ / "check";
+  const fs::path junit = *root_ / "check.xml";
+  const Result r = Cli(
+      "check scenarios/lab_two_cars_oracle.yaml --report --out " + out.string() + " --junit " +
+      junit.string() +
+      " --set duration_s=20 --set 'expect=[{max_lateral_error: {max_m: 0.001}}]'");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const fs::path report = out / "lab_two_cars_oracle" / "report.html";
+  EXPECT_TRUE(fs::exists(report));
+  // the failed check says where its report is, and how to open it at the failure
+  EXPECT_THAT(r.output, HasSubstr("report: " + report.string()));
+  EXPECT_THAT(r.output, HasSubstr(".html#t="));
+  EXPECT_THAT(Read(junit), HasSubstr("<property name=\"report\" value=\"" + report.string()));
+  const Result no_out = Cli("check scenarios/lab_two_cars_oracle.yaml --report");
+  EXPECT_EQ(no_out.exit_code, 2);
+  EXPECT_THAT(no_out.output, HasSubstr("--out"));
+}
+
 // trajectory.csv: car -> t (ms) -> (x, y)
 std::map<int, std::map<long, std::pair<double, double>>> Trajectory(const fs::path& file) {
   std::map<int, std::map<long, std::pair<double, double>>> out;

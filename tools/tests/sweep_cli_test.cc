@@ -48,6 +48,31 @@ TEST(SweepCliTest, RunsThatFailAnExpectationAreCountedAndExitOne) {
   EXPECT_THAT(merged.output, HasSubstr("4 run(s) with failed expectations"));
 }
 
+// Issue 17: the sweep's index.html links each run's replay report, and its rows are the table's.
+TEST(SweepCliTest, TheIndexLinksEveryRunsReport) {
+  const fs::path scratch = Scratch();
+  const fs::path dir = scratch / "sweep";
+  const Result r = Cli(kSweep + " --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("index: " + dir.string() + "/index.html"));
+  const std::string index = Read(dir / "index.html");
+  int runs = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "runs")) {
+    ++runs;
+    EXPECT_TRUE(fs::exists(entry.path() / "report.html")) << entry.path();
+    EXPECT_THAT(index, HasSubstr("\"runs/" + entry.path().filename().string() + "/report.html\""));
+  }
+  EXPECT_EQ(runs, 4);
+  // a run from before reports gets one when the index is remade
+  const fs::path first = fs::directory_iterator(dir / "runs")->path();
+  fs::remove(first / "report.html");
+  const Result merged =
+      Cli("sweep merge " + dir.string() + " --out " + (scratch / "merged").string());
+  EXPECT_EQ(merged.exit_code, 0) << merged.output;
+  EXPECT_TRUE(fs::exists(first / "report.html"));
+  EXPECT_THAT(Read(scratch / "merged" / "index.html"), HasSubstr("../sweep/runs/"));
+}
+
 TEST(SweepCliTest, HelpAnswers) {
   const Result sweep = Cli("sweep --help");
   EXPECT_EQ(sweep.exit_code, 0);
