@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app),
                                          AddTable1Command(app), AddRenderCommand(app),
-                                         AddSweepCommand(app), AddReportCommand(app)};
+                                         AddSweepCommand(app), AddReportCommand(app),
+                                         AddVideoCommand(app)};
 
   try {
     app.parse(argc, argv);

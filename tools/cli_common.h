@@ -32,6 +32,7 @@ Command AddTable1Command(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);
+Command AddVideoCommand(CLI::App& parent);
 
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);

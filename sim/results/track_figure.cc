@@ -27,7 +27,8 @@ constexpr int kLeftPx = 70, kTopPx = 56, kBottomPx = 56, kRightPx = 270;
 constexpr double kArrowEvery_m = 2.0;   // direction arrows along each path...
 constexpr double kArrowsUpTo_m = 12.0;  // ...over its first metres
 constexpr double kArrowLength_m = 0.25;
-const cv::Scalar kBackground(32, 32, 32), kText(235, 235, 235), kZoneGrey(120, 120, 120);
+const cv::Scalar kBackground(32, 32, 32), kText(235, 235, 235), kZoneGrey(120, 120, 120),
+    kObstacleBgr(40, 40, 200);
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 
 void Text(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.5,
@@ -87,8 +88,9 @@ TrackFigureLayout TrackFigureLayoutOf(const LoadedScenario& loaded) {
   return LayoutOf(world::RasterizeFloor(loaded.track));
 }
 
-cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
-  const world::FloorRaster raster = world::RasterizeFloor(loaded.track);
+TrackFigureBase DrawTrackFigureBase(const Scenario& scenario, const world::Track& track,
+                                    bool with_obstacles) {
+  const world::FloorRaster raster = world::RasterizeFloor(track);
   const TrackFigureLayout at = LayoutOf(raster);
   cv::Mat image(kTopPx + raster.height_px + kBottomPx, kLeftPx + raster.width_px + kRightPx,
                 CV_8UC3, kBackground);
@@ -96,7 +98,7 @@ cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
       .copyTo(image(cv::Rect(kLeftPx, kTopPx, raster.width_px, raster.height_px)));
 
   // zone boxes, each area labelled with its intersection's id
-  for (const world::IntersectionSpec& i : loaded.track.spec().intersections) {
+  for (const world::IntersectionSpec& i : track.spec().intersections) {
     auto draw_box = [&](const world::Box& b, int thickness) {
       cv::rectangle(image, at.ToPixel(b.x_min_m, b.y_max_m), at.ToPixel(b.x_max_m, b.y_min_m),
                     kZoneGrey, thickness);
@@ -106,16 +108,86 @@ cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
     Text(image, fmt::format("intersection {}", i.id),
          at.ToPixel(i.area.x_min_m, i.area.y_max_m) + cv::Point(4, 16), 0.45, kZoneGrey);
   }
-  for (const ObstacleConfig& o : loaded.scenario.obstacles) {
-    const cv::RotatedRect box(at.ToPixel(o.x_m, o.y_m),
-                              cv::Size2f(static_cast<float>(o.length_m / at.m_per_px),
-                                         static_cast<float>(o.width_m / at.m_per_px)),
-                              static_cast<float>(-o.yaw_deg));
-    cv::Point2f corners[4];
-    box.points(corners);
-    std::vector<cv::Point> polygon(corners, corners + 4);
-    cv::fillConvexPoly(image, polygon, cv::Scalar(40, 40, 200));
+  if (with_obstacles) {
+    for (const ObstacleConfig& o : scenario.obstacles) DrawObstacle(image, at, o);
   }
+
+  // axes, scale bar, title
+  DrawAxes(image, at, track.spec().size_m);
+  const double half = 0.5 * track.spec().size_m;
+  const cv::Point bar = at.ToPixel(half - 1.3, -half + 0.15);
+  const int one_m = static_cast<int>(std::lround(1.0 / at.m_per_px));
+  cv::rectangle(image, cv::Rect(bar.x - 4, bar.y - 24, one_m + 8, 32), cv::Scalar(0, 0, 0),
+                cv::FILLED);
+  cv::line(image, bar, bar + cv::Point(one_m, 0), kText, 3);
+  for (int end : {0, one_m}) cv::line(image, bar + cv::Point(end, -6), bar + cv::Point(end, 6), kText, 2);
+  Text(image, "1 m", bar + cv::Point(one_m / 2 - 14, -10), 0.5);
+  Text(image,
+       fmt::format("{}  (seed {}, {:g} s)", scenario.name, scenario.seed,
+                   ToSeconds(scenario.duration)),
+       {kLeftPx, 34}, 0.75, kText, 2);
+  return {image, at, kLeftPx + raster.width_px + 20};
+}
+
+int DrawTrackLegend(cv::Mat& image, const Scenario& scenario, int legend_x, bool paths) {
+  int y = kTopPx + 20;
+  for (const CarConfig& car : scenario.cars) {
+    const cv::Scalar colour = CarColourBgr(scenario, car.id);
+    if (paths) {
+      cv::line(image, {legend_x, y - 5}, {legend_x + 26, y - 5}, colour, 3, cv::LINE_AA);
+    } else {
+      cv::rectangle(image, cv::Rect(legend_x + 4, y - 12, 18, 12), colour, cv::FILLED);
+    }
+    Text(image, fmt::format("car {}: {}, {}", car.id, car.route.value_or("lanes"), car.driver),
+         {legend_x + 34, y}, 0.45);
+    y += 24;
+  }
+  y += 10;
+  if (paths) {
+    cv::circle(image, {legend_x + 13, y - 5}, 6, kText, cv::FILLED, cv::LINE_AA);
+    Text(image, "start", {legend_x + 34, y}, 0.45);
+    y += 24;
+    cv::arrowedLine(image, {legend_x, y - 5}, {legend_x + 26, y - 5}, kText, 2, cv::LINE_AA, 0,
+                    0.4);
+    Text(image, "direction", {legend_x + 34, y}, 0.45);
+    y += 24;
+  }
+  Cross(image, {legend_x + 13, y - 5}, 7, kCollisionMarkerBgr, 3);
+  Text(image, "collision", {legend_x + 34, y}, 0.45);
+  y += 24;
+  cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kZoneGrey, 2);
+  Text(image, "intersection", {legend_x + 34, y}, 0.45);
+  y += 24;
+  cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kZoneGrey, 1);
+  Text(image, "stop box", {legend_x + 34, y}, 0.45);
+  if (!scenario.obstacles.empty()) {
+    y += 24;
+    cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kObstacleBgr, cv::FILLED);
+    Text(image, "obstacle", {legend_x + 34, y}, 0.45);
+  }
+  return y + 24;
+}
+
+void DrawObstacle(cv::Mat& image, const TrackFigureLayout& at, const ObstacleConfig& o) {
+  const cv::RotatedRect box(at.ToPixel(o.x_m, o.y_m),
+                            cv::Size2f(static_cast<float>(o.length_m / at.m_per_px),
+                                       static_cast<float>(o.width_m / at.m_per_px)),
+                            static_cast<float>(-o.yaw_deg));
+  cv::Point2f corners[4];
+  box.points(corners);
+  std::vector<cv::Point> polygon(corners, corners + 4);
+  cv::fillConvexPoly(image, polygon, kObstacleBgr);
+}
+
+void DrawCollisionMarker(cv::Mat& image, cv::Point p) {
+  Cross(image, p, 9, cv::Scalar(255, 255, 255), 5);
+  Cross(image, p, 9, kCollisionMarkerBgr, 3);
+}
+
+cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
+  TrackFigureBase base = DrawTrackFigureBase(loaded.scenario, loaded.track, true);
+  cv::Mat& image = base.image;
+  const TrackFigureLayout& at = base.layout;
 
   // collisions: where the car was at the first sample at or after each
   std::map<int, std::vector<Time>> collisions;  // car -> instants, in order
@@ -177,53 +249,9 @@ cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
       cv::circle(image, *path.start, 6, colour_of(id), cv::FILLED, cv::LINE_AA);
     }
   }
-  for (const cv::Point& p : collision_points) {
-    Cross(image, p, 9, cv::Scalar(255, 255, 255), 5);
-    Cross(image, p, 9, kCollisionMarkerBgr, 3);
-  }
+  for (const cv::Point& p : collision_points) DrawCollisionMarker(image, p);
 
-  // axes, scale bar, title, legend
-  DrawAxes(image, at, loaded.track.spec().size_m);
-  const double half = 0.5 * loaded.track.spec().size_m;
-  const cv::Point bar = at.ToPixel(half - 1.3, -half + 0.15);
-  const int one_m = static_cast<int>(std::lround(1.0 / at.m_per_px));
-  cv::rectangle(image, cv::Rect(bar.x - 4, bar.y - 24, one_m + 8, 32), cv::Scalar(0, 0, 0),
-                cv::FILLED);
-  cv::line(image, bar, bar + cv::Point(one_m, 0), kText, 3);
-  for (int end : {0, one_m}) cv::line(image, bar + cv::Point(end, -6), bar + cv::Point(end, 6), kText, 2);
-  Text(image, "1 m", bar + cv::Point(one_m / 2 - 14, -10), 0.5);
-  Text(image,
-       fmt::format("{}  (seed {}, {:g} s)", loaded.scenario.name, loaded.scenario.seed,
-                   ToSeconds(loaded.scenario.duration)),
-       {kLeftPx, 34}, 0.75, kText, 2);
-  const int legend_x = kLeftPx + raster.width_px + 20;
-  int y = kTopPx + 20;
-  for (const CarConfig& car : loaded.scenario.cars) {
-    cv::line(image, {legend_x, y - 5}, {legend_x + 26, y - 5}, colour_of(car.id), 3, cv::LINE_AA);
-    Text(image, fmt::format("car {}: {}, {}", car.id, car.route.value_or("lanes"), car.driver),
-         {legend_x + 34, y}, 0.45);
-    y += 24;
-  }
-  y += 10;
-  cv::circle(image, {legend_x + 13, y - 5}, 6, kText, cv::FILLED, cv::LINE_AA);
-  Text(image, "start", {legend_x + 34, y}, 0.45);
-  y += 24;
-  cv::arrowedLine(image, {legend_x, y - 5}, {legend_x + 26, y - 5}, kText, 2, cv::LINE_AA, 0, 0.4);
-  Text(image, "direction", {legend_x + 34, y}, 0.45);
-  y += 24;
-  Cross(image, {legend_x + 13, y - 5}, 7, kCollisionMarkerBgr, 3);
-  Text(image, "collision", {legend_x + 34, y}, 0.45);
-  y += 24;
-  cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kZoneGrey, 2);
-  Text(image, "intersection", {legend_x + 34, y}, 0.45);
-  y += 24;
-  cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kZoneGrey, 1);
-  Text(image, "stop box", {legend_x + 34, y}, 0.45);
-  if (!loaded.scenario.obstacles.empty()) {
-    y += 24;
-    cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), cv::Scalar(40, 40, 200), cv::FILLED);
-    Text(image, "obstacle", {legend_x + 34, y}, 0.45);
-  }
+  DrawTrackLegend(image, loaded.scenario, base.legend_x, true);
   return image;
 }
 

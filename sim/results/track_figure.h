@@ -9,6 +9,7 @@
 
 #include "sim/scenario/run_record.h"
 #include "sim/scenario/scenario.h"
+#include "world/track.h"
 
 namespace autonomsim::sim {
 
@@ -26,6 +27,22 @@ TrackFigureLayout TrackFigureLayoutOf(const LoadedScenario& loaded);
 
 // The figure, BGR8. Reads the record's samples and events once each.
 cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record);
+
+// The pieces, for figures drawn over time (the video): what does not change during a run
+// (background, floor, zone boxes, the obstacles if `with_obstacles`, axes, scale bar, title),
+// where the floor sits, and where the legend goes.
+struct TrackFigureBase {
+  cv::Mat image;
+  TrackFigureLayout layout;
+  int legend_x{0};
+};
+TrackFigureBase DrawTrackFigureBase(const Scenario& scenario, const world::Track& track,
+                                    bool with_obstacles);
+// The legend at x = legend_x: each car in its colour (a line if `paths`, else a box), then the
+// marks. Returns the y below it.
+int DrawTrackLegend(cv::Mat& image, const Scenario& scenario, int legend_x, bool paths);
+void DrawObstacle(cv::Mat& image, const TrackFigureLayout& at, const ObstacleConfig& o);
+void DrawCollisionMarker(cv::Mat& image, cv::Point p);
 
 // Car `car_id`'s colour in every figure of a run (track.png, the report, the video), BGR: by the
 // car's place in the scenario, from a palette that stands out on black, white and yellow.

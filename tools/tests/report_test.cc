@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -130,6 +131,33 @@ TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
   const Result no_out = Cli("check scenarios/lab_two_cars_oracle.yaml --report");
   EXPECT_EQ(no_out.exit_code, 2);
   EXPECT_THAT(no_out.output, HasSubstr("--out"));
+}
+
+TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
+  const fs::path video = *root_ / "replay.mp4";
+  const Result r = Cli("video " + run_dir_->string() + " --out " + video.string() +
+                       " --fps 10 --speed 2 --cameras 0 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("151 frames"));  // 0, 0.2, ..., 30 s
+  cv::VideoCapture capture(video.string());
+  ASSERT_TRUE(capture.isOpened());
+  EXPECT_NEAR(capture.get(cv::CAP_PROP_FPS), 10.0, 1e-6);
+  int frames = 0;
+  cv::Mat frame;
+  while (capture.read(frame)) ++frames;
+  EXPECT_EQ(frames, 151);
+  // the run's own folder may be replaced by a video; a file elsewhere only with --force
+  EXPECT_EQ(Cli("video " + run_dir_->string() + " --out " + video.string() + " --to 1 -q").exit_code,
+            2);
+  EXPECT_EQ(Cli("video " + run_dir_->string() + " --out " + (*run_dir_ / "v.mp4").string() +
+                " --to 1 -q")
+                .exit_code,
+            0);
+  const Result no_board = Cli("video " + run_dir_->string() + " --out " +
+                              (*root_ / "x.mp4").string() + " --cameras 7 -q");
+  EXPECT_EQ(no_board.exit_code, 2);
+  EXPECT_THAT(no_board.output, HasSubstr("no car 7 with a board"));
+  EXPECT_FALSE(fs::exists(*root_ / "x.mp4"));
 }
 
 // trajectory.csv: car -> t (ms) -> (x, y)
