@@ -66,11 +66,15 @@ void DrawAxes(cv::Mat& image, const TrackFigureLayout& at, double size_m) {
 
 }  // namespace
 
+cv::Scalar CarColourBgrAt(std::size_t index) {
+  const auto& bgr = kCarColours[index % kCarColours.size()];
+  return cv::Scalar(bgr[0], bgr[1], bgr[2]);
+}
+
 cv::Scalar CarColourBgr(const Scenario& scenario, int car_id) {
   std::size_t c = 0;
   while (c < scenario.cars.size() && scenario.cars[c].id != car_id) ++c;
-  const auto& bgr = kCarColours[c % kCarColours.size()];
-  return cv::Scalar(bgr[0], bgr[1], bgr[2]);
+  return CarColourBgrAt(c);
 }
 
 cv::Point TrackFigureLayout::ToPixel(double x_m, double y_m) const {

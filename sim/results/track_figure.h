@@ -47,6 +47,8 @@ void DrawCollisionMarker(cv::Mat& image, cv::Point p);
 // Car `car_id`'s colour in every figure of a run (track.png, the report, the video), BGR: by the
 // car's place in the scenario, from a palette that stands out on black, white and yellow.
 cv::Scalar CarColourBgr(const Scenario& scenario, int car_id);
+// The palette's colour for the car at `index` in the scenario.
+cv::Scalar CarColourBgrAt(std::size_t index);
 
 // The colour of collision markers (BGR).
 inline const cv::Scalar kCollisionMarkerBgr(0, 0, 255);

@@ -149,8 +149,14 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
   const ResultsTable table = BuildResultsTable(AxisKeys(spec), complete, summaries);
   fs::create_directories(out_dir);
   WriteFileAtomically(out_dir / "results.csv", table.Csv());
-  if (plots) WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
   SweepTableSummary result{.missing = points.size() - complete.size()};
+  if (plots) {
+    try {
+      WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
+    } catch (const std::runtime_error& e) {  // the table stands without them
+      result.plots_error = e.what();
+    }
+  }
   WriteIndex(spec, table, folders, out_dir, result.missing,
              static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
                                                     [](const RunSummary& r) { return !r.passed; })));
@@ -328,9 +334,10 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
 
   const std::vector<std::size_t> todo = RunsToDo(records, options.out_dir, &summary.already_done);
   RunPoints(loaded, records, todo, options, &summary);
-  summary.failed_expectations =
-      WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots)
-          .failed_expectations;
+  SweepTableSummary table =
+      WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots);
+  summary.failed_expectations = std::move(table.failed_expectations);
+  summary.plots_error = std::move(table.plots_error);
   return summary;
 }
 

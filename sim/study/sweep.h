@@ -61,11 +61,13 @@ struct SweepSummary {
   // The shard's complete runs (ran now or before) whose expectations did not all hold:
   // "run <id> (point <index>): <each failed expectation's name>".
   std::vector<std::string> failed_expectations;
+  std::string plots_error;  // as in SweepTableSummary
 };
 
 // What the results table of a sweep (or of merged shards) found.
 struct SweepTableSummary {
   std::size_t missing{0};  // grid points without a complete run
+  std::string plots_error;  // why there are no plots (gnuplot failed); empty when they were drawn
   std::vector<std::string> failed_expectations;  // as in SweepSummary
 };
 

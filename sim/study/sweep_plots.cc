@@ -1,15 +1,18 @@
 #include "sim/study/sweep_plots.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
-#include <opencv2/imgproc.hpp>
 #include <set>
+#include <stdexcept>
 
-#include "sim/results/png.h"
+#include "sim/core/files.h"
+#include "sim/results/track_figure.h"
 
 namespace autonomsim::sim {
 
@@ -17,53 +20,26 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kWidth = 900;
-constexpr int kHeight = 560;
-constexpr int kLeft = 90;
-constexpr int kRight = 200;  // room for the legend
-constexpr int kTop = 50;
-constexpr int kBottom = 70;
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+// Tableau 10, for series that are not a car's.
+constexpr std::array<const char*, 10> kPalette = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
+                                                  "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+                                                  "#bcbd22", "#17becf"};
+constexpr const char* kAllCarsColour = "#333333";
+constexpr const char* kEachRunColour = "#b8b8b8";
+// More runs than this in a plot of one series per run: each run in grey, their mean on top.
+constexpr std::size_t kMostRunsNamed = 10;
+// Legends with a longer label go below the plot; a longer title takes two lines.
+constexpr std::size_t kLongestLabelBeside = 28;
+constexpr std::size_t kLongestTitleLine = 70;
 
-// Tableau 10, as BGR.
-constexpr std::array<std::array<int, 3>, 10> kPalette = {{{180, 119, 31},
-                                                          {14, 127, 255},
-                                                          {44, 160, 44},
-                                                          {40, 39, 214},
-                                                          {189, 103, 148},
-                                                          {75, 86, 140},
-                                                          {194, 119, 227},
-                                                          {127, 127, 127},
-                                                          {34, 189, 188},
-                                                          {207, 190, 23}}};
-
-cv::Scalar Colour(std::size_t i) {
-  const auto& c = kPalette[i % kPalette.size()];
-  return cv::Scalar(c[0], c[1], c[2]);
+// A string in gnuplot's single quotes ('' is a quote).
+std::string Quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
 }
 
-std::string TickText(double value, double step) {
-  if (value == 0.0) return "0";
-  const double magnitude = std::abs(value);
-  if (magnitude >= 1e5 || magnitude < 1e-3) return fmt::format("{:.1e}", value);
-  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
-  return fmt::format("{:.{}f}", value, decimals);
-}
-
-std::string Shorten(const std::string& text, std::size_t max_chars) {
-  if (text.size() <= max_chars) return text;
-  return text.substr(0, max_chars - 2) + "..";
-}
-
-void PutText(cv::Mat& image, const std::string& text, cv::Point at, double scale, int thickness = 1,
-             cv::Scalar colour = cv::Scalar(30, 30, 30)) {
-  cv::putText(image, text, at, kFont, scale, colour, thickness, cv::LINE_AA);
-}
-
-int TextWidth(const std::string& text, double scale, int thickness = 1) {
-  int baseline = 0;
-  return cv::getTextSize(text, kFont, scale, thickness, &baseline).width;
-}
+std::string Number(double v) { return fmt::format("{}", v); }
 
 bool ParseDouble(const std::string& text, double* out) {
   const std::optional<double> value = ParseFiniteNumber(text);
@@ -80,199 +56,63 @@ std::string FileSafe(const std::string& text) {
   return out;
 }
 
-// A run's label in legends: its varied values.
-std::string RunLabel(const PointRecord& p) {
-  std::string label;
-  for (const std::string& l : p.labels) label += (label.empty() ? "" : " ") + l;
-  if (p.repeat > 0 || label.empty())
-    label += (label.empty() ? "" : " ") + fmt::format("r{}", p.repeat);
-  return label;
+// A car's colour as in track.png and the report (taking car N to be the scenario's N-th, as the
+// shipped scenarios number their cars).
+std::string CarColourHex(std::size_t id) {
+  const cv::Scalar bgr = CarColourBgrAt(id);
+  return fmt::format("#{:02x}{:02x}{:02x}", static_cast<int>(bgr[2]), static_cast<int>(bgr[1]),
+                     static_cast<int>(bgr[0]));
 }
 
-// The key metrics plotted against each varied key: the column name without its car/board prefix.
-const std::vector<std::string> kKeyMetrics = {
-    "laps_total",          "collisions_total",     "max_lateral_error_m",
-    "rms_lateral_error_m", "lane_error_max_m",     "laps",
-    "mean_lap_time_s",     "total_wait_s",         "collisions",
-    "cpu_percent",         "cpu_demand_percent",   "e2e_latency_p50_ms",
-    "e2e_latency_p99_ms",  "lanes_latency_p50_ms", "lanes_latency_p99_ms",
-    "min_obstacle_gap_m"};
-
-}  // namespace
-
-std::vector<double> NiceTicks(double lo, double hi, int target_count) {
-  if (!(hi > lo)) {
-    const double pad = lo == 0.0 ? 1.0 : std::abs(lo) * 0.1;
-    lo -= pad;
-    hi += pad;
+// The colour of a column prefix: carN in its car's colour, "all" dark grey.
+std::string PrefixColour(const std::string& prefix) {
+  if (prefix.rfind("car", 0) == 0) {
+    double id = 0.0;
+    if (ParseDouble(prefix.substr(3), &id) && id >= 0 && id < 1000) {
+      return CarColourHex(static_cast<std::size_t>(id));
+    }
   }
-  const double raw = (hi - lo) / std::max(1, target_count);
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = power;
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    step = m * power;
-    if (step >= raw) break;
-  }
-  std::vector<double> ticks;
-  for (double t = std::floor(lo / step) * step; t <= hi + step * 0.999; t += step) {
-    ticks.push_back(std::abs(t) < step * 1e-9 ? 0.0 : t);
-    if (ticks.size() > 50) break;
-  }
-  return ticks;
+  return kAllCarsColour;
 }
 
-namespace {
-
-// Where the data goes in the picture: the plotted ranges, their ticks, and the mapping to pixels.
-struct Frame {
-  bool log_x{false};
-  double x_lo{0.0}, x_hi{1.0}, y_lo{0.0}, y_hi{1.0};  // x on the log10 scale when log_x
-  std::vector<double> x_ticks, y_ticks;               // no x_ticks: categories
-  int plot_w{kWidth - kLeft - kRight};
-  int plot_h{kHeight - kTop - kBottom};
-
-  double tx(double x) const { return log_x ? std::log10(x) : x; }
-  int px(double x) const {
-    return kLeft + static_cast<int>(std::lround((x - x_lo) / (x_hi - x_lo) * plot_w));
+// A run in legends: its varied keys with their values, and its seed.
+std::string RunLabel(const SweepSpec& spec, const PointRecord& p) {
+  std::vector<std::string> parts;
+  for (std::size_t a = 0; a < spec.axes.size() && a < p.labels.size(); ++a) {
+    parts.push_back(spec.axes[a].key + "=" + p.labels[a]);
   }
-  int py(double y) const {
-    return kTop + plot_h - static_cast<int>(std::lround((y - y_lo) / (y_hi - y_lo) * plot_h));
-  }
-  // Whether a point is drawn at all: a finite y, and x > 0 on a log scale.
-  bool Shown(double x, double y) const { return std::isfinite(y) && !(log_x && x <= 0); }
+  if (spec.repeat > 1 || parts.empty()) parts.push_back(fmt::format("seed {}", p.seed));
+  return fmt::format("{}", fmt::join(parts, ", "));
+}
+
+// The key metrics plotted against each varied key (the column name without its car/board
+// prefix): the plot's title and the y axis, in words.
+struct MetricWords {
+  const char* column;
+  const char* title;
+  const char* y_label;
 };
-
-Frame FrameFor(const PlotSpec& spec) {
-  Frame f{.log_x = spec.log_x};
-  double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
-  for (const PlotSeries& s : spec.series) {
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!f.Shown(s.x[i], s.y[i])) continue;
-      x_lo = std::min(x_lo, f.tx(s.x[i]));
-      x_hi = std::max(x_hi, f.tx(s.x[i]));
-      y_lo = std::min(y_lo, s.y[i]);
-      y_hi = std::max(y_hi, s.y[i]);
-    }
-  }
-  if (!std::isfinite(x_lo)) x_lo = 0, x_hi = 1, y_lo = 0, y_hi = 1;
-  if (!spec.categories.empty()) {
-    x_lo = -0.5;
-    x_hi = static_cast<double>(spec.categories.size()) - 0.5;
-  }
-  y_lo = std::min(y_lo, 0.0);  // metrics here are >= 0: show the zero line
-  f.y_ticks = NiceTicks(y_lo, y_hi);
-  f.y_lo = f.y_ticks.front();
-  f.y_hi = f.y_ticks.back();
-  if (spec.categories.empty()) {
-    if (spec.log_x) {
-      for (double d = std::floor(x_lo); d <= std::ceil(x_hi); d += 1.0) f.x_ticks.push_back(d);
-    } else {
-      f.x_ticks = NiceTicks(x_lo, x_hi);
-    }
-    x_lo = std::min(x_lo, f.x_ticks.front());
-    x_hi = std::max(x_hi, f.x_ticks.back());
-    if (x_hi <= x_lo) x_hi = x_lo + 1;
-  }
-  f.x_lo = x_lo;
-  f.x_hi = x_hi;
-  return f;
-}
-
-// Grid lines, ticks and tick labels, and the frame around the plot area.
-void DrawAxes(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
-  const cv::Scalar grid(225, 225, 225), axis(60, 60, 60);
-  for (double y : f.y_ticks) {
-    cv::line(image, {kLeft, f.py(y)}, {kLeft + f.plot_w, f.py(y)}, grid, 1);
-    const std::string text = TickText(y, f.y_ticks.size() > 1 ? f.y_ticks[1] - f.y_ticks[0] : 1.0);
-    PutText(image, text, {kLeft - 8 - TextWidth(text, 0.45), f.py(y) + 5}, 0.45);
-  }
-  const int bottom = kTop + f.plot_h;
-  for (std::size_t i = 0; i < spec.categories.size(); ++i) {
-    const int x = f.px(static_cast<double>(i));
-    cv::line(image, {x, kTop}, {x, bottom}, grid, 1);
-    // labels alternate between two rows when there are many, so each may be twice as wide
-    const bool stagger = spec.categories.size() > 6;
-    const std::size_t max_chars = std::max<std::size_t>(
-        4, static_cast<std::size_t>(f.plot_w * (stagger ? 2 : 1) /
-                                    std::max<std::size_t>(1, spec.categories.size()) / 8));
-    const std::string text = Shorten(spec.categories[i], max_chars);
-    const int row = stagger ? static_cast<int>(i % 2) : 0;
-    PutText(image, text, {x - TextWidth(text, 0.42) / 2, bottom + 20 + 16 * row}, 0.42);
-  }
-  for (double x : f.x_ticks) {
-    cv::line(image, {f.px(x), kTop}, {f.px(x), bottom}, grid, 1);
-    const std::string text =
-        spec.log_x ? TickText(std::pow(10.0, x), std::pow(10.0, x))
-                   : TickText(x, f.x_ticks.size() > 1 ? f.x_ticks[1] - f.x_ticks[0] : 1.0);
-    PutText(image, text, {f.px(x) - TextWidth(text, 0.45) / 2, bottom + 20}, 0.45);
-  }
-  cv::rectangle(image, {kLeft, kTop}, {kLeft + f.plot_w, bottom}, axis, 1);
-}
-
-// The title above, the x label below, and the y label rotated along the left edge.
-void DrawTitles(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
-  PutText(image, spec.title, {(kWidth - TextWidth(spec.title, 0.62, 2)) / 2, 30}, 0.62, 2);
-  const std::string x_label = spec.x_label + (spec.log_x ? " (log scale)" : "");
-  PutText(image, x_label, {kLeft + (f.plot_w - TextWidth(x_label, 0.5)) / 2, kHeight - 14}, 0.5);
-  // the y label, written horizontally and rotated into place
-  const int w = TextWidth(spec.y_label, 0.5) + 10;
-  cv::Mat label(24, w, CV_8UC3, cv::Scalar(255, 255, 255));
-  PutText(label, spec.y_label, {5, 17}, 0.5);
-  cv::Mat rotated;
-  cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
-  const int top = std::max(0, kTop + (f.plot_h - rotated.rows) / 2);
-  const int rows = std::min(rotated.rows, kHeight - top);
-  rotated(cv::Rect(0, 0, rotated.cols, rows)).copyTo(image(cv::Rect(8, top, rotated.cols, rows)));
-}
-
-// The series' lines and dots, clipped to the plot area.
-void DrawSeries(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
-  cv::Mat area = image(cv::Rect(kLeft, kTop, f.plot_w + 1, f.plot_h + 1));
-  const cv::Point offset(kLeft, kTop);
-  for (std::size_t s = 0; s < spec.series.size(); ++s) {
-    const PlotSeries& series = spec.series[s];
-    std::vector<cv::Point> points;
-    for (std::size_t i = 0; i < series.x.size(); ++i) {
-      if (!f.Shown(series.x[i], series.y[i])) continue;
-      points.push_back(cv::Point(f.px(f.tx(series.x[i])), f.py(series.y[i])) - offset);
-    }
-    if (series.line && points.size() > 1) {
-      cv::polylines(area, points, false, Colour(s), 2, cv::LINE_AA);
-    }
-    if (series.dots) {
-      for (const cv::Point& p : points) cv::circle(area, p, 4, Colour(s), cv::FILLED, cv::LINE_AA);
-    }
-  }
-}
-
-// The legend right of the plot area: the first 20 series, and how many more there are.
-void DrawLegend(cv::Mat& image, const PlotSpec& spec, const Frame& f) {
-  const int x = kLeft + f.plot_w;
-  const std::size_t shown = std::min<std::size_t>(spec.series.size(), 20);
-  for (std::size_t s = 0; s < shown; ++s) {
-    const int y = kTop + 12 + 20 * static_cast<int>(s);
-    cv::line(image, {x + 12, y - 4}, {x + 32, y - 4}, Colour(s), 3);
-    PutText(image, Shorten(spec.series[s].label, 22), {x + 38, y}, 0.4);
-  }
-  if (spec.series.size() > shown) {
-    PutText(image, fmt::format("+{} more", spec.series.size() - shown),
-            {x + 38, kTop + 12 + 20 * static_cast<int>(shown)}, 0.4);
-  }
-}
-
-}  // namespace
-
-cv::Mat DrawPlot(const PlotSpec& spec) {
-  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
-  const Frame frame = FrameFor(spec);
-  DrawAxes(image, spec, frame);
-  DrawTitles(image, spec, frame);
-  DrawSeries(image, spec, frame);
-  DrawLegend(image, spec, frame);
-  return image;
-}
-
-namespace {
+constexpr std::array<MetricWords, 16> kKeyMetrics{{
+    {"laps_total", "Laps completed, all cars together", "laps"},
+    {"collisions_total", "Collisions, all cars together", "collisions"},
+    {"max_lateral_error_m", "Largest lateral error from the lane centre", "lateral error (m)"},
+    {"rms_lateral_error_m", "RMS lateral error from the lane centre", "lateral error (m)"},
+    {"lane_error_max_m", "Largest error of the detected lane", "lane error (m)"},
+    {"laps", "Laps completed", "laps"},
+    {"mean_lap_time_s", "Mean lap time", "lap time (s)"},
+    {"total_wait_s", "Time spent waiting at intersections", "waiting (s)"},
+    {"collisions", "Collisions", "collisions"},
+    {"cpu_percent", "CPU load of the board", "CPU (%; 100 % = one core)"},
+    {"cpu_demand_percent", "CPU the board's nodes ask for", "CPU (%; 100 % = one core)"},
+    {"e2e_latency_p50_ms", "End-to-end latency (camera to command), median", "latency (ms)"},
+    {"e2e_latency_p99_ms", "End-to-end latency (camera to command), 99th percentile",
+     "latency (ms)"},
+    {"lanes_latency_p50_ms", "Lane detection latency (camera to lane points), median",
+     "latency (ms)"},
+    {"lanes_latency_p99_ms", "Lane detection latency (camera to lane points), 99th percentile",
+     "latency (ms)"},
+    {"min_obstacle_gap_m", "Smallest gap to an obstacle", "gap (m)"},
+}};
 
 // Where a run lands on a varied key's x axis: its value when every value of the key is a number,
 // else the index of its label (a categorical axis, labels in their first-given order).
@@ -301,20 +141,38 @@ AxisPositions PositionsOf(const VaryAxis& axis) {
   return positions;
 }
 
+// In words, what a metric plot against axis `a` averages: the other varied keys and the seeds.
+std::string AveragedOver(const SweepSpec& spec, std::size_t a, std::size_t runs_per_x) {
+  if (runs_per_x <= 1) return "One run at each value.";
+  std::vector<std::string> over;
+  for (std::size_t o = 0; o < spec.axes.size(); ++o) {
+    if (o == a) continue;
+    std::vector<std::string> values;
+    for (const VaryValue& v : spec.axes[o].values) values.push_back(v.label);
+    over.push_back(fmt::format("{} = {}", spec.axes[o].key, fmt::join(values, ", ")));
+  }
+  if (spec.repeat > 1) over.push_back(fmt::format("{} seeds", spec.repeat));
+  return fmt::format("Lines: the mean of the {} runs at each value (over {}); dots: each run.",
+                     runs_per_x, fmt::join(over, "; "));
+}
+
 // The series of one key metric against one varied key (its values in column `axis_column`): per
 // car or board that has the metric (the column's prefix), the mean over its runs at each x as a
-// line, and the runs as dots of their own where an x has several.
+// line, and the runs as dots of the line's colour where an x has several. `runs_per_x`: the most
+// runs at one x.
 std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::string& metric,
-                                     std::size_t axis_column, const AxisPositions& positions) {
+                                     std::size_t axis_column, const AxisPositions& positions,
+                                     std::size_t* runs_per_x) {
   std::vector<PlotSeries> series;
   for (std::size_t c = 0; c < table.columns.size(); ++c) {
     const std::string& column = table.columns[c];
     const auto dot = column.rfind('.');
     const std::string suffix = dot == std::string::npos ? column : column.substr(dot + 1);
-    const std::string prefix = dot == std::string::npos ? "all" : column.substr(0, dot);
+    const std::string prefix = dot == std::string::npos ? "all cars" : column.substr(0, dot);
     // only car/board-level columns (carN.metric), not per-node ones (carN.node.metric)
     if (suffix != metric || prefix.find('.') != std::string::npos) continue;
-    PlotSeries dots{.label = prefix, .x = {}, .y = {}, .dots = true, .line = false};
+    const std::string colour = PrefixColour(prefix);
+    PlotSeries dots{.label = prefix + ", each run", .dots = true, .line = false, .colour = colour};
     std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
     for (const auto& row : table.rows) {
       double y = 0.0, x = 0.0;
@@ -325,94 +183,194 @@ std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::strin
       mean[x].second += 1;
     }
     if (dots.x.empty()) continue;
-    PlotSeries line{.label = prefix, .x = {}, .y = {}, .dots = false, .line = true};
+    PlotSeries line{.label = prefix, .dots = false, .line = true, .colour = colour};
     for (const auto& [x, sum] : mean) {
       line.x.push_back(x);
       line.y.push_back(sum.first / sum.second);
+      *runs_per_x = std::max(*runs_per_x, static_cast<std::size_t>(sum.second));
     }
-    // dots and the mean line share a colour: put them in one series when one run per x
-    if (line.x.size() == dots.x.size()) {
+    if (line.x.size() == dots.x.size()) {  // one run per x: the line's own dots
       line.dots = true;
       series.push_back(std::move(line));
     } else {
+      line.label = prefix + ", mean";
       series.push_back(std::move(line));
-      dots.label = prefix + " (runs)";
       series.push_back(std::move(dots));
     }
   }
   return series;
 }
 
-// Each key metric against one varied key, one plot each (those no run has are left out).
-void WriteMetricPlots(const VaryAxis& axis, std::size_t axis_column, const ResultsTable& table,
-                      const fs::path& dir) {
-  const AxisPositions positions = PositionsOf(axis);
-  for (const std::string& metric : kKeyMetrics) {
-    const PlotSpec plot{
-        .title = fmt::format("{} vs {}", metric, axis.key),
-        .x_label = axis.key,
-        .y_label = metric,
-        .series = MetricSeries(table, metric, axis_column, positions),
-        .categories = positions.numeric ? std::vector<std::string>{} : positions.categories,
-        .log_x = false};
-    if (plot.series.empty()) continue;
-    WritePng(dir / (FileSafe(metric) + "_vs_" + FileSafe(axis.key) + ".png"), DrawPlot(plot));
+// Series of one per run: named while they are few; beyond kMostRunsNamed, each run in grey and
+// their mean (point by point, over the runs that have the point) in black on top.
+std::vector<PlotSeries> RunSeries(std::vector<PlotSeries> runs) {
+  if (runs.size() <= kMostRunsNamed) {
+    for (std::size_t i = 0; i < runs.size(); ++i) runs[i].colour = kPalette[i % kPalette.size()];
+    return runs;
   }
+  std::map<double, std::pair<double, int>> mean;
+  for (PlotSeries& r : runs) {
+    for (std::size_t i = 0; i < r.x.size(); ++i) {
+      mean[r.x[i]].first += r.y[i];
+      mean[r.x[i]].second += 1;
+    }
+    r.colour = kEachRunColour;
+    r.width = 1.0;
+    r.dots = false;
+    r.label.clear();
+  }
+  runs.front().label = fmt::format("each of the {} runs", runs.size());
+  PlotSeries m{.label = "mean of the runs", .dots = false, .line = true, .colour = "#000000",
+               .width = 2.5};
+  for (const auto& [x, sum] : mean) {
+    m.x.push_back(x);
+    m.y.push_back(sum.first / sum.second);
+  }
+  runs.push_back(std::move(m));
+  return runs;
 }
 
-// One run's turnaround histogram of one node (`node` from sim/platform's ReportJson) as a series of
-// the node's plot in `histograms` (by board/node); nothing for a node without jobs.
-void AddHistogramSeries(const std::string& board, const nlohmann::json& node,
-                        const std::string& label, std::map<std::string, PlotSpec>* histograms) {
-  if (!node.contains("turnaround_histogram_ms")) return;
-  const auto counts = node["turnaround_histogram_ms"].value("counts", std::vector<double>{});
-  const auto edges = node["turnaround_histogram_ms"].value("edges", std::vector<double>{});
-  double total = 0.0;
-  for (double c : counts) total += c;
-  if (total == 0.0 || edges.size() != counts.size() + 1) return;
-  const std::string name = node.at("name").get<std::string>();
-  PlotSpec& h = (*histograms)[board + "/" + name];
-  h.title = fmt::format("Turnaround of {} on {}", name, board);
-  h.x_label = "turnaround [ms], bin centre";
-  h.y_label = "fraction of jobs";
-  h.log_x = true;
-  // empty bins trimmed at both ends (one kept) so the plot shows where the jobs are
-  std::size_t first = 0, last = counts.size();
-  while (first < last && counts[first] == 0) ++first;
-  while (last > first && counts[last - 1] == 0) --last;
-  first = first > 0 ? first - 1 : 0;
-  last = std::min(counts.size(), last + 1);
-  PlotSeries histogram{.label = label, .x = {}, .y = {}, .dots = true, .line = true};
-  for (std::size_t b = first; b < last; ++b) {
-    histogram.x.push_back(std::sqrt(edges[b] * edges[b + 1]));
-    histogram.y.push_back(counts[b] / total);
-  }
-  h.series.push_back(std::move(histogram));
-}
-
-// One run's series in the CPU load plot of a board (`report`: sim/platform's ReportJson) and in
-// the turnaround histograms of the board's nodes.
-void AddBoardSeries(const std::string& board, const nlohmann::json& report,
-                    const std::string& label, std::map<std::string, PlotSpec>* loads,
-                    std::map<std::string, PlotSpec>* histograms) {
-  PlotSpec& load = (*loads)[board];
-  load.title = fmt::format("CPU load over time, {}", board);
-  load.x_label = "simulated time [s]";
-  load.y_label = fmt::format("CPU load [%, 100 = one core, {} cores]", report.value("cores", 0));
-  PlotSeries series{.label = label, .x = {}, .y = {}, .dots = false, .line = true};
+// A board's CPU load over time in one run (`report`: sim/platform's ReportJson).
+PlotSeries LoadSeries(const nlohmann::json& report, const std::string& label) {
+  PlotSeries series{.label = label, .dots = false, .line = true};
   const double bin_s = report.value("load_bin_s", 1.0);
   const auto bins = report.value("cpu_load_percent", std::vector<double>{});
   for (std::size_t b = 0; b < bins.size(); ++b) {
     series.x.push_back((static_cast<double>(b) + 0.5) * bin_s);
     series.y.push_back(bins[b]);
   }
-  load.series.push_back(std::move(series));
-  for (const nlohmann::json& node : report.at("nodes")) {
-    AddHistogramSeries(board, node, label, histograms);
+  return series;
+}
+
+// One node's turnaround histogram in one run, as fractions of its jobs at the bins' centres
+// (empty bins trimmed at both ends, one kept); nothing for a node without jobs.
+std::optional<PlotSeries> HistogramSeries(const nlohmann::json& node, const std::string& label) {
+  if (!node.contains("turnaround_histogram_ms")) return std::nullopt;
+  const auto counts = node["turnaround_histogram_ms"].value("counts", std::vector<double>{});
+  const auto edges = node["turnaround_histogram_ms"].value("edges", std::vector<double>{});
+  double total = 0.0;
+  for (double c : counts) total += c;
+  if (total == 0.0 || edges.size() != counts.size() + 1) return std::nullopt;
+  std::size_t first = 0, last = counts.size();
+  while (first < last && counts[first] == 0) ++first;
+  while (last > first && counts[last - 1] == 0) --last;
+  first = first > 0 ? first - 1 : 0;
+  last = std::min(counts.size(), last + 1);
+  PlotSeries histogram{.label = label, .dots = true, .line = true};
+  for (std::size_t b = first; b < last; ++b) {
+    histogram.x.push_back(std::sqrt(edges[b] * edges[b + 1]));
+    histogram.y.push_back(counts[b] / total);
   }
+  return histogram;
 }
 
 }  // namespace
+
+std::string GnuplotData(const PlotSpec& spec) {
+  std::string out = "# " + spec.title + "\n# x y, one block per series\n";
+  for (std::size_t i = 0; i < spec.series.size(); ++i) {
+    const PlotSeries& s = spec.series[i];
+    out += fmt::format("\n\n# series {}: {}\n", i, s.label);
+    for (std::size_t k = 0; k < s.x.size(); ++k) {
+      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k])) {
+        out += Number(s.x[k]) + " " + Number(s.y[k]) + "\n";
+      }
+    }
+  }
+  return out;
+}
+
+std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
+                          const std::string& png) {
+  std::size_t longest = 0;
+  for (const PlotSeries& s : spec.series) longest = std::max(longest, s.label.size());
+  std::string gp = fmt::format(
+      "# Drawn by autonomsim (a sweep's plots). Run `gnuplot {}` in this folder to draw it again;\n"
+      "# for a paper, change the terminal, e.g. set terminal pdfcairo size 6in,3.8in.\n"
+      "set terminal pngcairo size 1000,620 font 'DejaVu Sans,11' noenhanced\n"
+      "set output {}\n",
+      Quoted(png.substr(0, png.size() - 4) + ".gp"), Quoted(png));
+  // the title (in two lines when long: broken before ", against") and under it the subtitle,
+  // above the plot and left-aligned with it, one text line each
+  std::vector<std::pair<std::string, const char*>> lines;  // (text, font)
+  const std::size_t against = spec.title.find(", against ");
+  if (spec.title.size() > kLongestTitleLine && against != std::string::npos) {
+    lines.emplace_back(spec.title.substr(0, against), "DejaVu Sans,14");
+    lines.emplace_back(spec.title.substr(against + 2), "DejaVu Sans,12");
+  } else {
+    lines.emplace_back(spec.title, "DejaVu Sans,14");
+  }
+  if (!spec.subtitle.empty()) lines.emplace_back(spec.subtitle, "DejaVu Sans,10");
+  gp += fmt::format("set tmargin {}\n", 2 + 2 * lines.size());
+  for (std::size_t l = 0; l < lines.size(); ++l) {
+    gp += fmt::format("set label {} {} at graph 0, graph 1 left offset 0, char {} font '{}'{}\n",
+                      l + 1, Quoted(lines[l].first),
+                      1.7 * static_cast<double>(lines.size() - l) - 0.6, lines[l].second,
+                      l + 1 == lines.size() && !spec.subtitle.empty() ? " textcolor rgb '#555555'"
+                                                                      : "");
+  }
+  gp += "set xlabel " + Quoted(spec.x_label) + "\nset ylabel " + Quoted(spec.y_label) + "\n";
+  gp += "set grid lc rgb '#e0e0e0'\nset border 3\nset tics nomirror\nset yrange [0:*]\n";
+  gp += longest > kLongestLabelBeside ? "set key bmargin left horizontal Left reverse\nset bmargin 7\n"
+                                      : "set key outside right top Left reverse\n";
+  if (spec.log_x) gp += "set logscale x 10\n";
+  if (!spec.categories.empty()) {
+    std::vector<std::string> tics;
+    for (std::size_t i = 0; i < spec.categories.size(); ++i) {
+      tics.push_back(Quoted(spec.categories[i]) + " " + std::to_string(i));
+    }
+    gp += fmt::format("set xtics ({})\nset xrange [-0.5:{}]\n", fmt::join(tics, ", "),
+                      static_cast<double>(spec.categories.size()) - 0.5);
+  } else {
+    gp += "set offsets graph 0.03, graph 0.03, graph 0.05, 0\n";
+  }
+  std::vector<std::string> plots;
+  for (std::size_t i = 0; i < spec.series.size(); ++i) {
+    const PlotSeries& s = spec.series[i];
+    const std::string colour = s.colour.empty() ? kPalette[i % kPalette.size()] : s.colour;
+    const std::string style = s.line && s.dots ? "linespoints pt 7 ps 0.9"
+                              : s.line         ? "lines"
+                                               : "points pt 7 ps 0.7";
+    plots.push_back(fmt::format("{} index {} using 1:2 with {} lw {} lc rgb {} title {}",
+                                i == 0 ? Quoted(data_file) : "''", i, style, s.width,
+                                Quoted(colour), s.label.empty() ? "''" : Quoted(s.label)));
+  }
+  gp += "plot " + fmt::format("{}", fmt::join(plots, ", \\\n     ")) + "\n";
+  return gp;
+}
+
+void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots, const fs::path& dir) {
+  if (plots.empty()) return;
+  const fs::path folder = fs::absolute(dir);
+  // One gnuplot for all: a script that loads each plot's own in the plots folder.
+  std::string all = "cd " + Quoted(folder.string()) + "\n";
+  for (const auto& [name, plot] : plots) {
+    WriteFile(folder / (name + ".dat"), GnuplotData(plot));
+    WriteFile(folder / (name + ".gp"), GnuplotScript(plot, name + ".dat", name + ".png"));
+    all += "reset\nload " + Quoted(name + ".gp") + "\n";
+  }
+  const fs::path driver = folder / (".all-" + std::to_string(::getpid()) + ".gp");
+  WriteFile(driver, all);
+  std::string command = "gnuplot '";
+  for (char c : driver.string()) command += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  command += "' 2>&1";
+  std::string output;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe != nullptr) {
+    std::array<char, 4096> buffer;
+    while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  }
+  const int status = pipe != nullptr ? ::pclose(pipe) : -1;
+  fs::remove(driver);
+  if (status != 0) {
+    throw std::runtime_error(
+        "gnuplot could not draw the plots" +
+        (output.find("not found") != std::string::npos || status == (127 << 8)
+             ? std::string(" (is it installed? tools/install_deps.sh installs gnuplot-nox)")
+             : std::string()) +
+        ": " + output);
+  }
+}
 
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
@@ -420,29 +378,75 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
   fs::remove_all(dir);
   fs::create_directories(dir);
   if (points.empty()) return;
+  std::vector<std::pair<std::string, PlotSpec>> plots;
 
   // 1. Each key metric against each varied key; one series per car or board (column prefix).
   for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-    WriteMetricPlots(spec.axes[a], 2 + a, table, dir);  // the axes' columns follow index, run_id
+    const VaryAxis& axis = spec.axes[a];
+    const AxisPositions positions = PositionsOf(axis);
+    for (const MetricWords& metric : kKeyMetrics) {
+      std::size_t runs_per_x = 0;
+      PlotSpec plot{
+          .title = fmt::format("{}, against {}", metric.title, axis.key),
+          .subtitle = "",
+          .x_label = axis.key,
+          .y_label = metric.y_label,
+          // the axes' columns follow index and run_id
+          .series = MetricSeries(table, metric.column, 2 + a, positions, &runs_per_x),
+          .categories = positions.numeric ? std::vector<std::string>{} : positions.categories,
+          .log_x = false};
+      if (plot.series.empty()) continue;
+      plot.subtitle = AveragedOver(spec, a, runs_per_x);
+      plots.emplace_back(FileSafe(metric.column) + "_vs_" + FileSafe(axis.key), std::move(plot));
+    }
   }
 
   // 2. CPU load over time per board; 3. turnaround histograms per board and node: a series per
   // distinct run, in grid order.
-  std::map<std::string, PlotSpec> loads;       // by board, in name order
-  std::map<std::string, PlotSpec> histograms;  // by board/node, in name order
+  std::map<std::string, std::vector<PlotSeries>> loads;       // by board
+  std::map<std::string, std::vector<PlotSeries>> histograms;  // by board/node
+  std::map<std::string, int> cores;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!seen.insert(points[i].run_id).second || !summaries[i].platform) continue;
+    const std::string label = RunLabel(spec, points[i]);
     for (const auto& [board, report] : *summaries[i].platform) {
-      AddBoardSeries(board, report, RunLabel(points[i]), &loads, &histograms);
+      loads[board].push_back(LoadSeries(report, label));
+      cores[board] = report.value("cores", 0);
+      for (const nlohmann::json& node : report.at("nodes")) {
+        if (auto h = HistogramSeries(node, label)) {
+          histograms[board + "/" + node.at("name").get<std::string>()].push_back(std::move(*h));
+        }
+      }
     }
   }
-  for (const auto& [board, plot] : loads) {
-    WritePng(dir / ("cpu_load_" + FileSafe(board) + ".png"), DrawPlot(plot));
+  for (auto& [board, runs] : loads) {
+    plots.emplace_back(
+        "cpu_load_" + FileSafe(board),
+        PlotSpec{.title = fmt::format("CPU load of {}'s board over time", board),
+                 .subtitle = fmt::format("Mean over each load bin; {} cores, 100 % = one core.",
+                                         cores[board]),
+                 .x_label = "simulated time (s)",
+                 .y_label = "CPU load (%)",
+                 .series = RunSeries(std::move(runs)),
+                 .categories = {},
+                 .log_x = false});
   }
-  for (const auto& [name, plot] : histograms) {
-    WritePng(dir / ("turnaround_" + FileSafe(name) + ".png"), DrawPlot(plot));
+  for (auto& [name, runs] : histograms) {
+    const auto slash = name.find('/');
+    plots.emplace_back(
+        "turnaround_" + FileSafe(name),
+        PlotSpec{.title = fmt::format("Turnaround of {} on {}'s board", name.substr(slash + 1),
+                                      name.substr(0, slash)),
+                 .subtitle = "From taking a message to publishing its result, waiting for a "
+                             "core included; log-spaced bins.",
+                 .x_label = "turnaround (ms), bin centre",
+                 .y_label = "fraction of the node's jobs",
+                 .series = RunSeries(std::move(runs)),
+                 .categories = {},
+                 .log_x = true});
   }
+  RenderPlots(plots, dir);
 }
 
 }  // namespace autonomsim::sim

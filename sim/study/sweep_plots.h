@@ -1,10 +1,15 @@
-// The plots of a sweep (PNG, drawn with OpenCV): each key metric against each varied key, per-node
-// turnaround histograms, CPU load over time. Axes, tick labels, titles and a legend on each.
+// The plots of a sweep, drawn by gnuplot (Debian's gnuplot-nox, its pngcairo terminal): each key
+// metric against each varied key, CPU load over time per board, turnaround histograms per node.
+// Every plot is three files in DIR/plots: NAME.png, and NAME.gp with NAME.dat, the script and the
+// data that drew it, so that a researcher can restyle a plot or draw it for a paper (change the
+// script's `set terminal` line to pdfcairo or svg and run `gnuplot NAME.gp` in that folder).
+//
+// What a reader needs is on the plot: titles in words with units, what a line averages over and
+// how many runs, legends that name the varied keys with their values, each car in the colour it
+// has in track.png and the report (a car's runs as dots of its line's colour).
 #pragma once
 
 #include <filesystem>
-#include <opencv2/core.hpp>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,10 +24,13 @@ struct PlotSeries {
   std::vector<double> x, y;  // points drawn as dots (if dots) and joined (if line)
   bool dots{true};
   bool line{true};
+  std::string colour;  // "#rrggbb"; empty: the next colour of the palette
+  double width{2.0};   // of the line, in gnuplot's line width units
 };
 
 struct PlotSpec {
   std::string title;
+  std::string subtitle;  // what the plot shows beyond the title (what a line averages), in words
   std::string x_label;
   std::string y_label;
   std::vector<PlotSeries> series;
@@ -31,11 +39,18 @@ struct PlotSpec {
   bool log_x{false};  // x values are plotted on a log10 scale (must be > 0)
 };
 
-// One plot, 900 x 560 pixels, white background.
-cv::Mat DrawPlot(const PlotSpec& spec);
+// The data file of a plot: one block per series ("x y" lines, blocks two blank lines apart, a
+// comment naming each), read by the script with `index i`.
+std::string GnuplotData(const PlotSpec& spec);
+// The script that draws `spec` from `data_file` into `png` (names relative to the plots folder).
+std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
+                          const std::string& png);
 
-// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten) covering [lo, hi].
-std::vector<double> NiceTicks(double lo, double hi, int target_count = 6);
+// Writes NAME.gp and NAME.dat for each (NAME, plot) into `dir` and runs gnuplot on the scripts
+// there, which write NAME.png. std::runtime_error with gnuplot's message when it fails or is not
+// installed.
+void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots,
+                 const std::filesystem::path& dir);
 
 // Writes every plot of a sweep into `dir` (replacing what is there). `points[i]` and
 // `summaries[i]` belong together (grid order); `table` is their results.csv.

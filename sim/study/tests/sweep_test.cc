@@ -4,6 +4,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
 
 #include <atomic>
@@ -227,33 +228,29 @@ TEST(Sweep, ParallelForRunsEveryIndexOnce) {
   ParallelFor(0, 4, [&](std::size_t) { FAIL(); });
 }
 
-TEST(SweepPlots, TicksAreNiceAndCoverTheRange) {
-  EXPECT_THAT(NiceTicks(0.0, 1.0, 5), ElementsAre(0.0, 0.2, 0.4, 0.6000000000000001, 0.8, 1.0));
-  const std::vector<double> t = NiceTicks(3.0, 97.0);
-  EXPECT_LE(t.front(), 3.0);
-  EXPECT_GE(t.back(), 97.0);
-  EXPECT_EQ(t[1] - t[0], 20.0);
-}
-
-TEST(SweepPlots, APlotHasDataAxesAndTextOnAWhiteBackground) {
-  PlotSpec spec{.title = "lateral error vs latency",
-                .x_label = "v2i.latency_s",
-                .y_label = "max_lateral_error_m",
-                .series = {PlotSeries{.label = "car0", .x = {0, 1, 2}, .y = {0.1, 0.3, 0.2}}},
-                .categories = {},
-                .log_x = false};
-  const cv::Mat image = DrawPlot(spec);
-  ASSERT_EQ(image.type(), CV_8UC3);
-  int coloured = 0, dark = 0;
-  for (int y = 0; y < image.rows; ++y) {
-    for (int x = 0; x < image.cols; ++x) {
-      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
-      if (p[0] > 150 && p[2] < 80) ++coloured;          // the first palette colour (blue)
-      if (p[0] < 90 && p[1] < 90 && p[2] < 90) ++dark;  // text and the frame
-    }
-  }
-  EXPECT_GT(coloured, 200);
-  EXPECT_GT(dark, 2000);
+TEST(SweepPlots, TheScriptDrawsEachSeriesFromItsBlockWithItsColourAndName) {
+  const PlotSpec spec{.title = "Largest lateral error, against v2i.latency_s",
+                      .subtitle = "One run at each value.",
+                      .x_label = "v2i.latency_s",
+                      .y_label = "lateral error (m)",
+                      .series = {PlotSeries{.label = "car0", .x = {0, 1, 2}, .y = {0.1, 0.3, 0.2},
+                                            .colour = "#00a0ff"},
+                                 PlotSeries{.label = "car1's runs", .x = {0, 1}, .y = {0.2, NAN},
+                                            .dots = true, .line = false}},
+                      .categories = {"lab", "safe"},
+                      .log_x = false};
+  const std::string data = GnuplotData(spec);
+  EXPECT_THAT(data, HasSubstr("# series 0: car0\n0 0.1\n1 0.3\n2 0.2\n"));
+  EXPECT_THAT(data, ::testing::EndsWith("# series 1: car1's runs\n0 0.2\n"));  // no NaN line
+  const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
+  EXPECT_THAT(gp, HasSubstr("set output 'p.png'"));
+  EXPECT_THAT(gp, HasSubstr("noenhanced"));  // key names with underscores stay as written
+  EXPECT_THAT(gp, HasSubstr("set label 2 'One run at each value.'"));
+  EXPECT_THAT(gp, HasSubstr("set xtics ('lab' 0, 'safe' 1)"));
+  EXPECT_THAT(gp, HasSubstr("'p.dat' index 0 using 1:2 with linespoints"));
+  EXPECT_THAT(gp, HasSubstr("lc rgb '#00a0ff' title 'car0'"));
+  EXPECT_THAT(gp, HasSubstr("'' index 1 using 1:2 with points"));
+  EXPECT_THAT(gp, HasSubstr("title 'car1''s runs'"));  // gnuplot's quote in quotes
 }
 
 // ---- Real sweeps on the oracle scenario (no board: fast) ----
@@ -277,7 +274,18 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   EXPECT_TRUE(first.failures.empty());
   const std::string table = ReadText(dir.path / "one" / "results.csv");
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);
-  EXPECT_TRUE(fs::exists(dir.path / "one" / "plots" / "max_lateral_error_m_vs_v2i_latency_s.png"));
+  // the plots: drawn by gnuplot, with their script and data beside them, saying what they average
+  const fs::path plots = dir.path / "one" / "plots";
+  const cv::Mat png = cv::imread((plots / "max_lateral_error_m_vs_v2i_latency_s.png").string());
+  ASSERT_FALSE(png.empty());
+  EXPECT_EQ(png.cols, 1000);
+  const std::string gp = ReadText(plots / "max_lateral_error_m_vs_v2i_latency_s.gp");
+  EXPECT_THAT(gp, HasSubstr("Largest lateral error from the lane centre, against v2i.latency_s"));
+  EXPECT_THAT(gp, HasSubstr("the mean of the 2 runs at each value (over "
+                            "cars[0].oracle.speed_mps = 0.3, 0.5)"));
+  EXPECT_THAT(gp, HasSubstr("title 'car0, mean'"));
+  EXPECT_THAT(gp, HasSubstr("title 'car0, each run'"));
+  EXPECT_TRUE(fs::exists(plots / "max_lateral_error_m_vs_v2i_latency_s.dat"));
 
   // resumed: nothing is redone, the table is the same
   const SweepSummary again = RunSweep(spec, one);
