@@ -13,6 +13,7 @@ packages=(
   parallel  # GNU parallel: the sweep test runs shards with it, as the README's recipe does
   clang libclang-rt-14-dev  # tools/fuzz.sh: libFuzzer and clang's sanitizer runtimes
   chromium  # the replay report's browser test loads it in headless chromium
+  gnuplot-nox  # draws a sweep's plots (pngcairo)
 )
 
 missing=()

@@ -141,29 +141,58 @@ AxisPositions PositionsOf(const VaryAxis& axis) {
   return positions;
 }
 
-// In words, what a metric plot against axis `a` averages: the other varied keys and the seeds.
-std::string AveragedOver(const SweepSpec& spec, std::size_t a, std::size_t runs_per_x) {
-  if (runs_per_x <= 1) return "One run at each value.";
+// A second varied key a metric plot draws one line per value of (instead of averaging over it):
+// the other key, when exactly one other is varied, over at most kMostSplitValues values.
+constexpr std::size_t kMostSplitValues = 4;
+std::optional<std::size_t> SplitAxis(const SweepSpec& spec, std::size_t a) {
+  if (spec.axes.size() != 2) return std::nullopt;
+  const std::size_t other = 1 - a;
+  if (spec.axes[other].values.size() > kMostSplitValues) return std::nullopt;
+  return other;
+}
+
+// In words, what a metric plot against axis `a` averages: the other varied keys (but the one it
+// splits by) and the seeds.
+std::string AveragedOver(const SweepSpec& spec, std::size_t a, std::optional<std::size_t> split,
+                         std::size_t runs_per_x) {
+  const std::string lines =
+      split ? fmt::format("One line per value of {}. ", spec.axes[*split].key) : "";
+  if (runs_per_x <= 1) return lines + "One run at each point.";
   std::vector<std::string> over;
   for (std::size_t o = 0; o < spec.axes.size(); ++o) {
-    if (o == a) continue;
+    if (o == a || (split && o == *split)) continue;
     std::vector<std::string> values;
     for (const VaryValue& v : spec.axes[o].values) values.push_back(v.label);
     over.push_back(fmt::format("{} = {}", spec.axes[o].key, fmt::join(values, ", ")));
   }
   if (spec.repeat > 1) over.push_back(fmt::format("{} seeds", spec.repeat));
-  return fmt::format("Lines: the mean of the {} runs at each value (over {}); dots: each run.",
-                     runs_per_x, fmt::join(over, "; "));
+  return fmt::format("{}Lines: the mean of the {} runs at each point (over {}); dots: each run.",
+                     lines, runs_per_x, fmt::join(over, "; "));
 }
 
 // The series of one key metric against one varied key (its values in column `axis_column`): per
 // car or board that has the metric (the column's prefix), the mean over its runs at each x as a
 // line, and the runs as dots of the line's colour where an x has several. `runs_per_x`: the most
 // runs at one x.
+// A second key to split lines by: its column and its values (labels), in order.
+struct Split {
+  std::string key;
+  std::size_t column{0};
+  std::vector<std::string> values;
+};
+
 std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::string& metric,
                                      std::size_t axis_column, const AxisPositions& positions,
-                                     std::size_t* runs_per_x) {
+                                     const std::optional<Split>& split, std::size_t* runs_per_x) {
   std::vector<PlotSeries> series;
+  std::vector<std::string> prefixes;  // the columns' cars and boards
+  for (std::size_t c = 0; c < table.columns.size(); ++c) {
+    const std::string& column = table.columns[c];
+    const auto dot = column.rfind('.');
+    const std::string suffix = dot == std::string::npos ? column : column.substr(dot + 1);
+    if (suffix == metric) prefixes.push_back(dot == std::string::npos ? "" : column.substr(0, dot));
+  }
+  const std::vector<std::string> values = split ? split->values : std::vector<std::string>{""};
   for (std::size_t c = 0; c < table.columns.size(); ++c) {
     const std::string& column = table.columns[c];
     const auto dot = column.rfind('.');
@@ -171,11 +200,20 @@ std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::strin
     const std::string prefix = dot == std::string::npos ? "all cars" : column.substr(0, dot);
     // only car/board-level columns (carN.metric), not per-node ones (carN.node.metric)
     if (suffix != metric || prefix.find('.') != std::string::npos) continue;
-    const std::string colour = PrefixColour(prefix);
-    PlotSeries dots{.label = prefix + ", each run", .dots = true, .line = false, .colour = colour};
+    for (std::size_t v = 0; v < values.size(); ++v) {
+    // one car's lines: its colour, a dash per split value; a metric of all cars: a colour each
+    const bool one_prefix = prefixes.size() == 1;
+    const std::string colour =
+        split && one_prefix ? std::string(kPalette[v % kPalette.size()]) : PrefixColour(prefix);
+    const int dash = split && !one_prefix ? static_cast<int>(v % 5) + 1 : 1;
+    const std::string name =
+        split ? fmt::format("{}, {}={}", prefix, split->key, values[v]) : prefix;
+    PlotSeries dots{.label = name + ", each run", .dots = true, .line = false, .colour = colour,
+                    .dash = dash};
     std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
     for (const auto& row : table.rows) {
       double y = 0.0, x = 0.0;
+      if (split && row[split->column] != values[v]) continue;
       if (!ParseDouble(row[c], &y) || !positions.X(row[axis_column], &x)) continue;
       dots.x.push_back(x);
       dots.y.push_back(y);
@@ -183,7 +221,7 @@ std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::strin
       mean[x].second += 1;
     }
     if (dots.x.empty()) continue;
-    PlotSeries line{.label = prefix, .dots = false, .line = true, .colour = colour};
+    PlotSeries line{.label = name, .dots = false, .line = true, .colour = colour, .dash = dash};
     for (const auto& [x, sum] : mean) {
       line.x.push_back(x);
       line.y.push_back(sum.first / sum.second);
@@ -193,9 +231,10 @@ std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::strin
       line.dots = true;
       series.push_back(std::move(line));
     } else {
-      line.label = prefix + ", mean";
+      line.label = name + ", mean";
       series.push_back(std::move(line));
       series.push_back(std::move(dots));
+    }
     }
   }
   return series;
@@ -322,7 +361,7 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
     gp += fmt::format("set xtics ({})\nset xrange [-0.5:{}]\n", fmt::join(tics, ", "),
                       static_cast<double>(spec.categories.size()) - 0.5);
   } else {
-    gp += "set offsets graph 0.03, graph 0.03, graph 0.05, 0\n";
+    gp += "set autoscale xfix\nset offsets graph 0.03, graph 0.03, graph 0.05, 0\n";
   }
   std::vector<std::string> plots;
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
@@ -331,8 +370,8 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
     const std::string style = s.line && s.dots ? "linespoints pt 7 ps 0.9"
                               : s.line         ? "lines"
                                                : "points pt 7 ps 0.7";
-    plots.push_back(fmt::format("{} index {} using 1:2 with {} lw {} lc rgb {} title {}",
-                                i == 0 ? Quoted(data_file) : "''", i, style, s.width,
+    plots.push_back(fmt::format("{} index {} using 1:2 with {} lw {} dt {} lc rgb {} title {}",
+                                i == 0 ? Quoted(data_file) : "''", i, style, s.width, s.dash,
                                 Quoted(colour), s.label.empty() ? "''" : Quoted(s.label)));
   }
   gp += "plot " + fmt::format("{}", fmt::join(plots, ", \\\n     ")) + "\n";
@@ -384,6 +423,11 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
   for (std::size_t a = 0; a < spec.axes.size(); ++a) {
     const VaryAxis& axis = spec.axes[a];
     const AxisPositions positions = PositionsOf(axis);
+    std::optional<Split> split;
+    if (const std::optional<std::size_t> s = SplitAxis(spec, a)) {
+      split = Split{.key = spec.axes[*s].key, .column = 2 + *s, .values = {}};
+      for (const VaryValue& v : spec.axes[*s].values) split->values.push_back(v.label);
+    }
     for (const MetricWords& metric : kKeyMetrics) {
       std::size_t runs_per_x = 0;
       PlotSpec plot{
@@ -392,11 +436,11 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
           .x_label = axis.key,
           .y_label = metric.y_label,
           // the axes' columns follow index and run_id
-          .series = MetricSeries(table, metric.column, 2 + a, positions, &runs_per_x),
+          .series = MetricSeries(table, metric.column, 2 + a, positions, split, &runs_per_x),
           .categories = positions.numeric ? std::vector<std::string>{} : positions.categories,
           .log_x = false};
       if (plot.series.empty()) continue;
-      plot.subtitle = AveragedOver(spec, a, runs_per_x);
+      plot.subtitle = AveragedOver(spec, a, SplitAxis(spec, a), runs_per_x);
       plots.emplace_back(FileSafe(metric.column) + "_vs_" + FileSafe(axis.key), std::move(plot));
     }
   }

@@ -26,6 +26,7 @@ struct PlotSeries {
   bool line{true};
   std::string colour;  // "#rrggbb"; empty: the next colour of the palette
   double width{2.0};   // of the line, in gnuplot's line width units
+  int dash{1};         // gnuplot's dash type: 1 solid, 2 dashed, 3 dotted, ...
 };
 
 struct PlotSpec {

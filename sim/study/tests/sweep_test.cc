@@ -263,6 +263,23 @@ SweepSpec TinySweep() {
   return spec;
 }
 
+TEST(SweepRun, APlotSaysWhatItsLinesAverageAndShowsEachRun) {
+  TempDir dir;
+  SweepSpec spec;
+  spec.scenario = "scenarios/lab_two_cars_oracle.yaml";
+  spec.overrides = {"duration_s=3", "expect=[]"};
+  spec.axes = {ParseVary("v2i.latency_s=0,1")};
+  spec.repeat = 2;
+  RunSweep(spec, SweepOptions{.out_dir = dir.path, .jobs = 2, .shard = {}, .plots = true,
+                              .progress = {}});
+  const std::string gp = ReadText(dir.path / "plots" / "laps_vs_v2i_latency_s.gp");
+  EXPECT_THAT(gp, HasSubstr("Lines: the mean of the 2 runs at each point (over 2 seeds); dots: "
+                            "each run."));
+  EXPECT_THAT(gp, HasSubstr("lc rgb '#00a0ff' title 'car0, mean'"));
+  EXPECT_THAT(gp, HasSubstr("with points pt 7 ps 0.7 lw 2 dt 1 lc rgb '#00a0ff' title 'car0, "
+                            "each run'"));
+}
+
 TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   TempDir dir;
   const SweepSpec spec = TinySweep();
@@ -281,10 +298,10 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   EXPECT_EQ(png.cols, 1000);
   const std::string gp = ReadText(plots / "max_lateral_error_m_vs_v2i_latency_s.gp");
   EXPECT_THAT(gp, HasSubstr("Largest lateral error from the lane centre, against v2i.latency_s"));
-  EXPECT_THAT(gp, HasSubstr("the mean of the 2 runs at each value (over "
-                            "cars[0].oracle.speed_mps = 0.3, 0.5)"));
-  EXPECT_THAT(gp, HasSubstr("title 'car0, mean'"));
-  EXPECT_THAT(gp, HasSubstr("title 'car0, each run'"));
+  // the other varied key has a line per value, each car in its colour, a dash per value
+  EXPECT_THAT(gp, HasSubstr("One line per value of cars[0].oracle.speed_mps. One run at each "
+                            "point."));
+  EXPECT_THAT(gp, HasSubstr("dt 2 lc rgb '#00a0ff' title 'car0, cars[0].oracle.speed_mps=0.5'"));
   EXPECT_TRUE(fs::exists(plots / "max_lateral_error_m_vs_v2i_latency_s.dat"));
 
   // resumed: nothing is redone, the table is the same
