@@ -56,6 +56,18 @@ std::string KindOf(const fs::file_status& status) {
   }
 }
 
+// Every existing ancestor of `target` must be a folder (a file in the way is refused).
+template <class Refuse>
+void CheckAncestors(const fs::path& target, const Refuse& refuse) {
+  for (fs::path ancestor = target.parent_path(); !ancestor.empty();
+       ancestor = ancestor.parent_path()) {
+    const fs::file_status status = fs::status(ancestor);
+    if (fs::is_directory(status)) break;
+    if (fs::exists(status)) throw refuse(ancestor.string() + " is " + KindOf(status));
+    if (ancestor == ancestor.root_path()) break;
+  }
+}
+
 }  // namespace
 
 fs::path CheckOutputFolder(const std::string& given, bool force) {
@@ -77,13 +89,7 @@ fs::path CheckOutputFolder(const std::string& given, bool force) {
   if (first_difference == target.end()) {
     throw refuse("holds the working folder (" + cwd.string() + "): never replaced");
   }
-  for (fs::path ancestor = target.parent_path(); !ancestor.empty();
-       ancestor = ancestor.parent_path()) {
-    const fs::file_status status = fs::status(ancestor);
-    if (fs::is_directory(status)) break;
-    if (fs::exists(status)) throw refuse(ancestor.string() + " is " + KindOf(status));
-    if (ancestor == ancestor.root_path()) break;
-  }
+  CheckAncestors(target, refuse);
   const fs::file_status status = fs::symlink_status(target);
   const std::string kind = KindOf(status);
   if (kind.empty()) return target;
@@ -123,13 +129,7 @@ fs::path CheckOutputFile(const std::string& given, bool force, const std::string
   if (given.empty()) throw refuse("empty path");
   const fs::path target = fs::absolute(given).lexically_normal();
   if (target.filename().empty()) throw refuse("names a folder; give a file name");
-  for (fs::path ancestor = target.parent_path(); !ancestor.empty();
-       ancestor = ancestor.parent_path()) {
-    const fs::file_status status = fs::status(ancestor);
-    if (fs::is_directory(status)) break;
-    if (fs::exists(status)) throw refuse(ancestor.string() + " is " + KindOf(status));
-    if (ancestor == ancestor.root_path()) break;
-  }
+  CheckAncestors(target, refuse);
   const fs::file_status status = fs::symlink_status(target);
   const std::string kind = KindOf(status);
   if (kind.empty()) {

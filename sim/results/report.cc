@@ -186,14 +186,9 @@ json TrajectoryJson(const RunRecord& record) {
 json EventsJson(const RunRecord& record) {
   json out = json::array();
   for (const Event& e : record.events) {
-    json j = {{"t", Round(ToSeconds(e.t), 4)}, {"type", e.type}};
-    if (e.car >= 0) j["car"] = e.car;
-    if (e.intersection >= 0) j["intersection"] = e.intersection;
-    if (e.other_car >= 0) j["other_car"] = e.other_car;
-    if (!e.obstacle.empty()) j["obstacle"] = e.obstacle;
-    if (e.granted) j["granted"] = *e.granted;
-    if (e.lap > 0) j["lap"] = e.lap;
-    if (!e.detail.empty()) j["detail"] = e.detail;
+    json j = EventJson(e);  // as events.jsonl has it, but its time as "t", to 0.1 ms
+    j.erase("t_s");
+    j["t"] = Round(ToSeconds(e.t), 4);
     out.push_back(std::move(j));
   }
   return out;

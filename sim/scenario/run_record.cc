@@ -84,7 +84,9 @@ TrajectorySample ParseTrajectoryCsvLine(std::string_view line) {
                           .route_progress_m = number(10)};
 }
 
-std::string EventJsonLine(const Event& e) {
+std::string EventJsonLine(const Event& e) { return EventJson(e).dump() + "\n"; }
+
+nlohmann::json EventJson(const Event& e) {
   nlohmann::json j = {{"t_s", ToSeconds(e.t)}, {"type", e.type}};
   if (e.car >= 0) j["car"] = e.car;
   if (e.intersection >= 0) j["intersection"] = e.intersection;
@@ -93,7 +95,7 @@ std::string EventJsonLine(const Event& e) {
   if (e.granted) j["granted"] = *e.granted;
   if (e.lap > 0) j["lap"] = e.lap;
   if (!e.detail.empty()) j["detail"] = e.detail;
-  return j.dump() + "\n";
+  return j;
 }
 
 Event ParseEventJsonLine(std::string_view line) {

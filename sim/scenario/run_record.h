@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -153,6 +154,8 @@ std::string EventsJsonl(const RunRecord& record);
 std::string TrajectoryCsvHeader();
 std::string TrajectoryCsvLine(const TrajectorySample& sample);
 std::string EventJsonLine(const Event& event);
+// One event as events.jsonl writes it (t_s, type, and the fields it has), as JSON.
+nlohmann::json EventJson(const Event& event);
 // Throw std::invalid_argument for a line these functions did not write.
 TrajectorySample ParseTrajectoryCsvLine(std::string_view line);
 Event ParseEventJsonLine(std::string_view line);
