@@ -188,6 +188,45 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
   return Finish(counts);
 }
 
+Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
+                        const DepthImageView& depth, const std::array<double, 12>& P,
+                        DepthGridMemo* memo) {
+  const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
+  const GridConstants g = MakeGridConstants(params);
+  detail::CheckDepthImage(depth);
+  std::vector<float> key(g.m.begin(), g.m.end());
+  for (float v : {g.x_min, g.x_max, g.y_min, g.y_max, g.z_min, g.z_max, k.fx, k.fy, k.cx, k.cy,
+                  k.m_per_mm, static_cast<float>(params.cell_size_m)}) {
+    key.push_back(v);
+  }
+  const bool valid = memo->key_ == key;
+  if (!valid) {
+    memo->key_ = std::move(key);
+    memo->depth_.assign(depth.mm.begin(), depth.mm.end());
+    memo->rows_.assign(PointCloud640::kHeight, {});
+  }
+  FrameCounts counts{};
+  FrameCounts row_counts;
+  alignas(64) float x[kWidth], y[kWidth], z[kWidth];
+  for (int row = 0; row < PointCloud640::kHeight; ++row) {
+    const std::uint16_t* in = depth.mm.data() + row * kWidth;
+    std::uint16_t* last = memo->depth_.data() + row * kWidth;
+    auto& cells = memo->rows_[static_cast<std::size_t>(row)];
+    if (!valid || std::memcmp(in, last, kWidth * sizeof(std::uint16_t)) != 0) {
+      std::memcpy(last, in, kWidth * sizeof(std::uint16_t));
+      row_counts.fill(0);
+      detail::CameraPointsOfRow(k, row, in, x, y, z);
+      CountRow(g, x, y, z, &row_counts);
+      cells.clear();
+      for (std::size_t c = 0; c < row_counts.size(); ++c) {
+        if (row_counts[c] != 0) cells.emplace_back(static_cast<std::uint16_t>(c), row_counts[c]);
+      }
+    }
+    for (const auto& [cell, n] : cells) counts[cell] += n;
+  }
+  return Finish(counts);
+}
+
 void ObstacleLayerParams::Validate() const {
   Require(lethal_above_count >= 0 && lethal_above_count <= 254,
           "lethal_above_count must be in [0, 254], got " + Num(lethal_above_count));

@@ -93,6 +93,32 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P);
 
+// What a depth-to-grid node remembers between frames so that it counts only what changed: the
+// depth rows of the last frame and what each added to the grid. A row whose depth values are the
+// same as last time adds what it added then (the bare floor's rows repeat in every frame that has
+// no obstacle in them; only rows that see a car or an obstacle are counted again). Exact: a row's
+// counts are a function of its depth values alone, and the counts are summed as integers, so the
+// grid is the one StepDepthToGrid computes from scratch (tested). Forgets everything when the
+// parameters change.
+class DepthGridMemo {
+ public:
+  DepthGridMemo() = default;
+
+ private:
+  friend Grid234 StepDepthToGrid(const PointCloudParams&, const ObstacleGridParams&,
+                                 const DepthImageView&, const std::array<double, 12>&,
+                                 DepthGridMemo*);
+  std::vector<float> key_;            // the constants the rows were counted with
+  std::vector<std::uint16_t> depth_;  // the last frame's depth, row-major
+  // per row: the cells it counted into and how many (the slot past the last cell included)
+  std::vector<std::vector<std::pair<std::uint16_t, std::uint32_t>>> rows_;
+};
+
+// StepDepthToGrid counting only the rows that differ from the memo's (which it then updates).
+Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
+                        const DepthImageView& depth, const std::array<double, 12>& P,
+                        DepthGridMemo* memo);
+
 struct ObstacleLayerParams {
   // reference §4: a cell is an obstacle when its count is above 250.
   int lethal_above_count{250};

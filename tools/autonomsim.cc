@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   const std::vector<Command> commands = {AddRunCommand(app), AddCheckCommand(app),
                                          AddTable1Command(app), AddRenderCommand(app),
                                          AddSweepCommand(app), AddReportCommand(app),
-                                         AddVideoCommand(app)};
+                                         AddVideoForwarder(app)};
 
   try {
     app.parse(argc, argv);

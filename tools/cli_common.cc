@@ -161,4 +161,30 @@ void PrintReportPath(const Outcome& outcome) {
   }
 }
 
+Command AddVideoForwarder(CLI::App& parent) {
+  CLI::App* video = parent.add_subcommand("video", kVideoDescription);
+  // every argument, --help included, goes to the helper, which parses them
+  video->prefix_command();
+  video->set_help_flag();
+  return {video, [video] {
+            std::error_code error;
+            const fs::path helper =
+                fs::read_symlink("/proc/self/exe", error).parent_path() / "autonomsim-video";
+            if (error || !fs::exists(helper)) {
+              fmt::print(stderr, "error: the video helper {} is not there (build it: it is built "
+                         "with autonomsim)\n", helper.string());
+              return kExitUnusableInput;
+            }
+            std::vector<std::string> args{helper.string(), "video"};
+            for (const std::string& a : video->remaining()) args.push_back(a);
+            std::vector<char*> argv;
+            for (std::string& a : args) argv.push_back(a.data());
+            argv.push_back(nullptr);
+            std::fflush(stdout);
+            ::execv(helper.c_str(), argv.data());
+            fmt::print(stderr, "error: cannot run {}\n", helper.string());
+            return kExitUnusableInput;
+          }};
+}
+
 }  // namespace autonomsim::cli

@@ -32,7 +32,15 @@ Command AddTable1Command(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);
+// The video command lives in the `autonomsim-video` helper (tools/autonomsim_video.cc);
+// `autonomsim video ...` runs it with the same arguments (AddVideoForwarder).
 Command AddVideoCommand(CLI::App& parent);
+Command AddVideoForwarder(CLI::App& parent);
+inline constexpr const char* kVideoDescription =
+    "Write the top-down replay of a finished run as an MPEG-4 video: the track to scale, the "
+    "cars with their trails, intersections tinted by their holder, collisions and the clock; "
+    "with --cameras ID also that car's colour camera (the detected lane drawn in) and depth "
+    "camera. Frames at FROM + k * SPEED / FPS seconds of the run";
 
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);

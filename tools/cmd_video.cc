@@ -1,5 +1,6 @@
 // `autonomsim video RUN_DIR --out FILE.mp4`: the top-down replay of a finished run as a video
-// (sim/results/video.h).
+// (sim/results/video.h). Built into the `autonomsim-video` helper, which `autonomsim video`
+// runs (tools/autonomsim_video.cc says why).
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -75,12 +76,7 @@ int VideoCommand(const VideoArgs& a) {
 
 Command AddVideoCommand(CLI::App& parent) {
   auto a = std::make_shared<VideoArgs>();
-  CLI::App* video = parent.add_subcommand(
-      "video",
-      "Write the top-down replay of a finished run as an MPEG-4 video: the track to scale, the "
-      "cars with their trails, intersections tinted by their holder, collisions and the clock; "
-      "with --cameras ID also that car's colour camera (the detected lane drawn in) and depth "
-      "camera. Frames at FROM + k * SPEED / FPS seconds of the run");
+  CLI::App* video = parent.add_subcommand("video", kVideoDescription);
   video->add_option("RUN_DIR", a->run_dir, "A run's result folder")->required();
   video
       ->add_option("--out", a->out,

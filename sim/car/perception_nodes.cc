@@ -38,6 +38,7 @@ struct BirdViewMessage {  // /camera/bird_view, Image640mono
 // What a node keeps between frames: scratch buffers only (a result depends on its frame alone).
 struct DepthScratch {
   vehicle::DepthImage depth;
+  stack::DepthGridMemo grid_memo;  // the fused node's: it counts only the rows that changed
 };
 struct ColorScratch {
   vehicle::ColorImage color;
@@ -84,7 +85,8 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
         std::move(params), std::make_shared<DepthScratch>(),
         [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
           return Report(p,
-                        stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch), p.P),
+                        stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch), p.P,
+                                               &scratch->grid_memo),
                         frame.stamp);
         });
     return obstacles;

@@ -375,6 +375,8 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
   const ObstacleGridParams params;
   PointCloud640 cloud;
   int frames = 0, partial_cells = 0;
+  DepthGridMemo memo;
+  std::array<DepthGridMemo, 2> kept;  // one per scale
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const world::Pose2 pose = frames_->PoseOnRoute(poses[i].first, poses[i].second);
     std::vector<vehicle::Prism> prisms;
@@ -393,6 +395,13 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
       const Grid234 unfused = StepObstacleGrid(params, cloud);
       const Grid234 fused = StepDepthToGrid(cloud_params, params, View(frame.depth), P());
       EXPECT_EQ(fused, unfused) << poses[i].first << " s " << poses[i].second;
+      // remembering rows across the sequence (frames with and without boxes, one memo for
+      // both scales: it forgets when they change) gives the same grid
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &memo), fused)
+          << poses[i].first << " s " << poses[i].second;
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &kept[hardware_scale]),
+                fused)
+          << poses[i].first << " s " << poses[i].second;
       EXPECT_EQ(fused, ScalarTranscription(hardware_scale, params, frame.depth, P()))
           << poses[i].first << " s " << poses[i].second;
       for (int c = 0; c < Grid234::kCells; ++c)
