@@ -219,6 +219,13 @@ class LaneDetector {
   // `bgr`: 640×480 CV_8UC3. Throws std::invalid_argument on another size or type.
   LanePoints Step(const cv::Mat& bgr, LaneDetectionTrace* trace = nullptr);
 
+  // The pixels of the input image that Step reads (the source pixels of its warp), at most one
+  // span per row, rows ascending: an image whose other pixels hold anything gives the same result.
+  struct SourceSpan {
+    int row, col_begin, col_end;  // [col_begin, col_end)
+  };
+  const std::vector<SourceSpan>& source_spans() const { return spans_; }
+
   // The fast mask+warp stage alone: bit-identical to LaneMasksReference.
   void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
   // The rest, from the bird's-eye masks: Step is ComputeMasks then Fit. The real hardware runs the
@@ -230,9 +237,6 @@ class LaneDetector {
     std::uint32_t begin, end;        // into the per-pixel arrays
     std::uint16_t cell_x0, cell_y0;  // source cells read (inclusive)
     std::uint16_t cell_x1, cell_y1;
-  };
-  struct SourceSpan {
-    int row, col_begin, col_end;  // [col_begin, col_end)
   };
 
   void Classify(const cv::Mat& bgr);

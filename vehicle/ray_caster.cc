@@ -226,6 +226,38 @@ CameraRenderer::CameraRenderer(std::shared_ptr<const CameraRays> rays,
 
 void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                             ColorImage* color, DepthImage* depth) {
+  RenderImpl(X_map_car, prisms, color, depth, nullptr);
+}
+
+void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                            ColorImage* color, DepthImage* depth, const RowSpans& color_region) {
+  if (static_cast<int>(color_region.columns.size()) != rays_->height()) {
+    throw std::invalid_argument("CameraRenderer: a colour region of " +
+                                std::to_string(color_region.columns.size()) + " rows for a camera of " +
+                                std::to_string(rays_->height()));
+  }
+  RenderImpl(X_map_car, prisms, color, depth, &color_region);
+}
+
+namespace {
+// The parts of `runs` (pixel index ranges, row-major, width w) inside `region`, into *out.
+void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region, int w,
+               std::vector<CameraRays::Run>* out) {
+  out->clear();
+  for (const CameraRays::Run& run : runs) {
+    for (int row = run.begin / w; row * w < run.end; ++row) {
+      const auto [c0, c1] = region.columns[static_cast<std::size_t>(row)];
+      const int begin = std::max(run.begin, row * w + c0);
+      const int end = std::min({run.end, (row + 1) * w, row * w + c1});
+      if (begin < end) out->push_back({begin, end});
+    }
+  }
+}
+}  // namespace
+
+void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                                ColorImage* color, DepthImage* depth,
+                                const RowSpans* color_region) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
@@ -245,20 +277,28 @@ void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism
     std::fill(tile_stamp_.begin(), tile_stamp_.end(), 0u);
     frame_ = 1;
   }
-  RenderFloor(X_map_car, color, depth);
+  RenderFloor(X_map_car, color, depth, color_region);
   for (const Prism& prism : prisms) RenderPrism(X_map_car, prism, color, depth);
 }
 
 void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
-                                 DepthImage* depth) const {
+                                 DepthImage* depth, const RowSpans* color_region) {
   const CameraRays& r = *rays_;
   if (depth != nullptr) {
     std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
   }
   if (color == nullptr) return;
+  const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
+  const std::vector<CameraRays::Run>* surround_runs = &r.surround_runs();
+  if (color_region != nullptr) {
+    Intersect(r.floor_runs(), *color_region, r.width(), &floor_in_region_);
+    Intersect(r.surround_runs(), *color_region, r.width(), &surround_in_region_);
+    floor_runs = &floor_in_region_;
+    surround_runs = &surround_in_region_;
+  }
 
   std::uint8_t* out = color->bgr.data();
-  for (const CameraRays::Run& run : r.surround_runs()) {
+  for (const CameraRays::Run& run : *surround_runs) {
     for (int i = run.begin; i < run.end; ++i) std::memcpy(out + 3 * i, surround_.data(), 3);
   }
 
@@ -282,7 +322,7 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const std::uint32_t* texels = tex.texels();
   const float* fx = r.floor_x().data();
   const float* fy = r.floor_y().data();
-  for (const CameraRays::Run& run : r.floor_runs()) {
+  for (const CameraRays::Run& run : *floor_runs) {
     for (int i = run.begin; i < run.end; i += kLanes) {
       const int n = std::min(kLanes, run.end - i);
       const F4 x = Load(fx + i, n);

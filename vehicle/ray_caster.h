@@ -172,6 +172,13 @@ class CameraRays {
   std::vector<Tile> tiles_;
 };
 
+// The pixels a consumer of a colour image reads, per image row: columns [begin, end) (begin ==
+// end: none of the row). A renderer asked for a region computes the colour of those pixels only
+// (demand-driven sensing): the lane detector reads a third of the image.
+struct RowSpans {
+  std::vector<std::pair<int, int>> columns;  // one entry per image row
+};
+
 // Renders one camera. Owns its scratch memory, so frames allocate nothing once the output images
 // have their size; one renderer per thread. A frame depends only on its inputs, never on the
 // frames rendered before it.
@@ -188,9 +195,17 @@ class CameraRenderer {
   // to the camera's size.
   void Render(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
               DepthImage* depth);
+  // The same, with the floor's and the surround's colour computed only inside `color_region`
+  // (one entry per row of the camera; std::invalid_argument otherwise): those pixels are exactly
+  // Render's, the others of `color` are left as they were (the depth image is always whole).
+  void Render(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
+              DepthImage* depth, const RowSpans& color_region);
 
  private:
-  void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth) const;
+  void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
+                  DepthImage* depth, const RowSpans* color_region);
+  void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
+                   const RowSpans* color_region);
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, ColorImage* color,
                    DepthImage* depth);
   void InitTileDepth(std::size_t tile);
@@ -201,6 +216,7 @@ class CameraRenderer {
   std::vector<float> nearest_t_;           // per pixel, valid in tiles stamped with frame_
   std::vector<std::uint32_t> tile_stamp_;  // the frame in which a tile's nearest_t_ was set
   std::uint32_t frame_{0};
+  std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;  // scratch
 };
 
 // Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a

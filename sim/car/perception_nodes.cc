@@ -49,9 +49,22 @@ stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratc
   return stack::DepthImageView{scratch->depth.width, scratch->depth.height, scratch->depth.mm};
 }
 
-cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch) {
-  frame.Render(&scratch->color, nullptr);
+// The colour image where `reads` says its consumer reads it (demand-driven sensing).
+cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch,
+                    const vehicle::RowSpans& reads) {
+  frame.Render(&scratch->color, nullptr, reads);
   return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
+}
+
+// The pixels a lane detector reads, for a camera of `height` rows.
+vehicle::RowSpans ReadsOf(const stack::LaneDetector& detector, int height) {
+  vehicle::RowSpans reads;
+  reads.columns.assign(static_cast<std::size_t>(height), {0, 0});
+  for (const stack::LaneDetector::SourceSpan& span : detector.source_spans()) {
+    // (a camera of another size has no lane detection: its Step refuses the image)
+    if (span.row < height) reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
+  }
+  return reads;
 }
 
 // The input-independent part of a perception step: the component's params and the camera data.
@@ -112,6 +125,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
 
 struct LaneParams {
   std::shared_ptr<stack::LaneDetector> detector;  // its tables are shared by the lane nodes
+  std::shared_ptr<const vehicle::RowSpans> reads;  // the image pixels the detector reads
   std::function<void(const stack::LanePoints&, Time)> hook;
 };
 
@@ -128,7 +142,10 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
       graph.AddTopic<stack::LanePoints>({.name = kLanePointsTopic, .type = msg::LanePoints()});
   LaneParams params{.detector = std::make_shared<stack::LaneDetector>(
                         config.lane_detection, LaneCalibration(sensors.color_camera().model())),
+                    .reads = nullptr,
                     .hook = std::move(hook)};
+  params.reads = std::make_shared<const vehicle::RowSpans>(
+      ReadsOf(*params.detector, sensors.color_camera().model().height()));
 
   if (mapping.count("lane_detection") != 0) {
     if (InHardware(mapping, "lane_detection", kSoftware)) {
@@ -139,7 +156,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
     AddComponentNode(graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes,
                      std::move(params), std::make_shared<ColorScratch>(),
                      [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
-                       return Report(p, p.detector->Step(RenderColor(frame, scratch)), frame.stamp);
+                       return Report(p, p.detector->Step(RenderColor(frame, scratch, *p.reads)), frame.stamp);
                      });
     return lanes;
   }
@@ -150,7 +167,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                    params, std::make_shared<ColorScratch>(),
                    [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
                      BirdViewMessage out{.stamp = frame.stamp};
-                     p.detector->ComputeMasks(RenderColor(frame, scratch), &out.masks);
+                     p.detector->ComputeMasks(RenderColor(frame, scratch, *p.reads), &out.masks);
                      return out;
                    });
   AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,

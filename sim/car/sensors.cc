@@ -106,6 +106,12 @@ void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth)
   camera->Render(*this, color, depth);
 }
 
+void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
+                         const vehicle::RowSpans& color_region) const {
+  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
+  camera->Render(*this, color, depth, &color_region);
+}
+
 const std::string& CameraFrame::topic() const { return camera->params().topic; }
 
 std::int64_t CameraFrame::bytes() const { return ImageBytes(camera->params()); }
@@ -118,8 +124,12 @@ CameraSensor::CameraSensor(SensorEnvironment* environment, const CameraStreamPar
 }
 
 void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
-                          vehicle::DepthImage* depth) const {
-  renderer_.Render(frame.X_map_car, frame.prisms, color, depth);
+                          vehicle::DepthImage* depth, const vehicle::RowSpans* color_region) const {
+  if (color_region != nullptr) {
+    renderer_.Render(frame.X_map_car, frame.prisms, color, depth, *color_region);
+  } else {
+    renderer_.Render(frame.X_map_car, frame.prisms, color, depth);
+  }
   vehicle::AddCameraNoise(params_.noise, params_.camera, frame.noise_seed, color, depth);
   ++frames_rendered_;
 }

@@ -105,6 +105,10 @@ struct CameraFrame {
   // The frame's images (either may be null), noise included when it is on; the buffers are
   // reused (no allocation once they have their size). Identical for the same frame every time.
   void Render(vehicle::ColorImage* color, vehicle::DepthImage* depth) const;
+  // The same with the colour computed only where a consumer reads it (vehicle::RowSpans): those
+  // pixels are Render's, bit for bit; the others are left as the buffer held them.
+  void Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
+              const vehicle::RowSpans& color_region) const;
   const std::string& topic() const;
   std::int64_t bytes() const;  // of the message on the topic
 };
@@ -119,8 +123,8 @@ class CameraSensor {
   vehicle::CameraInfo Info() const { return model().Info(); }
   std::uint64_t frames_rendered() const { return frames_rendered_; }
 
-  void Render(const CameraFrame& frame, vehicle::ColorImage* color,
-              vehicle::DepthImage* depth) const;
+  void Render(const CameraFrame& frame, vehicle::ColorImage* color, vehicle::DepthImage* depth,
+              const vehicle::RowSpans* color_region = nullptr) const;
 
  private:
   CameraStreamParams params_;

@@ -460,6 +460,58 @@ TEST(RayCasterTest, ColourOnlyAndDepthOnlyRendersAgreeWithABothRender) {
   EXPECT_EQ(both_depth.mm, depth.mm);
 }
 
+TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
+  // a textured floor, cars and boxes in view, 24 poses; the region a trapezoid like the lane
+  // detector's, reaching both image edges, with rows left out
+  const CameraParams params = ColorCameraParams();
+  world::FloorRaster raster = BlackFloor();
+  Paint(&raster, 0.5, 0.54, -2.0, 2.0, kWhite);
+  Paint(&raster, -2.0, 2.0, 0.3, 0.34, kWhite);
+  Paint(&raster, 1.0, 1.04, -2.0, 2.0, Bgr{0, 235, 235});
+  CameraRenderer renderer = MakeRenderer(params, raster);
+  RowSpans region;
+  region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
+  for (int row = 200; row < params.height_px; ++row) {
+    if (row % 37 == 0) continue;
+    const int half = (row - 200) * 2;
+    region.columns[static_cast<std::size_t>(row)] = {std::max(0, 300 - half),
+                                                     std::min(params.width_px, 340 + half)};
+  }
+  int untouched = 0;
+  for (int k = 0; k < 24; ++k) {
+    const world::Pose2 pose{-1.0 + 0.1 * k, 0.4 - 0.05 * k, 0.26 * k};
+    const Eigen::Isometry3d X_map_car = Lift(pose);
+    const Eigen::Vector3d ahead = X_map_car * Eigen::Vector3d(1.0 + 0.05 * k, 0.2 - 0.02 * k, 0.0);
+    const Eigen::Vector3d side = X_map_car * Eigen::Vector3d(0.7, -0.35, 0.0);
+    const std::vector<Prism> prisms{
+        Box(ahead.x(), ahead.y(), 0.4 * k, 0.525, 0.296, 0.2, Bgr{200, 80, 30}),
+        Box(side.x(), side.y(), 0.0, 0.2, 0.2, 0.3, Bgr{40, 40, 190})};
+    ColorImage full, demand;
+    DepthImage full_depth, demand_depth;
+    renderer.Render(pose, prisms, &full, &full_depth);
+    demand.width = full.width;
+    demand.height = full.height;
+    demand.bgr.assign(full.bgr.size(), 0xAB);  // what the buffer held
+    renderer.Render(pose, prisms, &demand, &demand_depth, region);
+    EXPECT_EQ(demand_depth.mm, full_depth.mm);
+    for (int row = 0; row < params.height_px; ++row) {
+      const auto [c0, c1] = region.columns[static_cast<std::size_t>(row)];
+      for (int col = 0; col < params.width_px; ++col) {
+        const std::size_t i = 3 * (static_cast<std::size_t>(row) * params.width_px + col);
+        if (col >= c0 && col < c1) {
+          ASSERT_TRUE(std::equal(&full.bgr[i], &full.bgr[i] + 3, &demand.bgr[i]))
+              << "pose " << k << " row " << row << " col " << col;
+        } else {
+          untouched += demand.bgr[i] == 0xAB && demand.bgr[i + 1] == 0xAB;
+        }
+      }
+    }
+  }
+  EXPECT_GT(untouched, 24 * 100000);  // the floor outside the region was not computed
+  EXPECT_THROW(renderer.Render(world::Pose2{}, {}, nullptr, nullptr, RowSpans{}),
+               std::invalid_argument);
+}
+
 TEST(RayCasterTest, OutsideTheRasterIsBareFloorAndAboveTheHorizonTheSurround) {
   world::FloorRaster raster = BlackFloor(1.0);
   raster.floor_bgr = {10, 20, 30};
