@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "sim/car/perception_nodes.h"
 #include "sim/core/track_loader.h"
+#include "stack/lane_detection.h"
 #include "vehicle/camera_model.h"
 #include "vehicle/ray_caster.h"
 #include "world/floor_raster.h"
@@ -70,6 +72,28 @@ void BM_RenderRgbd(benchmark::State& state) {
                           static_cast<std::int64_t>(color.bgr.size() + 2 * depth.mm.size()));
 }
 BENCHMARK(BM_RenderRgbd)->Unit(benchmark::kMicrosecond);
+
+// The colour camera as the lane nodes render it in the loop: only the pixels the lane detector
+// reads (its warp's source spans, a third of the image).
+void BM_RenderColorLaneRegion(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
+  const stack::LaneDetector detector(stack::LaneDetectionParams{},
+                                     sim::LaneCalibration(color_camera.camera()));
+  vehicle::RowSpans region;
+  region.columns.assign(480, {0, 0});
+  for (const auto& span : detector.source_spans()) {
+    region.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
+  }
+  vehicle::ColorImage color;
+  for (auto _ : state) {
+    color_camera.Render(scene.pose, scene.prisms, &color, nullptr, region);
+    benchmark::DoNotOptimize(color.bgr.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RenderColorLaneRegion)->Unit(benchmark::kMicrosecond);
 
 // The same without prisms: the floor alone.
 void BM_RenderRgbdEmptyTrack(benchmark::State& state) {

@@ -1,0 +1,44 @@
+// The whole closed loop (issue 19): BM_ClosedLoopDefault runs the default scenario,
+// scenarios/lab_two_cars.yaml (two stack-driven cars, both cameras of both cars at 640×480 and
+// 30 fps), cut to 30 s of simulated time, and reports simulated seconds per wall second
+// (`sim_s_per_wall_s`, the real-time factor) on one thread. The README's speed table uses
+// `autonomsim run` on the whole 200 s (median of 3), which this tracks.
+//
+//     build/bin/bench_closed_loop --benchmark_filter=BM_ClosedLoopDefault
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "sim/loop/simulation.h"
+#include "sim/scenario/scenario.h"
+
+namespace autonomsim {
+namespace {
+
+void RunScenario(benchmark::State& state, const std::string& file, double seconds) {
+  const sim::LoadedScenario loaded =
+      sim::LoadScenario(std::string(AUTONOMSIM_SOURCE_DIR) + "/" + file,
+                        {"duration_s=" + std::to_string(seconds), "expect=[]"});
+  double simulated_s = 0.0;
+  for (auto _ : state) {
+    sim::Simulation simulation(loaded);
+    simulation.Run();
+    simulated_s += seconds;
+    benchmark::DoNotOptimize(simulation.record().kernel_events);
+  }
+  state.counters["sim_s_per_wall_s"] = benchmark::Counter(simulated_s, benchmark::Counter::kIsRate);
+}
+
+void BM_ClosedLoopDefault(benchmark::State& state) {
+  RunScenario(state, "scenarios/lab_two_cars.yaml", 30.0);
+}
+BENCHMARK(BM_ClosedLoopDefault)->Unit(benchmark::kSecond)->Iterations(2)->UseRealTime();
+
+// Four stack-driven cars (scenarios/fleet_four_cars.yaml), 30 s.
+void BM_ClosedLoopFourCars(benchmark::State& state) {
+  RunScenario(state, "scenarios/fleet_four_cars.yaml", 30.0);
+}
+BENCHMARK(BM_ClosedLoopFourCars)->Unit(benchmark::kSecond)->Iterations(2)->UseRealTime();
+
+}  // namespace
+}  // namespace autonomsim
