@@ -1,8 +1,7 @@
 // autonomsim: the command-line front end. One file per subcommand (tools/cmd_*.cc); what they
 // share is in tools/cli_common.h.
-#include <fmt/format.h>
-
 #include <CLI/CLI.hpp>
+#include <string>
 #include <vector>
 
 #include "tools/cli_common.h"
@@ -19,19 +18,5 @@ int main(int argc, char** argv) {
                                          AddSweepCommand(app), AddReportCommand(app),
                                          AddVideoForwarder(app)};
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitUnusableInput;
-  }
-  try {
-    for (const Command& command : commands) {
-      if (*command.app) return command.run();
-    }
-    return kExitUnusableInput;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
-    return kExitUnusableInput;
-  }
+  return ParseAndRun(app, argc, argv, commands);
 }

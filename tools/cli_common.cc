@@ -18,6 +18,24 @@ namespace autonomsim::cli {
 
 namespace fs = std::filesystem;
 
+int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>& commands) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUnusableInput;
+  }
+  try {
+    for (const Command& command : commands) {
+      if (*command.app) return command.run();
+    }
+    return kExitUnusableInput;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  }
+}
+
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides) {
   command
       ->add_option("--set", *overrides,

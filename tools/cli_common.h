@@ -42,6 +42,10 @@ inline constexpr const char* kVideoDescription =
     "with --cameras ID also that car's colour camera (the detected lane drawn in) and depth "
     "camera. Frames at FROM + k * SPEED / FPS seconds of the run";
 
+// Parses the command line and runs the subcommand given: a parse error (or --help) exits as CLI11
+// says (2 for an error), an exception from the command is an error message and exit 2.
+int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>& commands);
+
 // Adds the repeatable --set KEY=VALUE option.
 void AddSetOption(CLI::App* command, std::vector<std::string>* overrides);
 void AddSeedOption(CLI::App* command, std::optional<std::uint64_t>* seed);
