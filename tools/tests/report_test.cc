@@ -29,7 +29,7 @@ using testing::Read;
 using testing::Result;
 using testing::Shell;
 
-// One run shared by the tests: the default scenario cut to 30 s, with an expectation it fails (a
+// One run shared by the tests: the default scenario cut to 15 s, with an expectation it fails (a
 // lateral error bound tighter than the cars hold), so the report has a failure and snapshots.
 class ReportTest : public ::testing::Test {
  protected:
@@ -40,7 +40,7 @@ class ReportTest : public ::testing::Test {
     fs::remove_all(*root_);
     run_dir_ = new fs::path(*root_ / "run");
     const Result r = Cli(
-        "run scenarios/lab_two_cars.yaml -q --set duration_s=30 "
+        "run scenarios/lab_two_cars.yaml -q --set duration_s=15 "
         "--set 'expect=[{max_lateral_error: {max_m: 0.05}}, {no_collision: {}}]' --out " +
         run_dir_->string());
     run_output_ = new std::string(r.output);
@@ -136,16 +136,16 @@ TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
 TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
   const fs::path video = *root_ / "replay.mp4";
   const Result r = Cli("video " + run_dir_->string() + " --out " + video.string() +
-                       " --fps 10 --speed 2 --cameras 0 -q");
+                       " --fps 10 --speed 2 --to 10 --cameras 0 -q");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("151 frames"));  // 0, 0.2, ..., 30 s
+  EXPECT_THAT(r.output, HasSubstr("51 frames"));  // 0, 0.2, ..., 10 s
   cv::VideoCapture capture(video.string());
   ASSERT_TRUE(capture.isOpened());
   EXPECT_NEAR(capture.get(cv::CAP_PROP_FPS), 10.0, 1e-6);
   int frames = 0;
   cv::Mat frame;
   while (capture.read(frame)) ++frames;
-  EXPECT_EQ(frames, 151);
+  EXPECT_EQ(frames, 51);
   // the run's own folder may be replaced by a video; a file elsewhere only with --force
   EXPECT_EQ(Cli("video " + run_dir_->string() + " --out " + video.string() + " --to 1 -q").exit_code,
             2);
@@ -195,7 +195,7 @@ TEST_F(ReportTest, InChromiumTheSliderDrawsTheCarsWhereTheTrajectoryHasThem) {
   ASSERT_EQ(Cli("report " + run_dir_->string() + " --out " + page.string()).exit_code, 0);
 
   // ten instants, sampled ones (the slider's step is the 0.05 s sample period)
-  const std::vector<double> instants{0.0, 2.5, 5.05, 8.0, 11.35, 14.2, 17.9, 21.0, 25.55, 29.95};
+  const std::vector<double> instants{0.0, 1.5, 3.05, 4.0, 5.35, 7.2, 8.9, 10.5, 12.55, 14.95};
   std::string probe;
   for (double t : instants) probe += (probe.empty() ? "" : ",") + std::to_string(t);
   const Result browser = Shell(
