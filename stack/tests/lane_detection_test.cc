@@ -200,6 +200,41 @@ TEST(LaneMasks, BitIdenticalOnNoiseForBothThresholdSets) {
   }
 }
 
+TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
+  // The dark fast path (eight pixels at a time): dark values up to just below each set's V bound,
+  // single line pixels and pixels at exactly the bound scattered among them, in every channel.
+  const vehicle::CameraModel camera(vehicle::ColorCameraParams());
+  for (const char* set : {"simulation", "real_car"}) {
+    LaneDetectionParams params;
+    params.thresholds = set;
+    LaneDetector detector(params, CalibrationOf(camera));
+    const LaneThresholds& t = detector.thresholds();
+    const int v_min = std::min(t.yellow.lower_hsv[2], t.white.lower_hsv[2]);
+    std::mt19937 rng(11);
+    cv::Mat bgr(kLaneImageHeight, kLaneImageWidth, CV_8UC3);
+    for (int i = 0; i < bgr.rows * bgr.cols * 3; ++i) {
+      bgr.data[i] = static_cast<std::uint8_t>(rng() % static_cast<unsigned>(v_min));
+    }
+    for (int k = 0; k < 4000; ++k) {
+      const int i = static_cast<int>(rng() % static_cast<unsigned>(bgr.rows * bgr.cols));
+      std::uint8_t* px = bgr.data + 3 * i;
+      switch (k % 4) {
+        case 0: px[0] = px[1] = px[2] = 255; break;                   // white
+        case 1: px[0] = 0, px[1] = 235, px[2] = 235; break;           // yellow
+        case 2: px[k % 3] = static_cast<std::uint8_t>(v_min); break;  // at the bound
+        default: px[2] = 255; break;                                  // bright, not a line
+      }
+    }
+    BirdsEyeMasks reference, fast;
+    LaneMasksReference(bgr, t, detector.image_to_birds_eye(), &reference);
+    detector.ComputeMasks(bgr, &fast);
+    EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << set;
+    EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << set;
+    // the line pixels were seen (pure white is no line to the real car's thresholds; yellow is)
+    EXPECT_GT(cv::countNonZero(reference.white) + cv::countNonZero(reference.yellow), 1000) << set;
+  }
+}
+
 // Returns max and mean |error| at x_m ahead against the route; prints one line per pose.
 std::pair<double, double> CheckPoses(const testing::TrackFrames& frames, LaneDetector* detector,
                                      const std::vector<Pose>& poses, double tolerance_m) {
