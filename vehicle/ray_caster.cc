@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include "world/validation.h"
@@ -126,9 +127,20 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
           "FloorTexture: the raster needs a positive size and m_per_px");
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   Require(raster.bgr.size() == 3 * n, "FloorTexture: raster.bgr must hold 3 bytes per pixel");
-  texels_.assign(n + 1, 0u);
-  for (std::size_t i = 0; i < n; ++i) std::memcpy(&texels_[i], &raster.bgr[3 * i], 3);
-  std::memcpy(&texels_[n], raster.floor_bgr.data(), 3);
+  index_.resize(n + 1);
+  std::unordered_map<std::uint32_t, std::uint8_t> seen;
+  const auto index_of = [&](const std::uint8_t* bgr) {
+    std::uint32_t colour = 0;
+    std::memcpy(&colour, bgr, 3);
+    const auto [it, added] = seen.try_emplace(colour, static_cast<std::uint8_t>(palette_.size()));
+    if (added) {
+      Require(palette_.size() < 256, "FloorTexture: the floor raster has more than 256 colours");
+      palette_.push_back(colour);
+    }
+    return it->second;
+  };
+  for (std::size_t i = 0; i < n; ++i) index_[i] = index_of(&raster.bgr[3 * i]);
+  index_[n] = index_of(raster.floor_bgr.data());
 }
 
 CameraRays::CameraRays(const CameraModel& camera)
@@ -319,7 +331,8 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const F4 zero = Splat(0.0f);
   const I4 width = SplatInt(tex.width());
   const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
-  const std::uint32_t* texels = tex.texels();
+  const std::uint8_t* texel_index = tex.palette_index();
+  const std::uint32_t* palette = tex.palette();
   const float* fx = r.floor_x().data();
   const float* fy = r.floor_y().data();
   for (const CameraRays::Run& run : *floor_runs) {
@@ -335,10 +348,11 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       const I4 index = inside ? texel_row * width + texel_col : outside;
       for (int k = 0; k < n; ++k) {
         // 4 bytes where the next pixel of the run overwrites the fourth, 3 at the run's end
+        const std::uint32_t* texel = &palette[texel_index[index[k]]];
         if (i + k + 1 < run.end) {
-          std::memcpy(out + 3 * (i + k), &texels[index[k]], 4);
+          std::memcpy(out + 3 * (i + k), texel, 4);
         } else {
-          std::memcpy(out + 3 * (i + k), &texels[index[k]], 3);
+          std::memcpy(out + 3 * (i + k), texel, 3);
         }
       }
     }
