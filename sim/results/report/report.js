@@ -262,6 +262,13 @@
       polygon(rotatedRect(o.x_m, o.y_m, o.yaw_rad, o.length_m, o.width_m));
       ctx.fillStyle = "#c82828";
       ctx.fill();
+      ctx.strokeStyle = "#ffffff"; // hatched outline and name: not to be taken for a red car
+      ctx.setLineDash([3, 2]);
+      ctx.lineWidth = 1;
+      ctx.stroke();
+      ctx.setLineDash([]);
+      const [ox, oy] = toPx(o.x_m, o.y_m);
+      labelText(o.name, ox + (Math.max(o.length_m, o.width_m) / 2) * view.px_per_m + 4, oy + 4, "#ffb4b4");
     }
     // trails
     for (const car of cars) {
