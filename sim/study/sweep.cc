@@ -267,7 +267,11 @@ void RunPoint(const LoadedScenario& loaded, const WallClock& clock, const fs::pa
   const double wall_s = SecondsSince(start, clock);
   const auto expectations = EvaluateExpectations(loaded.scenario, simulation.record());
   run_folder.Complete(loaded, simulation.record(), expectations, wall_s);
-  WriteReport(folder);
+  try {
+    WriteReport(folder);
+  } catch (const std::exception&) {
+    // the run is complete without it; the index tries again and links the folder if it fails
+  }
 }
 
 // Runs the points `todo` (indices into `loaded` and `records`) on options.jobs threads, counting
