@@ -69,6 +69,15 @@ json BoxJson(const world::Box& b) {
           {"y_max_m", b.y_max_m}};
 }
 
+// The report keeps at most this many trajectory samples (all cars together): the default
+// scenario has 8000; a run over ~25 min at 20 Hz and two cars is shown at every `stride`-th sample
+// of each car, so that its page stays a few MB.
+constexpr std::size_t kMostReportSamples = 60000;
+
+std::size_t TrajectoryStride(const RunRecord& record) {
+  return (record.trajectory.size() + kMostReportSamples - 1) / kMostReportSamples;
+}
+
 json MetaJson(const FinishedRun& run) {
   const RunSummary& s = run.summary;
   json meta = {{"scenario", s.scenario},
@@ -84,6 +93,7 @@ json MetaJson(const FinishedRun& run) {
                {"autonomsim", s.versions.autonomsim},
                {"preset", run.scenario.stack.preset ? json(*run.scenario.stack.preset) : json()}};
   if (s.real_time_factor) meta["real_time_factor"] = *s.real_time_factor;
+  meta["trajectory_stride"] = TrajectoryStride(run.record);
   return meta;
 }
 
@@ -154,10 +164,15 @@ json CarsJson(const FinishedRun& run) {
 }
 
 // Per car, columns of its samples: {"<id>": {t, x, y, yaw, speed, steering, throttle, curvature,
-// lateral_error}}.
-json TrajectoryJson(const RunRecord& record) {
+// lateral_error}}, every `stride`-th sample of each car (its last one always).
+json TrajectoryJson(const RunRecord& record, std::size_t stride) {
   std::map<int, std::array<json, 9>> columns;
+  std::map<int, std::size_t> seen;  // samples of each car so far
+  std::map<int, std::size_t> total;
+  for (const TrajectorySample& s : record.trajectory) ++total[s.car];
   for (const TrajectorySample& s : record.trajectory) {
+    const std::size_t k = seen[s.car]++;
+    if (k % stride != 0 && k + 1 != total[s.car]) continue;
     auto& c = columns[s.car];
     if (c[0].is_null()) {
       for (json& column : c) column = json::array();
@@ -270,7 +285,7 @@ json ReportData(const FinishedRun& run, const ReportOptions& options) {
           {"track", TrackJson(run.track)},
           {"obstacles", ObstaclesJson(run.scenario)},
           {"cars", CarsJson(run)},
-          {"trajectory", TrajectoryJson(run.record)},
+          {"trajectory", TrajectoryJson(run.record, TrajectoryStride(run.record))},
           {"events", EventsJson(run.record)},
           {"expectations", ExpectationsJson(run.summary)},
           {"boards", BoardsJson(run.summary)},

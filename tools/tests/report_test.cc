@@ -160,6 +160,31 @@ TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
   EXPECT_FALSE(fs::exists(*root_ / "x.mp4"));
 }
 
+TEST_F(ReportTest, ALongRunsTrajectoryIsThinnedToKeepThePageSmall) {
+  sim::FinishedRun run = sim::ReadFinishedRun(*run_dir_);
+  const std::vector<sim::TrajectorySample> once = run.record.trajectory;
+  ASSERT_FALSE(once.empty());
+  // the same samples again and again, later each time: a run of over 60000 samples
+  for (int copy = 1; run.record.trajectory.size() <= 60000; ++copy) {
+    for (sim::TrajectorySample s : once) {
+      s.t += copy * (once.back().t + FromSeconds(0.05));
+      run.record.trajectory.push_back(s);
+    }
+  }
+  const nlohmann::json data = sim::ReportData(run);
+  EXPECT_EQ(data["meta"]["trajectory_stride"], 2);
+  std::size_t kept = 0;
+  for (const auto& [car, columns] : data["trajectory"].items()) {
+    kept += columns["t"].size();
+    double last_t = 0.0;  // each car's last sample is kept
+    for (const sim::TrajectorySample& s : run.record.trajectory) {
+      if (std::to_string(s.car) == car) last_t = ToSeconds(s.t);
+    }
+    EXPECT_NEAR(columns["t"].back().get<double>(), last_t, 1e-3) << "car " << car;
+  }
+  EXPECT_LT(kept, run.record.trajectory.size() * 6 / 10);
+}
+
 // trajectory.csv: car -> t (ms) -> (x, y)
 std::map<int, std::map<long, std::pair<double, double>>> Trajectory(const fs::path& file) {
   std::map<int, std::map<long, std::pair<double, double>>> out;

@@ -3,7 +3,8 @@
 //
 // data = {
 //   meta: {scenario, scenario_file, run_dir, seed, sim_seconds, wall_seconds, real_time_factor,
-//          passed, result_sha256, scenario_sha256, kernel_events, autonomsim, preset},
+//          passed, result_sha256, scenario_sha256, kernel_events, autonomsim, preset,
+//          trajectory_stride (1: every sample; k: every k-th, for long runs)},
 //   floor: {image (PNG data URL of the floor the cameras see), x0_m, y0_m (map coordinates of its
 //           top-left corner), m_per_px, width_px, height_px},
 //   track: {name, size_m, intersections: [{id, name, area, stop_zones: [box]}]}  box = {x_min_m, ..}
@@ -155,7 +156,10 @@
         el("span", {}, "stack preset " + (m.preset || "(per car / defaults)")),
         el("span", {}, data.expectations.length + " expectations, " + failed + " failed"),
         el("span", {}, "scenario file " + m.scenario_file),
-        el("span", {}, "run folder " + m.run_dir)));
+        el("span", {}, "run folder " + m.run_dir),
+        m.trajectory_stride > 1
+          ? el("span", {}, "a long run: every " + m.trajectory_stride + "th trajectory sample shown")
+          : ""));
   }
 
   // ---------- the replay ----------
