@@ -80,11 +80,8 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
   vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
   const stack::LaneDetector detector(stack::LaneDetectionParams{},
                                      sim::LaneCalibration(color_camera.camera()));
-  vehicle::RowSpans region;
-  region.columns.assign(480, {0, 0});
-  for (const auto& span : detector.source_spans()) {
-    region.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
-  }
+  const vehicle::RowSpans region =
+      sim::LaneDetectorReads(detector, color_camera.camera().height());
   vehicle::ColorImage color;
   for (auto _ : state) {
     color_camera.Render(scene.pose, scene.prisms, &color, nullptr, region);

@@ -446,33 +446,34 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(span.row);
     std::uint8_t* out = classes_.data() + (span.row + 1) * padded_w + 1;
     std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
-    for (int c = span.col_begin; c < span.col_end; ++c) {
-      if (word_test && (c - span.col_begin) % 8 == 0 && c + 8 <= span.col_end &&
-          all_dark(p + 3 * c)) {
+    for (int c = span.col_begin; c < span.col_end;) {
+      if (word_test && c + 8 <= span.col_end && all_dark(p + 3 * c)) {
         std::memset(out + c, 0, 8);
-        c += 7;
+        c += 8;
         continue;
       }
-      const int b = p[3 * c];
-      const int g = p[3 * c + 1];
-      const int r = p[3 * c + 2];
-      const int v = std::max({b, g, r});
-      if (v < v_min) {
-        out[c] = 0;
-        continue;
+      for (const int block_end = std::min(c + 8, span.col_end); c < block_end; ++c) {
+        const int b = p[3 * c];
+        const int g = p[3 * c + 1];
+        const int r = p[3 * c + 2];
+        const int v = std::max({b, g, r});
+        if (v < v_min) {
+          out[c] = 0;
+          continue;
+        }
+        // OpenCV's 8-bit BGR2HSV (see detail::BgrToHsv8), with the tables precomputed.
+        const int diff = v - std::min({b, g, r});
+        const int s = (diff * sdiv_[v] + (1 << (kHsvShift - 1))) >> kHsvShift;
+        int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+        h = (h * hdiv_[diff] + (1 << (kHsvShift - 1))) >> kHsvShift;
+        if (h < 0) h += 180;
+        const std::array<std::uint8_t, 3> hsv{
+            static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(v)};
+        const std::uint8_t cls =
+            static_cast<std::uint8_t>(InRange(yellow, hsv) | (InRange(white, hsv) << 1));
+        out[c] = cls;
+        if (cls != 0) cells[c / kCellSize] = 1;
       }
-      // OpenCV's 8-bit BGR2HSV (see detail::BgrToHsv8), with the tables precomputed.
-      const int diff = v - std::min({b, g, r});
-      const int s = (diff * sdiv_[v] + (1 << (kHsvShift - 1))) >> kHsvShift;
-      int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
-      h = (h * hdiv_[diff] + (1 << (kHsvShift - 1))) >> kHsvShift;
-      if (h < 0) h += 180;
-      const std::array<std::uint8_t, 3> hsv{
-          static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(v)};
-      const std::uint8_t cls =
-          static_cast<std::uint8_t>(InRange(yellow, hsv) | (InRange(white, hsv) << 1));
-      out[c] = cls;
-      if (cls != 0) cells[c / kCellSize] = 1;
     }
   }
   // Inclusive prefix counts: cell_prefix_[(y + 1) · (cells_x + 1) + x + 1] = Σ over [0, y] × [0,

@@ -194,14 +194,16 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
   const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
   const GridConstants g = MakeGridConstants(params);
   detail::CheckDepthImage(depth);
-  std::vector<float> key(g.m.begin(), g.m.end());
-  for (float v : {g.x_min, g.x_max, g.y_min, g.y_max, g.z_min, g.z_max, k.fx, k.fy, k.cx, k.cy,
-                  k.m_per_mm, static_cast<float>(params.cell_size_m)}) {
-    key.push_back(v);
-  }
-  const bool valid = memo->key_ == key;
+  std::array<float, 24> key;
+  std::copy(g.m.begin(), g.m.end(), key.begin());
+  const std::array<float, 12> rest{g.x_min, g.x_max, g.y_min, g.y_max, g.z_min, g.z_max, k.fx,
+                                   k.fy, k.cx, k.cy, k.m_per_mm,
+                                   static_cast<float>(params.cell_size_m)};
+  std::copy(rest.begin(), rest.end(), key.begin() + 12);
+  const bool valid = memo->valid_ && memo->key_ == key;
   if (!valid) {
-    memo->key_ = std::move(key);
+    memo->valid_ = true;
+    memo->key_ = key;
     memo->depth_.assign(depth.mm.begin(), depth.mm.end());
     memo->rows_.assign(PointCloud640::kHeight, {});
   }

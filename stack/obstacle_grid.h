@@ -108,7 +108,8 @@ class DepthGridMemo {
   friend Grid234 StepDepthToGrid(const PointCloudParams&, const ObstacleGridParams&,
                                  const DepthImageView&, const std::array<double, 12>&,
                                  DepthGridMemo*);
-  std::vector<float> key_;            // the constants the rows were counted with
+  std::array<float, 24> key_{};       // the constants the rows were counted with
+  bool valid_{false};
   std::vector<std::uint16_t> depth_;  // the last frame's depth, row-major
   // per row: the cells it counted into and how many (the slot past the last cell included)
   std::vector<std::vector<std::pair<std::uint16_t, std::uint32_t>>> rows_;

@@ -6,38 +6,13 @@
 #include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/core/parallel.h"
+#include "sim/results/report.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 // JUnit XML as CI servers read it (Jenkins, GitLab): one testsuite per scenario, carrying the
 // scenario's wall time and its identity as properties (with its result folder and replay report
@@ -48,16 +23,16 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
   double seconds = 0.0;
   std::string suites;
   for (const Outcome& o : outcomes) {
-    const std::string name = XmlEscape(o.scenario_name);
+    const std::string name = sim::XmlEscape(o.scenario_name);
     std::string properties = fmt::format(
-        "      <property name=\"scenario_file\" value=\"{}\"/>\n", XmlEscape(o.file));
+        "      <property name=\"scenario_file\" value=\"{}\"/>\n", sim::XmlEscape(o.file));
     std::string cases;
     int suite_failures = 0;
     if (o.input_error) {
       cases = fmt::format(
           "    <testcase classname=\"{}\" name=\"load\">\n"
           "      <error message=\"unusable input\">{}</error>\n    </testcase>\n",
-          name, XmlEscape(*o.input_error));
+          name, sim::XmlEscape(*o.input_error));
     } else {
       properties += fmt::format(
           "      <property name=\"seed\" value=\"{}\"/>\n"
@@ -65,21 +40,21 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
           o.seed, o.scenario_sha256);
       if (o.result_dir) {
         properties += fmt::format("      <property name=\"result_folder\" value=\"{}\"/>\n",
-                                  XmlEscape(o.result_dir->string()));
+                                  sim::XmlEscape(o.result_dir->string()));
       }
       if (o.report) {
         properties += fmt::format("      <property name=\"report\" value=\"{}\"/>\n",
-                                  XmlEscape(o.report->string()));
+                                  sim::XmlEscape(o.report->string()));
       }
       for (const sim::ExpectationResult& e : o.expectations) {
         cases += fmt::format("    <testcase classname=\"{}\" name=\"{}\">\n", name,
-                             XmlEscape(e.name));
+                             sim::XmlEscape(e.name));
         if (!e.passed) {
           ++suite_failures;
           cases += fmt::format("      <failure message=\"{}\">{}</failure>\n",
-                               XmlEscape(e.detail), XmlEscape(e.detail));
+                               sim::XmlEscape(e.detail), sim::XmlEscape(e.detail));
         } else {
-          cases += fmt::format("      <system-out>{}</system-out>\n", XmlEscape(e.detail));
+          cases += fmt::format("      <system-out>{}</system-out>\n", sim::XmlEscape(e.detail));
         }
         cases += "    </testcase>\n";
       }

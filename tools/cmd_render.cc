@@ -32,9 +32,7 @@ int RenderCommand(const std::string& scenario_file, int car_id, double at_s, con
     return kExitUnusableInput;
   }
   const sim::Scenario& scenario = loaded->scenario;
-  const auto car = std::find_if(scenario.cars.begin(), scenario.cars.end(),
-                                [&](const sim::CarConfig& c) { return c.id == car_id; });
-  if (car == scenario.cars.end()) {
+  if (scenario.FindCar(car_id) == nullptr) {
     std::string ids;
     for (const sim::CarConfig& c : scenario.cars)
       ids += (ids.empty() ? "" : ", ") + std::to_string(c.id);

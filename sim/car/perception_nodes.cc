@@ -56,16 +56,6 @@ cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch,
   return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
 }
 
-// The pixels a lane detector reads, for a camera of `height` rows.
-vehicle::RowSpans ReadsOf(const stack::LaneDetector& detector, int height) {
-  vehicle::RowSpans reads;
-  reads.columns.assign(static_cast<std::size_t>(height), {0, 0});
-  for (const stack::LaneDetector::SourceSpan& span : detector.source_spans()) {
-    // (a camera of another size has no lane detection: its Step refuses the image)
-    if (span.row < height) reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
-  }
-  return reads;
-}
 
 // The input-independent part of a perception step: the component's params and the camera data.
 struct GridParams {
@@ -145,7 +135,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                     .reads = nullptr,
                     .hook = std::move(hook)};
   params.reads = std::make_shared<const vehicle::RowSpans>(
-      ReadsOf(*params.detector, sensors.color_camera().model().height()));
+      LaneDetectorReads(*params.detector, sensors.color_camera().model().height()));
 
   if (mapping.count("lane_detection") != 0) {
     if (InHardware(mapping, "lane_detection", kSoftware)) {
@@ -179,6 +169,16 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
 }
 
 }  // namespace
+
+vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int height) {
+  vehicle::RowSpans reads;
+  reads.columns.assign(static_cast<std::size_t>(height), {0, 0});
+  for (const stack::LaneDetector::SourceSpan& span : detector.source_spans()) {
+    // (a camera of another size has no lane detection: its Step refuses the image)
+    if (span.row < height) reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
+  }
+  return reads;
+}
 
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {
   const vehicle::CameraInfo info = camera.Info();

@@ -48,6 +48,10 @@ struct PerceptionHooks {
 // report's lane overlay both build their LaneDetector from it).
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera);
 
+// The pixels of a camera of `height` rows that the detector reads (its source spans): what the
+// lane nodes ask the renderer for (vehicle::RowSpans, demand-driven colour).
+vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int height);
+
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a
 // mapping the shape cannot take (e.g. lane_detection in hardware: map lane_planner and poly_fit).

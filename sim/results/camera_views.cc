@@ -13,9 +13,8 @@ namespace autonomsim::sim {
 namespace {
 
 const CarConfig& CarOf(const Scenario& scenario, int car_id) {
-  const auto car = std::find_if(scenario.cars.begin(), scenario.cars.end(),
-                                [&](const CarConfig& c) { return c.id == car_id; });
-  if (car == scenario.cars.end()) {
+  const CarConfig* car = scenario.FindCar(car_id);
+  if (car == nullptr) {
     throw std::invalid_argument("the scenario has no car " + std::to_string(car_id));
   }
   return *car;

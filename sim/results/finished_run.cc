@@ -8,31 +8,11 @@
 #include <string>
 
 #include "sim/core/config.h"
+#include "sim/scenario/record_files.h"
 
 namespace autonomsim::sim {
-namespace {
 
 namespace fs = std::filesystem;
-
-// Calls `parse` on each non-empty line of `file` after `skip` header lines.
-template <class F>
-void ForEachLine(const fs::path& file, int skip, F parse) {
-  std::ifstream in(file);
-  if (!in) throw ConfigError(file.string() + ": cannot read (is this a run's folder?)");
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    if (++number <= skip || line.empty()) continue;
-    try {
-      parse(line);
-    } catch (const std::exception& e) {
-      throw ConfigError(file.string() + ":" + std::to_string(number) +
-                        ": not a line a run wrote: " + e.what());
-    }
-  }
-}
-
-}  // namespace
 
 FinishedRun ReadFinishedRun(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw ConfigError(dir.string() + ": not a folder");
@@ -75,12 +55,16 @@ FinishedRun ReadFinishedRun(const fs::path& dir) {
   run.record.cars = run.summary.cars;
   run.record.server = run.summary.server;
   run.record.v2i = run.summary.v2i;
-  ForEachLine(dir / "trajectory.csv", 1, [&](const std::string& line) {
-    run.record.trajectory.push_back(ParseTrajectoryCsvLine(line));
-  });
-  ForEachLine(dir / "events.jsonl", 0, [&](const std::string& line) {
-    run.record.events.push_back(ParseEventJsonLine(line));
-  });
+  try {
+    ReadTrajectoryCsv(dir / "trajectory.csv",
+                      [&](const TrajectorySample& s) { run.record.trajectory.push_back(s); });
+    ReadEventsJsonl(dir / "events.jsonl",
+                    [&](const Event& e) { run.record.events.push_back(e); });
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(std::string(e.what()) + " (is this a run's folder?)");
+  }
   return run;
 }
 

@@ -27,9 +27,6 @@ nlohmann::json Array(const std::array<double, N>& values) {
   return nlohmann::json(std::vector<double>(values.begin(), values.end()));
 }
 
-bool Present(const ObstacleConfig& o, Time t) {
-  return FromSeconds(o.appear_s) <= t && !(o.disappear_s && FromSeconds(*o.disappear_s) <= t);
-}
 
 }  // namespace
 
@@ -42,7 +39,7 @@ WorldSnapshot SnapshotWithPoses(const Scenario& scenario, const std::vector<worl
   WorldSnapshot snapshot;
   snapshot.t = t;
   for (const ObstacleConfig& o : scenario.obstacles) {
-    if (!Present(o, t)) continue;
+    if (!o.PresentAt(t)) continue;
     snapshot.obstacles.push_back(vehicle::ObstacleBox{
         o.name, world::Pose2{o.x_m, o.y_m, o.yaw_deg * std::numbers::pi / 180.0}, o.length_m,
         o.width_m, o.height_m});

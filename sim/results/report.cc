@@ -59,11 +59,6 @@ std::string DataUrl(const cv::Mat& image, const std::string& format) {
   return "data:image/" + format + ";base64," + Base64(bytes);
 }
 
-std::string Hex(const cv::Scalar& bgr) {
-  return fmt::format("#{:02x}{:02x}{:02x}", static_cast<int>(bgr[2]), static_cast<int>(bgr[1]),
-                     static_cast<int>(bgr[0]));
-}
-
 json BoxJson(const world::Box& b) {
   return {{"x_min_m", b.x_min_m}, {"x_max_m", b.x_max_m}, {"y_min_m", b.y_min_m},
           {"y_max_m", b.y_max_m}};
@@ -141,7 +136,7 @@ json CarsJson(const FinishedRun& run) {
   json out = json::array();
   for (const CarConfig& car : run.scenario.cars) {
     json c = {{"id", car.id},
-              {"colour", Hex(CarColourBgr(run.scenario, car.id))},
+              {"colour", ColourHex(CarColourBgr(run.scenario, car.id))},
               {"length_m", car.vehicle.length_m},
               {"width_m", car.vehicle.width_m},
               {"route", car.route ? json(*car.route) : json()},
@@ -301,6 +296,22 @@ std::string JsonForScript(const json& data) {
   return text;
 }
 
+std::string XmlEscape(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
 void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::string_view with) {
   const std::size_t at = page.find(placeholder);
   if (at == std::string::npos) {
@@ -312,11 +323,7 @@ void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::st
 std::string ReportHtml(const json& data) {
   std::string page = report_assets::kHtml;
   const std::string data_text = JsonForScript(data);
-  std::string title = data["meta"].value("scenario", "run");
-  for (char& c : title) {
-    if (c == '<' || c == '>' || c == '&') c = '_';
-  }
-  ReplacePlaceholder(page, "@TITLE@", title);
+  ReplacePlaceholder(page, "@TITLE@", XmlEscape(data["meta"].value("scenario", "run")));
   ReplacePlaceholder(page, "/*@UPLOT_CSS@*/", report_assets::kUplotCss);
   ReplacePlaceholder(page, "/*@REPORT_CSS@*/", report_assets::kCss);
   ReplacePlaceholder(page, "/*@UPLOT_JS@*/", report_assets::kUplotJs);

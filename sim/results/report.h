@@ -35,6 +35,9 @@ std::string ReportHtml(const nlohmann::json& data);
 // `json` as text that may stand inside a <script> element ("</" written "<\/"), and the one
 // occurrence of `placeholder` in `page` replaced (std::logic_error when it has none).
 std::string JsonForScript(const nlohmann::json& json);
+// Text as XML and HTML take it in content and in quoted attributes (& < > " ' escaped); JUnit
+// files use it too.
+std::string XmlEscape(std::string_view text);
 void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::string_view with);
 
 // What every report carries in its first bytes, so that an earlier report may be replaced

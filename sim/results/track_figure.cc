@@ -71,6 +71,11 @@ cv::Scalar CarColourBgrAt(std::size_t index) {
   return cv::Scalar(bgr[0], bgr[1], bgr[2]);
 }
 
+std::string ColourHex(const cv::Scalar& bgr) {
+  return fmt::format("#{:02x}{:02x}{:02x}", static_cast<int>(bgr[2]), static_cast<int>(bgr[1]),
+                     static_cast<int>(bgr[0]));
+}
+
 cv::Scalar CarColourBgr(const Scenario& scenario, int car_id) {
   std::size_t c = 0;
   while (c < scenario.cars.size() && scenario.cars[c].id != car_id) ++c;

@@ -49,6 +49,8 @@ void DrawCollisionMarker(cv::Mat& image, cv::Point p);
 cv::Scalar CarColourBgr(const Scenario& scenario, int car_id);
 // The palette's colour for the car at `index` in the scenario.
 cv::Scalar CarColourBgrAt(std::size_t index);
+// A BGR colour as "#rrggbb" (for the report's page and gnuplot scripts).
+std::string ColourHex(const cv::Scalar& bgr);
 
 // The colour of collision markers (BGR).
 inline const cv::Scalar kCollisionMarkerBgr(0, 0, 255);

@@ -114,9 +114,8 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
   }
   std::optional<CarCameraViewer> viewer;
   if (options.camera_car) {
-    const auto car = std::find_if(run.scenario.cars.begin(), run.scenario.cars.end(),
-                                  [&](const CarConfig& c) { return c.id == *options.camera_car; });
-    if (car == run.scenario.cars.end() || !car->has_board()) {
+    const CarConfig* car = run.scenario.FindCar(*options.camera_car);
+    if (car == nullptr || !car->has_board()) {
       throw std::invalid_argument(fmt::format(
           "--cameras {}: the run has no car {} with a board (cameras and a stack)",
           *options.camera_car, *options.camera_car));
@@ -191,9 +190,7 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
         }
       }
       for (const ObstacleConfig& o : run.scenario.obstacles) {
-        if (FromSeconds(o.appear_s) <= t && !(o.disappear_s && FromSeconds(*o.disappear_s) <= t)) {
-          DrawObstacle(frame, at, o);
-        }
+        if (o.PresentAt(t)) DrawObstacle(frame, at, o);
       }
       // trails, then collisions so far, then the cars on top
       for (const CarTrack& car : cars) {

@@ -28,13 +28,24 @@ void Write(std::ofstream& out, const std::string& text, const fs::path& file) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
-// Calls `visit` with each line of `file` (without its newline), after its header line if it has one.
+// Calls `visit` with each non-empty line of `file` (without its newline), after its header line if
+// it has one; a line `visit` cannot take (std::invalid_argument) is an error at file:line.
 void ForEachLine(const fs::path& file, bool header,
                  const std::function<void(const std::string&)>& visit) {
   std::ifstream in = OpenForReading(file);
   std::string line;
-  if (header) std::getline(in, line);
-  while (std::getline(in, line)) visit(line);
+  int number = 0;
+  if (header && std::getline(in, line)) ++number;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    try {
+      visit(line);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(file.string() + ":" + std::to_string(number) +
+                               ": not a line a run wrote: " + e.what());
+    }
+  }
   if (in.bad()) throw std::runtime_error("cannot read " + file.string());
 }
 
@@ -79,16 +90,24 @@ void RecordFiles::Close() {
   }
 }
 
+void ReadTrajectoryCsv(const fs::path& file,
+                       const std::function<void(const TrajectorySample&)>& visit) {
+  ForEachLine(file, true, [&](const std::string& line) { visit(ParseTrajectoryCsvLine(line)); });
+}
+
+void ReadEventsJsonl(const fs::path& file, const std::function<void(const Event&)>& visit) {
+  ForEachLine(file, false, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
+}
+
 void RecordFiles::ForEachSample(
     const std::function<void(const TrajectorySample&)>& visit) const {
   RequireClosed();
-  ForEachLine(trajectory_file_, true,
-              [&](const std::string& line) { visit(ParseTrajectoryCsvLine(line)); });
+  ReadTrajectoryCsv(trajectory_file_, visit);
 }
 
 void RecordFiles::ForEachEvent(const std::function<void(const Event&)>& visit) const {
   RequireClosed();
-  ForEachLine(events_file_, false, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
+  ReadEventsJsonl(events_file_, visit);
 }
 
 void RecordFiles::HashText(Sha256* hash) const {

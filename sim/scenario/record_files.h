@@ -9,6 +9,14 @@
 
 namespace autonomsim::sim {
 
+// Read back a trajectory.csv (after its header) or an events.jsonl that a run wrote, calling
+// `visit` for each sample or event in order. std::runtime_error naming the file when it cannot
+// be read, and file:line for a line a run did not write.
+void ReadTrajectoryCsv(const std::filesystem::path& file,
+                       const std::function<void(const TrajectorySample&)>& visit);
+void ReadEventsJsonl(const std::filesystem::path& file,
+                     const std::function<void(const Event&)>& visit);
+
 class RecordFiles : public RecordStore {
  public:
   // Creates (or truncates) `folder`/trajectory.csv and `folder`/events.jsonl.

@@ -76,6 +76,11 @@ struct CarConfig {
 // A box on the floor that cars can hit (and, later, see). It is present from appear_s until
 // disappear_s (if given).
 struct ObstacleConfig {
+  // Whether it stands on the floor at t.
+  bool PresentAt(Time t) const {
+    return FromSeconds(appear_s) <= t && !(disappear_s && FromSeconds(*disappear_s) <= t);
+  }
+
   std::string name;
   double x_m{0.0};
   double y_m{0.0};
@@ -205,6 +210,14 @@ struct ExpectClause {
 };
 
 struct Scenario {
+  // The car with this id, or null.
+  const CarConfig* FindCar(int id) const {
+    for (const CarConfig& car : cars) {
+      if (car.id == id) return &car;
+    }
+    return nullptr;
+  }
+
   std::string name;
   std::string description;
   std::uint64_t seed{1};

@@ -8,17 +8,6 @@
 namespace autonomsim::sim {
 namespace {
 
-std::string HtmlText(std::string text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else out += c;
-  }
-  return out;
-}
-
 }  // namespace
 
 std::string SweepIndexHtml(const SweepIndexInput& input) {
@@ -31,7 +20,7 @@ std::string SweepIndexHtml(const SweepIndexInput& input) {
                                {"failed", input.failed},
                                {"missing", input.missing}};
   std::string page = report_assets::kIndexHtml;
-  ReplacePlaceholder(page, "@TITLE@", HtmlText(input.title));
+  ReplacePlaceholder(page, "@TITLE@", XmlEscape(input.title));
   ReplacePlaceholder(page, "/*@REPORT_CSS@*/", report_assets::kCss);
   ReplacePlaceholder(page, "@DATA@", JsonForScript(data));
   return page;

@@ -56,20 +56,13 @@ std::string FileSafe(const std::string& text) {
   return out;
 }
 
-// A car's colour as in track.png and the report (taking car N to be the scenario's N-th, as the
-// shipped scenarios number their cars).
-std::string CarColourHex(std::size_t id) {
-  const cv::Scalar bgr = CarColourBgrAt(id);
-  return fmt::format("#{:02x}{:02x}{:02x}", static_cast<int>(bgr[2]), static_cast<int>(bgr[1]),
-                     static_cast<int>(bgr[0]));
-}
-
 // The colour of a column prefix: carN in its car's colour, "all" dark grey.
 std::string PrefixColour(const std::string& prefix) {
   if (prefix.rfind("car", 0) == 0) {
     double id = 0.0;
     if (ParseDouble(prefix.substr(3), &id) && id >= 0 && id < 1000) {
-      return CarColourHex(static_cast<std::size_t>(id));
+      // car N taken to be the scenario's N-th, as the shipped scenarios number their cars
+      return ColourHex(CarColourBgrAt(static_cast<std::size_t>(id)));
     }
   }
   return kAllCarsColour;
