@@ -263,4 +263,14 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
   return out;
 }
 
+void JumpLocalizationEstimate(double dx_m, double dy_m, double dyaw_rad,
+                              LocalizationEkfState* state) {
+  // the mean is in the odom frame: turn the map-frame step into it
+  const double c = std::cos(state->X_map_odom.yaw_rad);
+  const double s = std::sin(state->X_map_odom.yaw_rad);
+  state->mean(kEkfX) += c * dx_m + s * dy_m;
+  state->mean(kEkfY) += -s * dx_m + c * dy_m;
+  state->mean(kEkfYaw) = world::WrapAngle(state->mean(kEkfYaw) + dyaw_rad);
+}
+
 }  // namespace autonomsim::stack

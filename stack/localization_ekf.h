@@ -138,6 +138,11 @@ struct LocalizationEkfState {
   Time last_measurement{kZeroTime};
 };
 
+// The estimate jumps (a fault: a kidnapped car, a wrong fix taken): its map-frame position moves by
+// (dx_m, dy_m) and its heading by dyaw_rad; the covariance stays, so the filter trusts it as before.
+void JumpLocalizationEstimate(double dx_m, double dy_m, double dyaw_rad,
+                              LocalizationEkfState* state);
+
 // The filter at rest at the odom origin at `start`, with map→odom = the start pose (the real
 // car's static transform). Validates params.
 LocalizationEkfState InitialLocalizationEkfState(const LocalizationEkfParams& params, Time start,

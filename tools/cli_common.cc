@@ -18,6 +18,29 @@ namespace autonomsim::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Assumed: behind real time by more than this, a simulated car's messages reach the server
+// noticeably later than a real car's would (the car client polls every 0.1 s, reference §7).
+constexpr double kPacingWarning_s = 0.1;
+
+// One line on how far a real-time run fell behind the wall clock, and a warning when it is far.
+void PrintPacing(const sim::RealTimeMetrics& m) {
+  fmt::print(stderr,
+             "real time: lag behind the wall clock max {:.3f} s, mean {:.4f} s; {} of {} slices "
+             "({:.0f} ms) late; {} messages sent, {} responses received\n",
+             m.pacing_max_lag_s, m.pacing_mean_lag_s, m.late_slices, m.slices, 1e3 * m.slice_s,
+             m.messages_sent, m.messages_received);
+  if (m.pacing_max_lag_s > kPacingWarning_s) {
+    fmt::print(stderr,
+               "warning: the simulation fell up to {:.2f} s behind real time (more than {} s): "
+               "its cars' messages went out that much late, unlike a real car's\n",
+               m.pacing_max_lag_s, kPacingWarning_s);
+  }
+}
+
+}  // namespace
+
 int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>& commands) {
   try {
     app.parse(argc, argv);
@@ -122,6 +145,7 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
     simulation.Run();
   }
   outcome.wall_seconds = WallSecondsSince(start);
+  if (simulation.record().realtime) PrintPacing(*simulation.record().realtime);
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
   if (folder) {

@@ -1,5 +1,6 @@
 // Shared by the `autonomsim` subcommands: exit codes, progress, running and judging one scenario.
-// The CLI is the only place that reads the wall clock (for progress and the real-time factor).
+// The CLI is the only place that reads the wall clock (for progress and the real-time factor),
+// besides the pacing of a real-time run (sim/v2i/realtime_pacing.h).
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -31,14 +31,17 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
   }
   const double duration_s = ToSeconds(loaded->scenario.duration);
   if (!quiet) {
-    fmt::print(stderr, "autonomsim: running {} ({} cars, {:.0f} s simulated, seed {})\n",
-               scenario_file, loaded->scenario.cars.size(), duration_s, loaded->scenario.seed);
+    const sim::V2IConfig& v2i = loaded->scenario.v2i;
+    fmt::print(stderr, "autonomsim: running {} ({} cars, {:.0f} s simulated{}, seed {})\n",
+               scenario_file, loaded->scenario.cars.size(), duration_s,
+               v2i.link == "realtime" ? " in real time against broker " + v2i.mqtt.broker : "",
+               loaded->scenario.seed);
   }
   Progress progress(duration_s, quiet);
   Outcome outcome;
   try {
     outcome = RunLoaded(*loaded, out_dir, &progress, force);
-  } catch (const sim::MqttError& e) {  // the broker or tlserver of v2i.link: mqtt failed us
+  } catch (const sim::MqttError& e) {  // the broker or server of v2i.link: mqtt or realtime
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
@@ -61,6 +64,7 @@ Command AddRunCommand(CLI::App& parent) {
     std::optional<std::uint64_t> seed;
     std::vector<std::string> overrides;
     std::optional<std::string> broker;
+    bool realtime{false};
     bool quiet{false};
     bool force{false};
     bool report{false};
@@ -84,15 +88,30 @@ Command AddRunCommand(CLI::App& parent) {
   run->add_option("--broker", o->broker,
                   "Send the cars' V2I traffic through this MQTT broker to the `tlserver "
                   "--sim-clock` serving it (same as --set v2i.link=mqtt --set "
-                  "v2i.mqtt.broker=HOST:PORT); credentials and TLS via --set v2i.mqtt.*")
+                  "v2i.mqtt.broker=HOST:PORT); with --realtime, to the traffic-light server "
+                  "outside the run instead; credentials and TLS via --set v2i.mqtt.*")
       ->type_name("HOST:PORT");
+  run->add_flag("--realtime", o->realtime,
+                "Run in real time against the traffic-light server on --broker (the lab's "
+                "vtl.py, or tlserver without --sim-clock), possibly beside real cars: the run is "
+                "paced to the wall clock and the cars send the lab's plain /vtl/request and "
+                "/vtl/free and hear /vtl/response. Reports how far it fell behind real time "
+                "(summary.json's `realtime`); results are not reproducible bit for bit (same as "
+                "--set v2i.link=realtime --set v2i.mqtt.broker=HOST:PORT)");
   run->add_flag("--quiet,-q", o->quiet, "No progress output");
   run->add_flag("--report", o->report,
                 "Also write the replay report, RESULTS/report.html (see `autonomsim report`)");
   return {run, [o] {
             std::vector<std::string> overrides = o->overrides;
+            if (o->realtime && !o->broker) {
+              fmt::print(stderr,
+                         "error: --realtime needs --broker HOST:PORT, the MQTT broker of the "
+                         "traffic-light server to run against (a real-time run starts no "
+                         "broker or server of its own)\n");
+              return kExitUnusableInput;
+            }
             if (o->broker) {
-              overrides.push_back("v2i.link=mqtt");
+              overrides.push_back(o->realtime ? "v2i.link=realtime" : "v2i.link=mqtt");
               overrides.push_back("v2i.mqtt.broker=" + *o->broker);
             }
             return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet, o->force,

@@ -14,6 +14,7 @@ packages=(
   clang libclang-rt-14-dev  # tools/fuzz.sh: libFuzzer and clang's sanitizer runtimes
   chromium  # the replay report's browser test loads it in headless chromium
   gnuplot-nox  # draws a sweep's plots (pngcairo)
+  python3-paho-mqtt  # the real-time test's stand-in of the lab's vtl.py (tools/tests/vtl_standin.py)
 )
 
 missing=()

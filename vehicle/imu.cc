@@ -65,7 +65,18 @@ ImuReading StepImu(const ImuParams& params, const ImuTruth& truth, const ImuNois
   reading.yaw_rad =
       world::WrapAngle(truth.X_map_car.yaw_rad + state->gyro_bias_rad_per_s * ToSeconds(truth.t) +
                        params.yaw_noise_stddev_rad * noise.yaw);
+  if (state->bias_step_rad_per_s != 0.0) {  // only after a step: a run without one is unchanged
+    reading.yaw_rate_rad_per_s += state->bias_step_rad_per_s;
+    reading.yaw_rad = world::WrapAngle(reading.yaw_rad +
+                                       state->bias_step_rad_per_s * ToSeconds(truth.t) -
+                                       state->bias_step_time_rad);
+  }
   return reading;
+}
+
+void StepGyroBias(Time t, double step_rad_per_s, ImuState* state) {
+  state->bias_step_rad_per_s += step_rad_per_s;
+  state->bias_step_time_rad += step_rad_per_s * ToSeconds(t);
 }
 
 }  // namespace autonomsim::vehicle

@@ -83,7 +83,14 @@ struct ImuState {
   bool has_previous{false};
   Time previous_t{};
   double previous_yaw_rate_rad_per_s{0.0};
+  // Bias steps (a fault: StepGyroBias): their sum, and Σ step · t_step, so that the heading drifts
+  // by Σ step · (t − t_step) from each step on.
+  double bias_step_rad_per_s{0.0};
+  double bias_step_time_rad{0.0};
 };
+
+// From `t` on, the gyro's bias is `step_rad_per_s` more, and the heading drifts by it from then.
+void StepGyroBias(Time t, double step_rad_per_s, ImuState* state);
 
 ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias);
 

@@ -125,6 +125,21 @@ CameraSensor::CameraSensor(SensorEnvironment* environment, const CameraStreamPar
 
 void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
                           vehicle::DepthImage* depth, const vehicle::RowSpans* color_region) const {
+  if (frame.blackout) {
+    const vehicle::CameraInfo info = Info();
+    if (color != nullptr) {
+      color->width = info.width;
+      color->height = info.height;
+      color->bgr.assign(static_cast<std::size_t>(info.width) * info.height * 3, 0);
+    }
+    if (depth != nullptr) {
+      depth->width = info.width;
+      depth->height = info.height;
+      depth->mm.assign(static_cast<std::size_t>(info.width) * info.height, 0);
+    }
+    ++frames_rendered_;
+    return;
+  }
   if (color_region != nullptr) {
     renderer_.Render(frame.X_map_car, frame.prisms, color, depth, *color_region);
   } else {
@@ -228,10 +243,17 @@ CameraFrame SensorSuite::Capture(const CameraSensor& camera, CameraState* state,
   frame.stamp = kernel_->Now();
   // drawn for every frame, rendered or not, so that no frame's noise depends on which were
   frame.noise_seed = state->noise.NextU64();
-  if (scene) {
-    frame.X_map_car = environment_->physics().car(car_id_).pose();
-    frame.prisms = environment_->PrismsSeenBy(car_id_);
+  if (!scene) return frame;
+  if (state->fault == CameraFault::kFreeze && state->last) {
+    CameraFrame frozen = *state->last;  // the old picture, under the new header
+    frozen.sequence = frame.sequence;
+    frozen.stamp = frame.stamp;
+    return frozen;
   }
+  frame.X_map_car = environment_->physics().car(car_id_).pose();
+  frame.prisms = environment_->PrismsSeenBy(car_id_);
+  frame.blackout = state->fault == CameraFault::kBlackout;
+  if (!frame.blackout) state->last = frame;
   return frame;
 }
 
@@ -259,6 +281,10 @@ void SensorSuite::SampleImu() {
   noise.yaw = imu_noise_.Normal(0.0, 1.0);
   const vehicle::ImuReading reading = vehicle::StepImu(params_.imu.imu, truth, noise, &imu_state_);
   for (const auto& callback : on_imu_) callback(reading);
+}
+
+void SensorSuite::StepGyroBias(double rad_per_s) {
+  vehicle::StepGyroBias(kernel_->Now(), rad_per_s, &imu_state_);
 }
 
 void SensorSuite::IntegrateWheel() {

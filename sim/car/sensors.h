@@ -101,6 +101,7 @@ struct CameraFrame {
   world::Pose2 X_map_car;
   std::vector<vehicle::Prism> prisms;  // what the camera could see then
   std::uint64_t noise_seed{0};
+  bool blackout{false};  // a camera_blackout fault: every pixel 0 (depth 0: no return), no noise
 
   // The frame's images (either may be null), noise included when it is on; the buffers are
   // reused (no allocation once they have their size). Identical for the same frame every time.
@@ -184,6 +185,15 @@ class SensorSuite {
   CameraFrame CaptureColorFrame();
   CameraFrame CaptureDepthFrame();
 
+  // Faults (sim/loop/faults.h). A frozen camera publishes its last frame again (same pixels, pose
+  // and scene) with each new stamp; a blacked-out one publishes black frames. kNone ends either.
+  // Stamps, sequences and noise seeds go on as without the fault.
+  enum class CameraFault { kNone, kFreeze, kBlackout };
+  void SetColorCameraFault(CameraFault fault) { color_state_.fault = fault; }
+  void SetDepthCameraFault(CameraFault fault) { depth_state_.fault = fault; }
+  // From now on the gyro reads `rad_per_s` more (vehicle::StepGyroBias); steps add up.
+  void StepGyroBias(double rad_per_s);
+
   int car_id() const { return car_id_; }
   const SensorSuiteParams& params() const { return params_; }
   const CameraSensor& color_camera() const { return *color_; }
@@ -198,6 +208,8 @@ class SensorSuite {
   struct CameraState {
     Rng noise;
     std::uint64_t sequence{0};
+    CameraFault fault{CameraFault::kNone};
+    std::optional<CameraFrame> last;  // the last frame with a scene, for a freeze
   };
   // The frame's header (sequence, stamp, noise seed), and with `scene` its world.
   CameraFrame Capture(const CameraSensor& camera, CameraState* state, bool scene);

@@ -167,9 +167,11 @@ TopicId<stack::PoseFix> AddPoseFixSource(NodeGraph& graph, const PoseFixConfig& 
 }
 
 // ekf_filter_node: the EKF at 20 Hz on everything received since its last step.
-void AddLocalizationNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                         const StackConfig& config, const StackContext& context,
-                         std::function<void(const stack::LocalizationEkfOutput&)> on_estimate) {
+// Returns the estimate's jump (StackControls::jump_localization).
+std::function<void(double, double, double)> AddLocalizationNode(
+    NodeGraph& graph, Cache& cache, const StackTopics& topics, const StackConfig& config,
+    const StackContext& context,
+    std::function<void(const stack::LocalizationEkfOutput&)> on_estimate) {
   struct State {
     stack::LocalizationEkfState ekf;
     stack::LocalizationEkfInput pending;
@@ -203,6 +205,9 @@ void AddLocalizationNode(NodeGraph& graph, Cache& cache, const StackTopics& topi
                    const Time stamp = estimate.stamp;
                    outbox.Publish(out, std::move(estimate), stamp);
                  });
+  return [state](double dx_m, double dy_m, double dyaw_rad) {
+    stack::JumpLocalizationEstimate(dx_m, dy_m, dyaw_rad, &state->ekf);
+  };
 }
 
 // vehicle_communication: the intersection client every 100 ms on the estimated position (and,
@@ -534,16 +539,18 @@ stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_ma
   return fix;
 }
 
-void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
-                   SensorSuite& sensors, const PerceptionTopics& perception,
-                   const StackContext& context, StackHooks hooks) {
+StackControls AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
+                            SensorSuite& sensors, const PerceptionTopics& perception,
+                            const StackContext& context, StackHooks hooks) {
   if (!context.route || !context.intersections || !context.static_map || !context.obstacle_grid) {
     throw std::invalid_argument("AddStackNodes: incomplete context");
   }
   const StackTopics topics = AddStackTopics(graph, config, sensors, perception);
   Cache cache(graph);
   AddSensorDrivers(graph, sensors, topics);
-  AddLocalizationNode(graph, cache, topics, config, context, std::move(hooks.on_estimate));
+  StackControls controls;
+  controls.jump_localization =
+      AddLocalizationNode(graph, cache, topics, config, context, std::move(hooks.on_estimate));
   // the emergency stop's topics come after the stack's, its nodes after the stack's nodes: a car
   // without it has the same graph as before it existed
   std::optional<TopicId<RangeMessage>> range;
@@ -563,6 +570,7 @@ void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& co
   if (config.emergency_stop.enabled) {
     AddEmergencyStopNodes(graph, sensors, config.emergency_stop, *range, *emergency);
   }
+  return controls;
 }
 
 }  // namespace autonomsim::sim

@@ -93,10 +93,17 @@ struct StackHooks {
 stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_map_base_true,
                            Time now, Rng* noise);
 
+// What faults reach inside the stack (sim/loop/faults.h).
+struct StackControls {
+  // Moves the EKF's estimate: map-frame (dx_m, dy_m), heading dyaw_rad
+  // (stack::JumpLocalizationEstimate).
+  std::function<void(double dx_m, double dy_m, double dyaw_rad)> jump_localization;
+};
+
 // Adds the nodes and topics above to `graph`. `kernel` gives the arrival times the cruise
 // control's watchdog needs. The perception topics must be on the same graph.
-void AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
-                   SensorSuite& sensors, const PerceptionTopics& perception,
-                   const StackContext& context, StackHooks hooks);
+StackControls AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
+                            SensorSuite& sensors, const PerceptionTopics& perception,
+                            const StackContext& context, StackHooks hooks);
 
 }  // namespace autonomsim::sim

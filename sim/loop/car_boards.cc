@@ -27,7 +27,9 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
       graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
       image, color.first, color.period, [suite, agent](Time) {
         CameraFrame frame = suite->CaptureColorFrame();
-        agent->color_frames.emplace_back(frame.stamp, frame.X_map_car);
+        // the car's pose now, which is the frame's unless the camera froze (then the detection is
+        // judged against where the car really is)
+        agent->color_frames.emplace_back(frame.stamp, agent->car->pose());
         if (agent->color_frames.size() > kRecentFrames) agent->color_frames.pop_front();
         return frame;
       });
@@ -85,7 +87,7 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
       .actuate =
           [agent](const vehicle::ActuatorCommand& command) {
             agent->command = command;
-            agent->car->SetCommand(command);
+            agent->car->SetCommand(agent->applied());
           },
       .mission_done = [agent] { return agent->parked; },
       .on_behavior =
@@ -119,7 +121,8 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
             if (follow_path) ++m.follow_path_cycles;
             if (collision) ++m.collision_cycles;
           }};
-  AddStackNodes(*graph, kernel, config.stack, *suite, perception, context, std::move(hooks));
+  agent->stack_controls =
+      AddStackNodes(*graph, kernel, config.stack, *suite, perception, context, std::move(hooks));
 }
 
 void Simulation::Impl::JudgeGrid(CarAgent* agent, const stack::Grid234& grid) {

@@ -18,6 +18,9 @@ constexpr double kArrivalMargin_m = 0.2;
 constexpr double kTrackingWindow_m = 0.5;
 // The oracle looks this far ahead along its route for obstacles.
 constexpr double kObstacleHorizon_m = 2.0;
+// At the end of a real-time run, the longest we wait (wall time) for the broker to take the
+// messages still on their way. Assumed: ample for a broker that is there, short if it is not.
+constexpr std::chrono::seconds kRealTimeFlushTimeout{2};
 
 Duration Phase(const RngStreams& streams, const std::string& name, Duration period) {
   // whole milliseconds, so that phases read well in traces
@@ -59,6 +62,7 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario, std::shared_ptr<Re
   AddSensorsAndBoards();  // sensors → nodes → actuators, per car
   ConnectServer();        // the traffic-light server and the V2I link to it
   AddObstacles();         // appearing and disappearing on schedule
+  ScheduleFaults();       // the scenario's faults, struck and lifted on schedule
   AddOracleDrivers();     // oracle cars: intersection client and driver → actuators
   ScheduleRecording();    // trajectory samples
   ScheduleWorldStep();    // world step → monitors
@@ -104,17 +108,27 @@ void Simulation::Impl::AddSensorsAndBoards() {
 void Simulation::Impl::ConnectServer() {
   std::vector<int> car_ids;
   for (const CarAgent& agent : agents) car_ids.push_back(agent.config->id);
+  if (scenario.v2i.link == "realtime") {
+    // the server is outside the run; the one in process is given no link and never answers
+    realtime_link = ConnectRealTimeLink(
+        scenario.v2i.mqtt, &kernel, car_ids,
+        [this](int car_id, const world::V2IMessage& m) { ReceiveAtCar(car_id, m); });
+    to_server = realtime_link.get();
+    return;
+  }
   link = std::make_unique<EmbeddedV2ILink>(
       &kernel, scenario.v2i, streams, car_ids,
       [this](int car_id, const world::V2IMessage& m) { server.OnMessage(car_id, m); },
       [this](int car_id, const world::V2IMessage& m) { ReceiveAtCar(car_id, m); },
-      [this](int car_id, const world::V2IMessage& m) {
+      [this](int car_id, const world::V2IMessage& m, const std::string& cause) {
         Emit(Event{.t = kernel.Now(),
                    .type = "v2i_lost",
                    .car = car_id,
-                   .detail = m.topic + " '" + m.payload + "'"});
+                   .detail = m.topic + " '" + m.payload + "'" +
+                             (cause.empty() ? "" : " (" + cause + ")")});
       });
   server.set_link(link.get());
+  to_server = link.get();
 }
 
 void Simulation::Impl::AddObstacles() {
@@ -189,9 +203,9 @@ bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
   // the server's records of what it received and did are the run's request/free/grant/denied
   // events (TrafficLightNode); a message the link lost is a v2i_lost event
   for (const world::Request& request : out.requests) {
-    link->SendToServer(id, world::ToMessage(request));
+    to_server->SendToServer(id, world::ToMessage(request));
   }
-  for (const world::Free& free : out.frees) link->SendToServer(id, world::ToMessage(free));
+  for (const world::Free& free : out.frees) to_server->SendToServer(id, world::ToMessage(free));
   const bool was_waiting = agent->waiting;
   agent->waiting = !out.may_proceed;
   if (!was_waiting && agent->waiting) {
@@ -228,7 +242,7 @@ void Simulation::Impl::StepDriver(CarAgent* agent) {
   input.obstacle_gap_m = ObstacleGap(*agent);
   agent->command = StepOracleDriver(agent->config->oracle, agent->config->vehicle, *agent->route,
                                     input, &agent->driver);
-  agent->car->SetCommand(agent->command);
+  agent->car->SetCommand(agent->applied());
 }
 
 std::optional<double> Simulation::Impl::ObstacleGap(const CarAgent& agent) const {
@@ -338,12 +352,14 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
       Emit(Event{.t = t, .type = "exit", .car = id, .intersection = agent->area});
     }
     if (area >= 0) {
+      // granted: the server holds the intersection for the car; in real time the server is
+      // outside the run, and what counts is what the car was told (its client holds it)
       const std::optional<int> holder = server.Holder(area);
-      Emit(Event{.t = t,
-                 .type = "enter",
-                 .car = id,
-                 .intersection = area,
-                 .granted = holder.has_value() && *holder == id});
+      const bool granted =
+          realtime_link ? agent->client.phase == stack::IntersectionClientState::Phase::kHolding &&
+                              agent->client.intersection == area
+                        : holder.has_value() && *holder == id;
+      Emit(Event{.t = t, .type = "enter", .car = id, .intersection = area, .granted = granted});
       ++agent->metrics.intersection_entries;
     }
     agent->area = area;
@@ -400,7 +416,11 @@ void Simulation::Impl::Finish() {
   }
   const world::TrafficLightServer::Counters c = server.counters();
   record.server = {c.requests, c.grants, c.denials, c.frees, c.lease_expiries, server.malformed()};
-  record.v2i = {link->sent(), link->delivered(), link->lost()};
+  if (realtime_link) {  // what went out to the broker and what came back; nothing is lost
+    record.v2i = {realtime_link->sent(), realtime_link->received(), 0};
+  } else {
+    record.v2i = {link->sent(), link->delivered(), link->lost()};
+  }
   std::vector<BoardMetrics> traced;
   for (std::size_t i = 0; i < boards.size(); ++i) {
     if (!boards[i]) continue;
@@ -427,8 +447,23 @@ void Simulation::Run(const std::function<void(Time)>& progress, Duration progres
         progress_period, progress_period, [this, &progress] { progress(impl_->kernel.Now()); },
         kPriorityRecord);
   }
-  impl_->kernel.RunUntil(impl_->end);
+  if (impl_->realtime_link) {
+    impl_->RunRealTime();
+  } else {
+    impl_->kernel.RunUntil(impl_->end);
+  }
   impl_->Finish();
+}
+
+void Simulation::Impl::RunRealTime() {
+  SteadyWallClock clock;
+  Pacer pacer(&clock);
+  pacer.Run(&kernel, end, [this] { realtime_link->DeliverReceived(); });
+  // the cars' last frees should reach the server before the run lets go of the broker
+  realtime_link->Flush(kRealTimeFlushTimeout);
+  record.realtime = pacer.figures();
+  record.realtime->messages_sent = realtime_link->sent();
+  record.realtime->messages_received = realtime_link->received();
 }
 
 const RunRecord& Simulation::record() const { return impl_->record; }

@@ -20,8 +20,9 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  // Runs to the scenario's duration. `progress`, if given, is called with the simulated time
-  // every `progress_period` of simulated time (the CLI turns it into a progress line).
+  // Runs to the scenario's duration (with v2i.link: realtime, paced to the wall clock). `progress`,
+  // if given, is called with the simulated time every `progress_period` of simulated time (the CLI
+  // turns it into a progress line).
   void Run(const std::function<void(Time)>& progress = {},
            Duration progress_period = std::chrono::seconds(1));
 

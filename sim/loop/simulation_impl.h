@@ -19,6 +19,8 @@
 #include "sim/loop/simulation.h"
 #include "sim/platform/node_graph.h"
 #include "sim/v2i/mqtt_endpoint.h"
+#include "sim/v2i/realtime_link.h"
+#include "sim/v2i/realtime_pacing.h"
 #include "sim/v2i/traffic_light_node.h"
 #include "sim/v2i/v2i_link.h"
 #include "stack/intersection_client.h"
@@ -47,7 +49,9 @@ struct CarAgent {
   OracleDriverState driver;
   stack::IntersectionClientState client;
   std::vector<world::Response> inbox;  // responses for this car since the client's last step
-  vehicle::ActuatorCommand command;
+  vehicle::ActuatorCommand command;  // what its driver commands
+  bool stalled{false};               // car_stall: the motor is dead (sim/loop/faults.h)
+  StackControls stack_controls;      // driver: stack
   bool waiting{false};  // the intersection client says: stop here until granted
   bool parked{false};   // done: laps driven or route ended
   std::vector<ObstacleOnRoute> obstacles_on_lane;
@@ -66,6 +70,11 @@ struct CarAgent {
   // driver: stack
   stack::BehaviorMode behavior_mode{stack::BehaviorMode::kDrive};
   CarMetrics metrics;
+
+  // What reaches the car: its driver's command, with no throttle while the motor is dead.
+  vehicle::ActuatorCommand applied() const {
+    return stalled ? vehicle::ActuatorCommand{0.0, command.curvature_per_m} : command;
+  }
 };
 
 }  // namespace detail
@@ -81,6 +90,7 @@ struct Simulation::Impl {
   void ConnectServer();
   void AddSensorsAndBoards();
   void AddOracleDrivers();
+  void ScheduleFaults();  // sim/loop/faults.cc
   void ScheduleRecording();
   void ScheduleWorldStep();
 
@@ -101,6 +111,8 @@ struct Simulation::Impl {
   void JudgeLanes(CarAgent* agent, const stack::LanePoints& lanes, Time stamp);
   void JudgeGrid(CarAgent* agent, const stack::Grid234& grid);
   void Finish();
+  // v2i.link: realtime: runs to the end paced to the wall clock (sim/v2i/realtime_pacing.h).
+  void RunRealTime();
 
   const LoadedScenario& loaded;
   const Scenario& scenario;
@@ -112,6 +124,9 @@ struct Simulation::Impl {
   std::map<int, std::size_t> agent_index;  // car id -> agents index
   TrafficLightNode server;
   std::unique_ptr<EmbeddedV2ILink> link;
+  // v2i.link: realtime: the cars' link to a server outside the run, instead of `link`
+  std::unique_ptr<RealTimeV2ILink> realtime_link;
+  V2ILink* to_server{nullptr};  // what the cars send on: `link` or `realtime_link`
   // the cars' sensors; camera frames are rendered only by whoever processes them
   world::FloorRaster floor;
   std::unique_ptr<SensorEnvironment> sensor_world;

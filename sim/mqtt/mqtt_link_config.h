@@ -10,6 +10,8 @@
 
 namespace autonomsim::sim {
 
+struct MqttOptions;  // sim/mqtt/mqtt_client.h
+
 struct MqttLinkConfig {
   // Empty: the run starts a private mosquitto on a free loopback port and a `tlserver
   // --sim-clock` on it, and stops both at its end. "HOST:PORT": a broker that is already running,
@@ -42,5 +44,11 @@ struct MqttLinkConfig {
   // Throws std::invalid_argument naming the key and the bad value.
   void Validate() const;
 };
+
+// The client options for the given broker `config.broker` (not empty): its address, our user and
+// password (read from password_file), TLS, and a session the broker drops when we disconnect (a
+// run's session is of no use to anybody once it has ended). Throws MqttError when the password
+// file cannot be read.
+MqttOptions GivenBrokerOptions(const MqttLinkConfig& config, const std::string& client_id);
 
 }  // namespace autonomsim::sim

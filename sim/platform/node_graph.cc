@@ -194,6 +194,50 @@ void NodeGraph::AddTimer(NodeId node, Time first, Duration period,
       first, period, [this, index] { OnTimer(index); }, kPriorityPlatform);
 }
 
+NodeGraph::Node& NodeGraph::NodeNamed(const std::string& name) {
+  for (Node& n : nodes_) {
+    if (n.name == name) return n;
+  }
+  throw std::invalid_argument("no node '" + name + "' on the graph");
+}
+
+void NodeGraph::HangNode(const std::string& name) {
+  Node& n = NodeNamed(name);
+  if (!n.crashed) n.hung = true;
+}
+
+void NodeGraph::ResumeNode(const std::string& name) {
+  Node& n = NodeNamed(name);
+  if (!n.hung) return;
+  n.hung = false;
+  const int node = static_cast<int>(&n - nodes_.data());
+  if (n.finish_held) {
+    n.finish_held = false;
+    FinishJob(node);  // and from there the node takes its next work
+  } else {
+    Kick(node);
+  }
+}
+
+void NodeGraph::CrashNode(const std::string& name) {
+  Node& n = NodeNamed(name);
+  if (n.crashed) return;
+  n.crashed = true;
+  n.hung = false;
+  for (int s : n.subscriptions) subscriptions_[static_cast<std::size_t>(s)].queue.clear();
+  for (int t : n.timers) timers_[static_cast<std::size_t>(t)].pending = false;
+  if (n.finish_held) {
+    n.finish_held = false;
+    FinishJob(static_cast<int>(&n - nodes_.data()));  // returns its loans, publishes nothing
+  }
+}
+
+std::vector<std::string> NodeGraph::node_names() const {
+  std::vector<std::string> names;
+  for (const Node& n : nodes_) names.push_back(n.name);
+  return names;
+}
+
 const TopicSpec& NodeGraph::topic_spec(int topic) const {
   return topics_.at(static_cast<std::size_t>(topic)).spec;
 }
@@ -235,6 +279,7 @@ double NodeGraph::Jitter(Node& node, double jitter) {
 
 void NodeGraph::OnTimer(int timer) {
   Timer& t = timers_[static_cast<std::size_t>(timer)];
+  if (nodes_[static_cast<std::size_t>(t.node)].crashed) return;
   const int owner = Owner(t.node);
   if (metrics_) metrics_->TimerFired(owner, kernel_.Now());
   if (t.pending) {
@@ -248,7 +293,7 @@ void NodeGraph::OnTimer(int timer) {
 
 void NodeGraph::Kick(int node) {
   const Node& n = nodes_[static_cast<std::size_t>(node)];
-  if (n.job) return;
+  if (n.job || n.hung || n.crashed) return;
   for (int t : n.timers) {
     if (timers_[static_cast<std::size_t>(t)].pending) return StartJob(node);
   }
@@ -393,6 +438,10 @@ void NodeGraph::RunPublish(int node) {
 
 void NodeGraph::FinishJob(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
+  if (n.hung) {
+    n.finish_held = true;
+    return;
+  }
   Job job = std::move(*n.job);
   n.job.reset();
   const Time now = kernel_.Now();
@@ -401,9 +450,11 @@ void NodeGraph::FinishJob(int node) {
     Publisher& pub = publishers_[static_cast<std::size_t>(p.publisher)];
     const Topic& topic = topics_[static_cast<std::size_t>(pub.topic)];
     if (topic.spec.transport == Transport::kZeroCopy) --pub.loans_held;
+    if (n.crashed) continue;  // died before publishing: the loan goes back, nothing is sent
     if (metrics_) metrics_->Published(n.metrics_index, topic.metrics_index, now, p.message->stamp);
     Distribute(topic, std::move(p.message));
   }
+  if (n.crashed) return;
   if (metrics_) {
     metrics_->JobDone(n.metrics_index, job.start, now,
                       job.take_core_s + job.compute_core_s + job.publish_core_s, !job.own_cost);
@@ -424,6 +475,7 @@ void NodeGraph::Distribute(const Topic& topic,
     } else {
       // DDS: every sample is received (and paid for) by the subscriber's receive thread.
       Node& subscriber = nodes_[static_cast<std::size_t>(sub.node)];
+      if (subscriber.crashed) continue;
       const double core_s = DdsCost(platform_.profile(), message->bytes).receive_core_s;
       subscriber.receive_queue.push_back(ReceiveItem{s, message, core_s});
       if (!subscriber.receiving) StartReceive(sub.node);
@@ -462,6 +514,7 @@ void NodeGraph::StartReceive(int node) {
 
 void NodeGraph::Enqueue(int subscription, std::shared_ptr<const detail::EnvelopeBase> message) {
   Subscription& sub = subscriptions_[static_cast<std::size_t>(subscription)];
+  if (nodes_[static_cast<std::size_t>(sub.node)].crashed) return;
   const Topic& topic = topics_[static_cast<std::size_t>(sub.topic)];
   const int owner = Owner(sub.node);
   const Time now = kernel_.Now();

@@ -182,9 +182,20 @@ class NodeGraph {
   void AddTimer(NodeId node, Time first, Duration period,
                 std::function<void(Time, Outbox&)> handler);
 
+  // Faults (sim/loop/faults.h), by node name; std::invalid_argument for a name not on the graph.
+  // Hang: the node's executor blocks: its running job does not finish (its outputs wait with it)
+  // and no job starts; messages still queue (keep-last drops counted) and timer ticks count as
+  // overruns. ResumeNode ends the hang: the held job finishes then, and the node catches up.
+  // Crash: the node is gone for the rest of the run: a running job's outputs are never published,
+  // its queues are emptied (zero-copy loans returned) and nothing reaches it any more.
+  void HangNode(const std::string& name);
+  void ResumeNode(const std::string& name);
+  void CrashNode(const std::string& name);
+
   const TopicSpec& topic_spec(int topic) const;
   const std::string& node_name(NodeId node) const;
   bool HasNode(const std::string& name) const;
+  std::vector<std::string> node_names() const;  // in the order they were added
   bool busy(NodeId node) const;
   // Messages waiting in the node's subscriptions.
   std::size_t queued(NodeId node) const;
@@ -255,7 +266,12 @@ class NodeGraph {
     std::deque<ReceiveItem> receive_queue;
     bool receiving{false};
     Time receive_start{0};
+    // faults
+    bool hung{false};
+    bool finish_held{false};  // its job ended while hung: it finishes when the hang ends
+    bool crashed{false};
   };
+  Node& NodeNamed(const std::string& name);
 
   int AddTopicImpl(TopicSpec spec);
   int AddPublisherImpl(int node, int topic);

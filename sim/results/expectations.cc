@@ -226,6 +226,29 @@ std::vector<Wait> Waits(const RunRecord& record) {
   return waits;
 }
 
+// A fault of the run, from its fault_begin and fault_end events (sim/loop/faults.h).
+struct FaultSpan {
+  std::string kind;
+  int car{-1};  // the car it strikes; -1: none in particular
+  Time begin{0};
+  std::optional<Time> end;  // none: it lasted to the run's end
+};
+
+std::vector<FaultSpan> Faults(const RunRecord& record) {
+  std::vector<FaultSpan> faults;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == "fault_begin") faults.push_back({e.fault, e.car, e.t, std::nullopt});
+    if (e.type != "fault_end") return;
+    for (FaultSpan& f : faults) {  // the earliest open one of its kind and car
+      if (!f.end && f.kind == e.fault && f.car == e.car) {
+        f.end = e.t;
+        break;
+      }
+    }
+  });
+  return faults;
+}
+
 ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
   std::optional<Wait> longest;
   std::optional<Wait> first_over;
@@ -329,6 +352,11 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
     flush(w.end);
   }
   for (const auto& [car, t] : parked) excused[car].emplace_back(t, record.sim_duration);
+  // a car whose motor a fault killed cannot move: that is car_stall's effect, not a gridlock
+  for (const FaultSpan& f : Faults(record)) {
+    if (f.kind == "car_stall") excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
+  }
+  for (auto& [car, intervals] : excused) std::sort(intervals.begin(), intervals.end());
 
   struct Still {
     std::optional<Time> since;  // unexcused standstill began
@@ -371,6 +399,77 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
   return r;
 }
 
+// recovers_within: after each fault ends, every car moves again within max_s. Judged on the cars'
+// standstills (speed below kStillSpeed_mps) that overlap the fault or the max_s after its end: each
+// must be over within max_s of the fault's end (of its own start, if it starts later). A fault that
+// lasts to the run's end is judged from its begin, and the car it strikes is not judged for it (a
+// dead motor, a crashed node). Standstills after a car parked do not count.
+ExpectationResult RecoversWithin(const ExpectArgs& args, const RunRecord& record) {
+  const double bound_s = *args.max_s;
+  const std::vector<FaultSpan> faults = Faults(record);
+  if (faults.empty()) return {"", true, "no fault in the run"};
+  struct Standstill {
+    Time begin{0};
+    Time end{0};  // the first moving sample, or the run's end
+  };
+  std::map<int, std::vector<Standstill>> standstills;
+  std::map<int, std::optional<Time>> since;  // car -> the open standstill's start
+  ForEachSample(record, [&](const TrajectorySample& s) {
+    if (!Concerns(args, s.car)) return;
+    std::optional<Time>& open = since[s.car];
+    standstills[s.car];  // every judged car has an entry
+    if (std::abs(s.speed_mps) < kStillSpeed_mps) {
+      if (!open) open = s.t;
+    } else if (open) {
+      standstills[s.car].push_back({*open, s.t});
+      open.reset();
+    }
+  });
+  for (const auto& [car, open] : since) {
+    if (open) standstills[car].push_back({*open, record.sim_duration});
+  }
+  std::map<int, Time> parked;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == "parked" && !parked.count(e.car)) parked[e.car] = e.t;
+  });
+
+  double slowest_s = 0.0;
+  for (const FaultSpan& f : faults) {
+    const Time from = f.end.value_or(f.begin);
+    const Time horizon = from + FromSeconds(bound_s);
+    for (const auto& [car, list] : standstills) {
+      if (!f.end && f.car == car) continue;  // struck for good
+      const auto p = parked.find(car);
+      for (const Standstill& still : list) {
+        if (still.end <= f.begin || still.begin >= horizon) continue;
+        if (p != parked.end() && still.begin >= p->second) continue;
+        const Time counted_from = std::max(still.begin, from);
+        const double stood_s = ToSeconds(still.end - counted_from);
+        if (stood_s <= bound_s) {
+          slowest_s = std::max(slowest_s, stood_s);
+          continue;
+        }
+        ExpectationResult r{
+            "", false,
+            fmt::format("car {} stood still from t={:.1f} s to {}, over {} s after {} {} at "
+                        "t={:.1f} s",
+                        car, ToSeconds(still.begin),
+                        still.end >= record.sim_duration
+                            ? std::string("the run's end")
+                            : fmt::format("t={:.1f} s", ToSeconds(still.end)),
+                        bound_s, f.kind, f.end ? "ended" : "began", ToSeconds(from))};
+        r.at_s = ToSeconds(counted_from);
+        r.car = car;
+        return r;
+      }
+    }
+  }
+  return {"", true,
+          fmt::format("{} fault(s): every car moved again within {:.1f} s of a fault's end "
+                      "(bound {} s)",
+                      faults.size(), slowest_s, bound_s)};
+}
+
 }  // namespace
 
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
@@ -391,6 +490,7 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
     if (kind == "no_gridlock") result = NoGridlock(args, record);
     if (kind == "max_wait") result = MaxWait(args, record);
     if (kind == "min_throughput") result = MinThroughput(args, record);
+    if (kind == "recovers_within") result = RecoversWithin(args, record);
     result.name = Name(clause);
     results.push_back(std::move(result));
   }

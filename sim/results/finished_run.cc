@@ -55,6 +55,7 @@ FinishedRun ReadFinishedRun(const fs::path& dir) {
   run.record.cars = run.summary.cars;
   run.record.server = run.summary.server;
   run.record.v2i = run.summary.v2i;
+  run.record.realtime = run.summary.realtime;
   try {
     ReadTrajectoryCsv(dir / "trajectory.csv",
                       [&](const TrajectorySample& s) { run.record.trajectory.push_back(s); });

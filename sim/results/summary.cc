@@ -168,6 +168,7 @@ RunSummary Summarize(const LoadedScenario& loaded, const RunRecord& record,
   summary.cars = record.cars;
   summary.server = record.server;
   summary.v2i = record.v2i;
+  summary.realtime = record.realtime;
   if (!record.boards.empty()) {
     summary.platform.emplace();
     for (const BoardReport& board : record.boards) {

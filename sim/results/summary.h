@@ -49,6 +49,8 @@ struct RunSummary {
   std::vector<CarMetrics> cars;
   RunRecord::ServerCounters server;
   RunRecord::LinkCounters v2i;
+  // A real-time run's pacing and broker traffic (v2i.link: realtime); left out for other runs.
+  std::optional<RealTimeMetrics> realtime;
   // Per board (the cars that have one): sim/platform's ReportJson as is, a format that module
   // defines. Left out when no car has a board.
   std::optional<std::map<std::string, nlohmann::json>> platform;
@@ -142,6 +144,17 @@ void Describe(V& v, RunRecord::LinkCounters& l) {
 }
 
 template <class V>
+void Describe(V& v, RealTimeMetrics& r) {
+  v("slice_s", r.slice_s);
+  v("slices", r.slices);
+  v("late_slices", r.late_slices);
+  v("pacing_max_lag_s", r.pacing_max_lag_s);
+  v("pacing_mean_lag_s", r.pacing_mean_lag_s);
+  v("messages_sent", r.messages_sent);
+  v("messages_received", r.messages_received);
+}
+
+template <class V>
 void Describe(V& v, SummaryVersions& s) {
   v("autonomsim", s.autonomsim);
   v("box2d", s.box2d);
@@ -165,6 +178,7 @@ void Describe(V& v, RunSummary& s) {
   v("cars", s.cars);
   v("server", s.server);
   v("v2i", s.v2i);
+  v("realtime", s.realtime, IfEmpty::kLeftOut);
   v("platform", s.platform, IfEmpty::kLeftOut);
   v("versions", s.versions);
 }

@@ -94,6 +94,7 @@ nlohmann::json EventJson(const Event& e) {
   if (!e.obstacle.empty()) j["obstacle"] = e.obstacle;
   if (e.granted) j["granted"] = *e.granted;
   if (e.lap > 0) j["lap"] = e.lap;
+  if (!e.fault.empty()) j["fault"] = e.fault;
   if (!e.detail.empty()) j["detail"] = e.detail;
   return j;
 }
@@ -110,6 +111,7 @@ Event ParseEventJsonLine(std::string_view line) {
     e.obstacle = j.value("obstacle", std::string());
     if (j.contains("granted")) e.granted = j.at("granted").get<bool>();
     e.lap = j.value("lap", 0);
+    e.fault = j.value("fault", std::string());
     e.detail = j.value("detail", std::string());
     return e;
   } catch (const nlohmann::json::exception& error) {

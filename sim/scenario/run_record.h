@@ -27,7 +27,9 @@ namespace autonomsim::sim {
 //   enter, exit: ground truth: the car's chassis centre entered or left an intersection area;
 //     `granted` says whether the server held the intersection for it then;
 //   collision, lap, parked, behavior, obstacle_appear, obstacle_disappear, v2i_lost,
-//   v2i_malformed.
+//   v2i_malformed;
+//   fault_begin, fault_end: a scenario's fault (`fault` names its kind; `car` the car it strikes,
+//     if one) began or ended (sim/loop/faults.h); a fault without fault_end lasts to the run's end.
 struct Event {
   Time t{0};
   std::string type;
@@ -37,6 +39,7 @@ struct Event {
   std::string obstacle;
   std::optional<bool> granted;
   int lap{0};
+  std::string fault;  // fault_begin, fault_end: the fault's kind
   std::string detail;
 };
 
@@ -103,6 +106,20 @@ struct CarMetrics {
 
 inline constexpr double kObstacleGapHorizon_m = 2.0;
 
+// A real-time run (v2i.link: realtime, sim/v2i/realtime_pacing.h): how far the simulation fell
+// behind the wall clock, and what went through the broker. A slice's lag is the wall time at which
+// its computation ended minus the wall time at which its last instant was due, 0 when it was in
+// time; a slice with a lag above 0 is late.
+struct RealTimeMetrics {
+  double slice_s{0.0};  // the pacing slice, simulated (= wall) seconds
+  std::uint64_t slices{0};
+  std::uint64_t late_slices{0};
+  double pacing_max_lag_s{0.0};
+  double pacing_mean_lag_s{0.0};       // over all slices, those in time counting 0
+  std::uint64_t messages_sent{0};      // requests and frees the cars published
+  std::uint64_t messages_received{0};  // /vtl/response messages, other cars' included
+};
+
 class Sha256;
 
 // Where a run's trajectory samples and events go when they are not kept in RunRecord's vectors:
@@ -137,6 +154,8 @@ struct RunRecord {
   struct LinkCounters {
     std::uint64_t sent{0}, delivered{0}, lost{0};
   } v2i;
+  // A real-time run only (v2i.link: realtime): its pacing and its traffic through the broker.
+  std::optional<RealTimeMetrics> realtime;
   // The cars' compute boards (those that have one): per-node and platform metrics, and the
   // Chrome trace of their jobs (empty when no board records one).
   std::vector<BoardReport> boards;

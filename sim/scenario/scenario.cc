@@ -79,8 +79,12 @@ void ObstacleConfig::Validate() const {
 }
 
 void V2IConfig::Validate() const {
-  Require(link == "embedded" || link == "mqtt",
-          "link must be 'embedded' or 'mqtt', got '" + link + "'");
+  Require(link == "embedded" || link == "mqtt" || link == "realtime",
+          "link must be 'embedded', 'mqtt' or 'realtime', got '" + link + "'");
+  Require(link != "realtime" || !mqtt.broker.empty(),
+          "link 'realtime' needs mqtt.broker, the HOST:PORT of the broker its traffic-light "
+          "server listens on (autonomsim run --realtime --broker HOST:PORT): a real-time run "
+          "starts no broker or server of its own");
   Require(latency >= kZeroTime, "latency_s must be >= 0");
   Require(jitter >= kZeroTime, "jitter_s must be >= 0");
   Require(loss >= 0.0 && loss < 1.0, "loss must be in [0, 1), got " + Num(loss));
@@ -101,13 +105,14 @@ std::string ExpectClause::kind() const {
   if (no_gridlock) return "no_gridlock";
   if (max_wait) return "max_wait";
   if (min_throughput) return "min_throughput";
+  if (recovers_within) return "recovers_within";
   return "min_obstacle_gap";
 }
 
 const ExpectArgs& ExpectClause::args() const {
   for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
                            &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand,
-                           &no_gridlock, &max_wait, &min_throughput}) {
+                           &no_gridlock, &max_wait, &min_throughput, &recovers_within}) {
     if (args->has_value()) return **args;
   }
   throw std::logic_error("ExpectClause::args on an empty clause");
@@ -118,7 +123,8 @@ void ExpectClause::Validate() const {
                     no_entry_without_grant.has_value() + completes.has_value() +
                     max_lateral_error.has_value() + min_obstacle_gap.has_value() +
                     node_rate.has_value() + cpu_demand.has_value() + no_gridlock.has_value() +
-                    max_wait.has_value() + min_throughput.has_value();
+                    max_wait.has_value() + min_throughput.has_value() +
+                    recovers_within.has_value();
   Require(count == 1,
           "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
           "got " +
@@ -129,7 +135,8 @@ void ExpectClause::Validate() const {
     Require(!present, "'" + k + "' takes no key '" + key + "'");
   };
   forbid((k == "intersection_mutex" || k == "min_throughput") && a.car.has_value(), "car");
-  forbid(k != "no_gridlock" && k != "max_wait" && a.max_s.has_value(), "max_s");
+  forbid(k != "no_gridlock" && k != "max_wait" && k != "recovers_within" && a.max_s.has_value(),
+         "max_s");
   forbid(k != "max_wait" && k != "min_throughput" && a.intersection.has_value(), "intersection");
   forbid(k != "min_throughput" && a.per_minute.has_value(), "per_minute");
   forbid(k != "completes" && a.laps.has_value(), "laps");
@@ -162,12 +169,103 @@ void ExpectClause::Validate() const {
   }
   if (k == "no_gridlock") Require(!a.max_s || *a.max_s > 0.0, "max_s must be > 0");
   if (k == "max_wait") Require(a.max_s.has_value() && *a.max_s > 0.0, "max_wait needs max_s > 0");
+  if (k == "recovers_within") {
+    Require(a.max_s.has_value() && *a.max_s > 0.0, "recovers_within needs max_s > 0");
+  }
   if (k == "min_throughput") {
     Require(a.per_minute.has_value() && *a.per_minute >= 0.0,
             "min_throughput needs per_minute >= 0");
   }
   Require(!a.intersection || (*a.intersection >= 0 && *a.intersection <= 9),
           "intersection must be an id 0..9");
+}
+
+namespace {
+// The clause's entries as Describe lists them (read only: the visitors do not write).
+template <class Visit>
+void ForEachFaultKind(const FaultClause& clause, Visit visit) {
+  auto each = [&](const char* key, const std::optional<FaultArgs>& args) { visit(key, args); };
+  const_cast<FaultClause&>(clause).Describe(each);
+}
+}  // namespace
+
+std::string FaultClause::kind() const {
+  std::string found;
+  ForEachFaultKind(*this, [&](const char* key, const std::optional<FaultArgs>& args) {
+    if (found.empty() && args.has_value()) found = key;
+  });
+  if (found.empty()) throw std::logic_error("FaultClause::kind on an empty clause");
+  return found;
+}
+
+const FaultArgs& FaultClause::args() const {
+  const FaultArgs* found = nullptr;
+  ForEachFaultKind(*this, [&](const char*, const std::optional<FaultArgs>& args) {
+    if (found == nullptr && args.has_value()) found = &*args;
+  });
+  if (found == nullptr) throw std::logic_error("FaultClause::args on an empty clause");
+  return *found;
+}
+
+void FaultClause::Validate() const {
+  int count = 0;
+  ForEachFaultKind(*this, [&](const char*, const std::optional<FaultArgs>& args) {
+    count += args.has_value();
+  });
+  Require(count == 1,
+          "a faults entry names exactly one fault, e.g. '- car_stall: {car: 1, at_s: 20}'; got " +
+              std::to_string(count));
+  const std::string k = kind();
+  const FaultArgs& a = args();
+  auto forbid = [&](bool present, const char* key) {
+    Require(!present, "'" + k + "' takes no key '" + key + "'");
+  };
+  const bool on_link = k == "v2i_partition" || k == "v2i_loss_burst";
+  const bool fleet_wide = k == "server_restart" || k == "broker_outage";
+  const bool on_node = k == "node_crash" || k == "node_hang";
+  const bool on_camera = k == "camera_freeze" || k == "camera_blackout";
+  forbid(fleet_wide && a.car.has_value(), "car");
+  forbid(k == "node_crash" && a.for_s.has_value(),
+         "for_s' (a crashed node stays down; node_hang has for_s");
+  forbid(k == "localization_jump" && a.for_s.has_value(), "for_s' (a jump is instantaneous");
+  forbid(k != "v2i_partition" && a.direction.has_value(), "direction");
+  forbid(k != "v2i_loss_burst" && a.loss.has_value(), "loss");
+  forbid(!on_node && a.node.has_value(), "node");
+  forbid(!on_camera && a.camera.has_value(), "camera");
+  forbid(k != "imu_bias_step" && a.gyro_bias_rad_per_s.has_value(), "gyro_bias_rad_per_s");
+  forbid(k != "localization_jump" && a.dx_m.has_value(), "dx_m");
+  forbid(k != "localization_jump" && a.dy_m.has_value(), "dy_m");
+  forbid(k != "localization_jump" && a.dyaw_deg.has_value(), "dyaw_deg");
+  Require(std::isfinite(a.at_s) && a.at_s >= 0.0, "at_s must be >= 0, got " + Num(a.at_s));
+  Require(!a.for_s || (std::isfinite(*a.for_s) && *a.for_s > 0.0),
+          "for_s must be > 0 (leave it out for a fault that lasts to the end of the run)");
+  if (!on_link && !fleet_wide) Require(a.car.has_value(), k + " needs car");
+  if (on_node) Require(a.node.has_value() && !a.node->empty(), k + " needs node");
+  if (a.direction) {
+    Require(*a.direction == "up" || *a.direction == "down" || *a.direction == "both",
+            "direction must be 'up' (car to server), 'down' or 'both', got '" + *a.direction +
+                "'");
+  }
+  if (k == "v2i_loss_burst") {
+    Require(a.loss.has_value() && *a.loss > 0.0 && *a.loss <= 1.0,
+            "v2i_loss_burst needs loss in (0, 1]");
+  }
+  if (a.camera) {
+    Require(*a.camera == "color" || *a.camera == "depth",
+            "camera must be 'color' or 'depth', got '" + *a.camera + "'");
+  }
+  if (k == "imu_bias_step") {
+    Require(a.gyro_bias_rad_per_s.has_value() && std::isfinite(*a.gyro_bias_rad_per_s) &&
+                *a.gyro_bias_rad_per_s != 0.0,
+            "imu_bias_step needs gyro_bias_rad_per_s, finite and not 0");
+  }
+  if (k == "localization_jump") {
+    Require(a.dx_m || a.dy_m || a.dyaw_deg,
+            "localization_jump needs at least one of dx_m, dy_m, dyaw_deg");
+    for (const auto& v : {a.dx_m, a.dy_m, a.dyaw_deg}) {
+      Require(!v || std::isfinite(*v), "the jump must be finite");
+    }
+  }
 }
 
 void Scenario::Validate() const {
@@ -389,6 +487,38 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                  Num(ToSeconds(scenario.duration)) +
                  " s: the run ends before it can be judged; lower within_s, raise duration_s, "
                  "or drop the expectation (e.g. --set 'expect=[]')");
+    }
+  }
+
+  for (std::size_t i = 0; i < scenario.faults.size(); ++i) {
+    const std::string kind = scenario.faults[i].kind();
+    const FaultArgs& args = scenario.faults[i].args();
+    if (args.car && car_ids.count(*args.car) == 0) {
+      FailAt(root, source, {"faults", i, kind, "car"}, "no car with id " + std::to_string(*args.car));
+    }
+    if (args.at_s >= ToSeconds(scenario.duration)) {
+      FailAt(root, source, {"faults", i, kind, "at_s"},
+             "at_s " + Num(args.at_s) + " s is not before the run's end (duration_s " +
+                 Num(ToSeconds(scenario.duration)) + " s): the fault would never strike");
+    }
+    if (scenario.v2i.link == "realtime" &&
+        (kind.starts_with("v2i_") || kind == "server_restart" || kind == "broker_outage")) {
+      FailAt(root, source, {"faults", i, kind},
+             kind + " acts on the modeled V2I link and the server in the run; with v2i.link: "
+                    "realtime (run --realtime) both are real and outside the run");
+    }
+    const CarConfig* car = args.car ? scenario.FindCar(*args.car) : nullptr;
+    const bool needs_stack = kind == "localization_jump" || kind == "imu_bias_step";
+    const bool needs_board = args.node || kind.starts_with("camera_");
+    if (car && needs_stack && !car->drives_by_stack()) {
+      FailAt(root, source, {"faults", i, kind, "car"},
+             "car " + std::to_string(*args.car) +
+                 " does not drive by its stack (driver: oracle drives on ground truth), so "
+                 "nothing reads its localization or IMU");
+    }
+    if (car && needs_board && !car->has_board()) {
+      FailAt(root, source, {"faults", i, kind, "car"},
+             "car " + std::to_string(*args.car) + " runs no nodes (perception.enabled is false)");
     }
   }
 

@@ -112,11 +112,16 @@ struct V2IConfig {
   // "embedded": the server runs in process. "mqtt": the cars' messages go through a real
   // mosquitto broker to a `tlserver --sim-clock` process in lock-step (sim/v2i/mqtt_endpoint.h);
   // the run's result is the same. The modeled latency, jitter and loss apply to both.
+  // "realtime": the run is paced to the wall clock and the cars speak the lab's plain protocol
+  // through the broker mqtt.broker to a server outside the run (the lab's vtl.py, or `tlserver`
+  // without --sim-clock), possibly beside real cars (sim/v2i/realtime_link.h); the network is
+  // real, so the modeled latency, jitter and loss do not apply, and the result is not
+  // reproducible bit for bit.
   std::string link{"embedded"};
   Duration latency{std::chrono::milliseconds(20)};  // assumed: one-way WLAN + broker delay
   Duration jitter{std::chrono::milliseconds(5)};    // assumed: uniform extra delay in [0, jitter]
   double loss{0.0};                                 // probability that one message is lost
-  MqttLinkConfig mqtt;                              // link: mqtt only
+  MqttLinkConfig mqtt;                              // link: mqtt and realtime only
 
   template <class V>
   void Describe(V& v) {
@@ -151,7 +156,8 @@ struct ExpectArgs {
   std::optional<double> max_hz;
   std::optional<double> min_percent;  // cpu_demand: bounds on the board's CPU demand
   std::optional<double> max_percent;  //   (% of one core, summed over its nodes)
-  std::optional<double> max_s;        // no_gridlock: longest standstill; max_wait: longest wait
+  std::optional<double> max_s;        // no_gridlock: longest standstill; max_wait: longest wait;
+                                      // recovers_within: the bound after a fault ends
   std::optional<int> intersection;    // max_wait, min_throughput: the one it is about (default all)
   std::optional<double> per_minute;   // min_throughput: least crossings per minute
 
@@ -189,6 +195,8 @@ struct ExpectClause {
   std::optional<ExpectArgs> no_gridlock;
   std::optional<ExpectArgs> max_wait;        // {car, intersection, max_s}: each wait at a stop zone
   std::optional<ExpectArgs> min_throughput;  // {intersection, per_minute}: crossings per minute
+  // {car, max_s}: after each fault ends, every car moves again within max_s (expectations.h)
+  std::optional<ExpectArgs> recovers_within;
 
   template <class V>
   void Describe(V& v) {
@@ -203,10 +211,77 @@ struct ExpectClause {
     v("no_gridlock", no_gridlock);
     v("max_wait", max_wait);
     v("min_throughput", min_throughput);
+    v("recovers_within", recovers_within);
   }
   void Validate() const;
   std::string kind() const;
   const ExpectArgs& args() const;
+};
+
+// Arguments a fault may take; which ones each kind accepts is checked in FaultClause. Every fault
+// starts at at_s; for_s is how long it lasts (absent: to the end of the run, except where
+// FaultClause says otherwise). sim/loop/faults.h says what each kind does.
+struct FaultArgs {
+  double at_s{0.0};
+  std::optional<double> for_s;
+  std::optional<int> car;                 // the car it strikes (v2i_*: default every car)
+  std::optional<std::string> direction;   // v2i_partition: "up" (car → server), "down", "both"
+  std::optional<double> loss;             // v2i_loss_burst: probability a message is lost
+  std::optional<std::string> node;        // node_crash, node_hang: a node on the car's board
+  std::optional<std::string> camera;      // camera_*: "color" (default) or "depth"
+  std::optional<double> gyro_bias_rad_per_s;  // imu_bias_step: added to the gyro's z bias
+  std::optional<double> dx_m;             // localization_jump: the estimate's jump, map frame
+  std::optional<double> dy_m;
+  std::optional<double> dyaw_deg;
+
+  template <class V>
+  void Describe(V& v) {
+    v("at_s", at_s);
+    v("for_s", for_s);
+    v("car", car);
+    v("direction", direction);
+    v("loss", loss);
+    v("node", node);
+    v("camera", camera);
+    v("gyro_bias_rad_per_s", gyro_bias_rad_per_s);
+    v("dx_m", dx_m);
+    v("dy_m", dy_m);
+    v("dyaw_deg", dyaw_deg);
+  }
+  void Validate() const {}
+};
+
+// One `faults:` entry: exactly one of these keys, e.g. `- car_stall: {car: 1, at_s: 20}`.
+struct FaultClause {
+  std::optional<FaultArgs> v2i_partition;
+  std::optional<FaultArgs> v2i_loss_burst;
+  std::optional<FaultArgs> server_restart;
+  std::optional<FaultArgs> broker_outage;
+  std::optional<FaultArgs> car_stall;
+  std::optional<FaultArgs> node_crash;
+  std::optional<FaultArgs> node_hang;
+  std::optional<FaultArgs> camera_freeze;
+  std::optional<FaultArgs> camera_blackout;
+  std::optional<FaultArgs> imu_bias_step;
+  std::optional<FaultArgs> localization_jump;
+
+  template <class V>
+  void Describe(V& v) {
+    v("v2i_partition", v2i_partition);
+    v("v2i_loss_burst", v2i_loss_burst);
+    v("server_restart", server_restart);
+    v("broker_outage", broker_outage);
+    v("car_stall", car_stall);
+    v("node_crash", node_crash);
+    v("node_hang", node_hang);
+    v("camera_freeze", camera_freeze);
+    v("camera_blackout", camera_blackout);
+    v("imu_bias_step", imu_bias_step);
+    v("localization_jump", localization_jump);
+  }
+  void Validate() const;
+  std::string kind() const;
+  const FaultArgs& args() const;
 };
 
 struct Scenario {
@@ -230,6 +305,7 @@ struct Scenario {
   std::vector<CarConfig> cars;
   std::vector<ObstacleConfig> obstacles;
   std::vector<ExpectClause> expect;
+  std::vector<FaultClause> faults;  // in any order; sim/loop/faults.h
   OutputConfig output;
   vehicle::SceneAppearance appearance;  // how cars and obstacles look to the cameras
 
@@ -247,6 +323,7 @@ struct Scenario {
     v("cars", cars);
     v("obstacles", obstacles);
     v("expect", expect);
+    v("faults", faults);
     v("output", output);
     v("appearance", appearance);
   }

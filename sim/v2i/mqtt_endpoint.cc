@@ -128,7 +128,10 @@ MqttTrafficLightEndpoint::MqttTrafficLightEndpoint(std::unique_ptr<MqttClient> c
                                                    const world::TrafficLightServerParams& params,
                                                    std::vector<int> intersection_ids,
                                                    MqttEndpointOptions options)
-    : client_(std::move(client)), options_(std::move(options)) {
+    : client_(std::move(client)),
+      options_(std::move(options)),
+      params_(params),
+      intersection_ids_(std::move(intersection_ids)) {
   if (!IsValidEpoch(options_.epoch)) {
     throw std::invalid_argument("MqttTrafficLightEndpoint: invalid epoch '" + options_.epoch + "'");
   }
@@ -146,9 +149,20 @@ MqttTrafficLightEndpoint::MqttTrafficLightEndpoint(std::unique_ptr<MqttClient> c
                       " within " + Ms(options_.timeout));
     }
   }
-  SimReset reset{options_.epoch, params, std::move(intersection_ids)};
-  MqttMessage message{.topic = std::string(kSimResetTopic), .payload = EncodeReset(reset)};
-  Exchange(message);
+  Reset();
+}
+
+void MqttTrafficLightEndpoint::Reset() {
+  const SimReset reset{options_.epoch, params_, intersection_ids_};
+  Exchange(MqttMessage{.topic = std::string(kSimResetTopic), .payload = EncodeReset(reset)});
+}
+
+void MqttTrafficLightEndpoint::Restart() {
+  before_restarts_ = counters();
+  counters_ = {};
+  options_.epoch = NewEpoch();
+  seq_ = 0;
+  Reset();
 }
 
 MqttMessage MqttTrafficLightEndpoint::Tagged(std::string_view topic, std::string payload,
@@ -313,6 +327,7 @@ class PrivateMqttEndpoint final : public TrafficLightEndpoint {
     return endpoint_->OnFree(now, free);
   }
   std::vector<world::Response> OnTick(Time now) override { return endpoint_->OnTick(now); }
+  void Restart() override { endpoint_->Restart(); }
   std::optional<Time> NextDeadline() const override { return endpoint_->NextDeadline(); }
   std::optional<int> Holder(int intersection) const override {
     return endpoint_->Holder(intersection);

@@ -48,9 +48,13 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
   std::vector<world::Response> OnRequest(Time now, const world::Request& request) override;
   std::vector<world::Response> OnFree(Time now, const world::Free& free) override;
   std::vector<world::Response> OnTick(Time now) override;
+  // Resets the tlserver under a new epoch (a fresh server); the counters go on.
+  void Restart() override;
   std::optional<Time> NextDeadline() const override { return deadline_; }
   std::optional<int> Holder(int intersection) const override;
-  world::TrafficLightServer::Counters counters() const override { return counters_; }
+  world::TrafficLightServer::Counters counters() const override {
+    return Sum(before_restarts_, counters_);
+  }
   std::vector<world::ServerRecord> TakeRecords() override;
 
   struct Stats {
@@ -65,9 +69,13 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
  private:
   std::vector<world::Response> Exchange(const MqttMessage& message);
   MqttMessage Tagged(std::string_view topic, std::string payload, Time now);
+  void Reset();
 
   std::unique_ptr<MqttClient> client_;
   MqttEndpointOptions options_;
+  world::TrafficLightServerParams params_;
+  std::vector<int> intersection_ids_;
+  world::TrafficLightServer::Counters before_restarts_;
   std::uint64_t seq_{0};
   std::optional<Time> deadline_;
   std::map<int, std::optional<int>> holders_;

@@ -20,6 +20,31 @@ TrafficLightNode::TrafficLightNode(Kernel* kernel, const world::TrafficLightServ
           std::make_unique<EmbeddedTrafficLightEndpoint>(params, std::move(intersection_ids)),
           std::move(sink)) {}
 
+world::TrafficLightServer::Counters Sum(const world::TrafficLightServer::Counters& a,
+                                        const world::TrafficLightServer::Counters& b) {
+  return {.requests = a.requests + b.requests,
+          .grants = a.grants + b.grants,
+          .denials = a.denials + b.denials,
+          .frees = a.frees + b.frees,
+          .lease_expiries = a.lease_expiries + b.lease_expiries,
+          .unknown_intersection = a.unknown_intersection + b.unknown_intersection,
+          .queue_drops = a.queue_drops + b.queue_drops};
+}
+
+void EmbeddedTrafficLightEndpoint::Restart() {
+  before_restarts_ = counters();
+  server_ = world::TrafficLightServer(server_.params(), intersection_ids_);
+}
+
+world::TrafficLightServer::Counters EmbeddedTrafficLightEndpoint::counters() const {
+  return Sum(before_restarts_, server_.counters());
+}
+
+void TrafficLightNode::Restart() {
+  endpoint_->Restart();
+  RescheduleTick();  // the new server has no lease running
+}
+
 void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message) {
   const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
   if (!decoded) {

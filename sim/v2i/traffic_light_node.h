@@ -26,6 +26,9 @@ class TrafficLightEndpoint {
   virtual std::vector<world::Response> OnRequest(Time now, const world::Request& request) = 0;
   virtual std::vector<world::Response> OnFree(Time now, const world::Free& free) = 0;
   virtual std::vector<world::Response> OnTick(Time now) = 0;
+  // The server restarts (a fault): every holder, queue and lease is forgotten, as the lab's server
+  // forgets them (vtl.py keeps its slots in memory only); the counters go on.
+  virtual void Restart() = 0;
   // The server's state after the last call.
   virtual std::optional<Time> NextDeadline() const = 0;
   virtual std::optional<int> Holder(int intersection) const = 0;
@@ -38,7 +41,7 @@ class EmbeddedTrafficLightEndpoint final : public TrafficLightEndpoint {
  public:
   EmbeddedTrafficLightEndpoint(const world::TrafficLightServerParams& params,
                                std::vector<int> intersection_ids)
-      : server_(params, std::move(intersection_ids)) {}
+      : server_(params, intersection_ids), intersection_ids_(std::move(intersection_ids)) {}
 
   std::vector<world::Response> OnRequest(Time now, const world::Request& request) override {
     return server_.OnRequest(now, request);
@@ -47,18 +50,25 @@ class EmbeddedTrafficLightEndpoint final : public TrafficLightEndpoint {
     return server_.OnFree(now, free);
   }
   std::vector<world::Response> OnTick(Time now) override { return server_.OnTick(now); }
+  void Restart() override;
   std::optional<Time> NextDeadline() const override { return server_.NextDeadline(); }
   std::optional<int> Holder(int intersection) const override {
     return server_.Holder(intersection);
   }
-  world::TrafficLightServer::Counters counters() const override { return server_.counters(); }
+  world::TrafficLightServer::Counters counters() const override;
   std::vector<world::ServerRecord> TakeRecords() override { return server_.TakeRecords(); }
 
   const world::TrafficLightServer& server() const { return server_; }
 
  private:
   world::TrafficLightServer server_;
+  std::vector<int> intersection_ids_;
+  world::TrafficLightServer::Counters before_restarts_;  // what the servers before this one did
 };
+
+// a + b, field by field (counters of a server and of its restarted successor).
+world::TrafficLightServer::Counters Sum(const world::TrafficLightServer::Counters& a,
+                                        const world::TrafficLightServer::Counters& b);
 
 class TrafficLightNode {
  public:
@@ -70,6 +80,8 @@ class TrafficLightNode {
                    std::vector<int> intersection_ids, EventSink sink);
 
   void set_link(V2ILink* link) { link_ = link; }
+  // A server_restart fault: the server forgets its state now (TrafficLightEndpoint::Restart).
+  void Restart();
   // A message from `from_car` (as the link saw it) arrives at the server.
   void OnMessage(int from_car, const world::V2IMessage& message);
 

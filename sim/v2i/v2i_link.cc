@@ -35,16 +35,39 @@ void EmbeddedV2ILink::Broadcast(const world::V2IMessage& message) {
   }
 }
 
+int EmbeddedV2ILink::AddFault(V2ILinkFault fault) {
+  faults_.emplace_back(next_fault_, std::move(fault));
+  return next_fault_++;
+}
+
+void EmbeddedV2ILink::RemoveFault(int handle) {
+  std::erase_if(faults_, [handle](const auto& f) { return f.first == handle; });
+}
+
+const V2ILinkFault* EmbeddedV2ILink::FaultLosing(int car_id, bool to_server, double u) const {
+  for (const auto& [handle, f] : faults_) {
+    if (f.car && *f.car != car_id) continue;
+    if (!(to_server ? f.up : f.down)) continue;
+    if (u < f.loss) return &f;
+  }
+  return nullptr;
+}
+
+void EmbeddedV2ILink::Lose(int car_id, const world::V2IMessage& message, const std::string& cause) {
+  ++lost_;
+  if (on_lost_) on_lost_(car_id, message, cause);
+}
+
 void EmbeddedV2ILink::Deliver(Path* path, int car_id, const world::V2IMessage& message,
                               bool to_server) {
   ++sent_;
-  // Draw both numbers every time, so that a change of `loss` does not shift the delays.
-  const bool lost = path->rng.Bernoulli(config_.loss);
+  // Draw both numbers every time, so that a change of `loss` (or a fault) does not shift the
+  // delays.
+  const double u = path->rng.Uniform01();
   const double jitter_fraction = path->rng.Uniform01();
-  if (lost) {
-    ++lost_;
-    if (on_lost_) on_lost_(car_id, message);
-    return;
+  if (u < config_.loss) return Lose(car_id, message, "");
+  if (const V2ILinkFault* fault = FaultLosing(car_id, to_server, u)) {
+    return Lose(car_id, message, fault->cause);
   }
   const Duration jitter{
       static_cast<std::int64_t>(jitter_fraction * static_cast<double>(config_.jitter.count()))};
@@ -53,6 +76,11 @@ void EmbeddedV2ILink::Deliver(Path* path, int car_id, const world::V2IMessage& m
   kernel_->ScheduleAt(
       at,
       [this, car_id, message, to_server] {
+        // a cut path (loss 1) loses what is in flight on it too
+        if (const V2ILinkFault* fault = FaultLosing(car_id, to_server, 1.0 - 0x1.0p-53)) {
+          return Lose(car_id, message, fault->cause);
+        }
+        if (to_server && server_down_) return Lose(car_id, message, "server down");
         ++delivered_;
         if (to_server) {
           to_server_(car_id, message);

@@ -121,6 +121,19 @@ TEST(CliTest, CheckPassesTheShippedScenariosAndWritesJunit) {
   EXPECT_THAT(xml, HasSubstr("<property name=\"seed\" value=\"42\"/>"));
 }
 
+// The fault scenarios (README "Faults") each pass what they expect.
+TEST(CliTest, CheckPassesTheShippedFaultScenarios) {
+  const Result r = Cli("check scenarios/faults/ --jobs 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  int scenarios = 0;
+  for (const auto& entry : fs::directory_iterator("scenarios/faults")) {
+    if (entry.path().extension() != ".yaml") continue;
+    ++scenarios;
+    EXPECT_THAT(r.output, HasSubstr("PASS  " + entry.path().string())) << r.output;
+  }
+  EXPECT_GE(scenarios, 5);
+}
+
 // Three scenarios (one driven by the stack on a board) are enough to show that --jobs changes
 // nothing; every shipped scenario is checked above.
 TEST(CliTest, CheckGivesTheSameResultsWhateverTheNumberOfJobs) {

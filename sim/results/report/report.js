@@ -11,7 +11,7 @@
 //   obstacles: [{name, x_m, y_m, yaw_rad, length_m, width_m, appear_s, disappear_s}],
 //   cars: [{id, colour, length_m, width_m, route, driver, has_board, preset, laps, ...}],
 //   trajectory: {"<car id>": {t, x, y, yaw, speed, steering, throttle, curvature, lateral_error}},
-//   events: [{t, type, car, intersection, other_car, obstacle, granted, lap, detail}],
+//   events: [{t, type, car, intersection, other_car, obstacle, granted, lap, fault, detail}],
 //   expectations: [{name, passed, detail, at_s, car}],
 //   boards: {"car0": {cores, load_bin_s, cpu_load_percent, e2e_topic, e2e_mean_ms, e2e_max_ms}},
 //   snapshots: [{t, car, reasons, lane, color, depth}]
@@ -90,6 +90,8 @@
     lap: { colour: "#ffffff", label: "lap", size: 5 },
     behavior: { colour: "#db61a2", label: "behaviour", size: 3 },
     parked: { colour: "#bbbbbb", label: "parked", size: 4 },
+    fault_begin: { colour: "#f0883e", label: "fault (bar: while it lasts)", size: 5 },
+    fault_end: { colour: "#f0883e", label: "fault ends", size: 3 },
   };
   const styleOf = (type) => EVENT_STYLE[type] || { colour: "#cccccc", label: type, size: 3 };
 
@@ -101,6 +103,7 @@
     if (e.other_car !== undefined) what += " with car " + e.other_car;
     if (e.obstacle) what += " with obstacle '" + e.obstacle + "'";
     if (e.lap) what += " " + e.lap;
+    if (e.fault) what += " " + e.fault;
     if (e.detail) what += ": " + e.detail;
     return "t = " + e.t.toFixed(3) + " s  " + who + "  " + what;
   }
@@ -133,6 +136,22 @@
       }
     }
     for (const w of openWait.values()) waitBars.push({ ...w, to: T_END });
+  }
+  // The faults, from their fault_begin to their fault_end (or the run's end): a bar on the struck
+  // car's row, or on the "fleet faults" row for the server, the broker and every car's link.
+  const FLEET = "fleet";
+  const faultBars = []; // {row, fault, from, to}
+  {
+    const open = [];
+    for (const e of data.events) {
+      const row = e.car !== undefined ? e.car : FLEET;
+      if (e.type === "fault_begin") open.push({ row, fault: e.fault, from: e.t, to: T_END });
+      if (e.type === "fault_end") {
+        const i = open.findIndex((b) => b.row === row && b.fault === e.fault);
+        if (i >= 0) faultBars.push({ ...open.splice(i, 1)[0], to: e.t });
+      }
+    }
+    faultBars.push(...open);
   }
   function intersectionAt(id, t) {
     const s = intersectionStates.get(id);
@@ -361,6 +380,16 @@
         el("td", {}, String(laps))));
     }
     status.append(table);
+    const faultsNow = faultBars.filter((b) => b.from <= t && t < b.to);
+    if (faultsNow.length) {
+      status.append(el("h3", {}, "Faults now"));
+      const fl = el("ul", { class: "events" });
+      for (const b of faultsNow) {
+        fl.append(el("li", {}, (b.row === FLEET ? "fleet" : "car " + b.row) + ": " + b.fault +
+          " (since " + b.from.toFixed(1) + " s, " + (b.to >= T_END ? "to the end" : "until " + b.to.toFixed(1) + " s") + ")"));
+      }
+      status.append(fl);
+    }
     status.append(el("h3", {}, "Intersections"));
     const xt = el("table", {}, el("tr", {}, el("th", {}, "intersection"), el("th", {}, "held by"), el("th", {}, "queued")));
     for (const x of data.track.intersections) {
@@ -387,7 +416,8 @@
   const tctx = tl.getContext("2d");
   const TL = { left: 96, right: 16, rowH: 26, top: 8, axis: 26 };
   const tlRows = cars.map((c) => ({ label: "car " + c.id, car: c.id }));
-  tlRows.push({ label: "expectations", car: null });
+  if (faultBars.some((b) => b.row === FLEET)) tlRows.push({ label: "fleet faults", car: FLEET });
+  tlRows.push({ label: "expectations", car: null }); // always the last row
   let tlMarks = []; // {x, y, text} for the tooltip
   function sizeTimeline() {
     const w = tl.parentElement.clientWidth;
@@ -406,7 +436,7 @@
     tlMarks = [];
     tlRows.forEach((row, r) => {
       const y = TL.top + r * TL.rowH + TL.rowH / 2;
-      tctx.fillStyle = row.car === null ? "#c9d1d9" : colourOf(row.car);
+      tctx.fillStyle = row.car === null || row.car === FLEET ? "#c9d1d9" : colourOf(row.car);
       tctx.fillText(row.label, 8, y + 4);
       tctx.strokeStyle = "#3a3e46";
       tctx.beginPath(); tctx.moveTo(TL.left, y); tctx.lineTo(w - TL.right, y); tctx.stroke();
@@ -419,8 +449,22 @@
       tctx.fillStyle = "rgba(227,179,65,0.35)";
       tctx.fillRect(tlX(b.from), y - 5, Math.max(1, tlX(b.to) - tlX(b.from)), 10);
     }
+    const faultLabels = new Map(); // "row@from" -> {r, x, names}: faults that begin together
+    for (const b of faultBars) {
+      const r = rowOf(b.row);
+      if (r < 0) continue;
+      const y = TL.top + r * TL.rowH + TL.rowH / 2;
+      const x0 = tlX(b.from), x1 = Math.max(tlX(b.to), x0 + 2);
+      tctx.fillStyle = "rgba(240,136,62,0.30)";
+      tctx.fillRect(x0, y - 10, x1 - x0, 20);
+      const key = b.row + "@" + b.from;
+      if (!faultLabels.has(key)) faultLabels.set(key, { y, x: x0, names: [] });
+      faultLabels.get(key).names.push(b.fault);
+    }
+    tctx.fillStyle = "#f0883e";
+    for (const l of faultLabels.values()) tctx.fillText(l.names.join(" + "), l.x + 3, l.y - 1);
     for (const e of data.events) {
-      const r = rowOf(e.car);
+      const r = rowOf(e.car !== undefined ? e.car : e.type.startsWith("fault_") ? FLEET : undefined);
       if (r < 0) continue;
       const st = styleOf(e.type);
       const x = tlX(e.t), y = TL.top + r * TL.rowH + TL.rowH / 2;

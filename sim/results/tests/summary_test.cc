@@ -175,6 +175,23 @@ TEST(Summary, EmptyOptionalsAreNullOrLeftOutAndNaNReadsBack) {
   EXPECT_TRUE(std::isnan(back.cars[0].max_wait_s));  // JSON has no NaN: written as null
 }
 
+TEST(Summary, ARealTimeRunsPacingIsUnderRealtimeAndOtherRunsHaveNoSuchKey) {
+  EXPECT_FALSE(SummaryJson(HandMadeSummary()).contains("realtime"));
+  RunSummary s = HandMadeSummary();
+  s.realtime = RealTimeMetrics{.slice_s = 0.01,
+                               .slices = 6000,
+                               .late_slices = 3,
+                               .pacing_max_lag_s = 0.025,
+                               .pacing_mean_lag_s = 0.5e-5,
+                               .messages_sent = 66,
+                               .messages_received = 62};
+  const nlohmann::json j = SummaryJson(s);
+  EXPECT_EQ(j.at("realtime").dump(),
+            R"({"late_slices":3,"messages_received":62,"messages_sent":66,)"
+            R"("pacing_max_lag_s":0.025,"pacing_mean_lag_s":5e-06,"slice_s":0.01,"slices":6000})");
+  EXPECT_EQ(SummaryJson(ParseSummary(nlohmann::json::parse(j.dump()))), j);
+}
+
 TEST(Summary, AMissingKeyOrAWrongTypeIsAnErrorNamingIt) {
   nlohmann::json j = SummaryJson(HandMadeSummary());
   j["cars"][0].erase("laps");

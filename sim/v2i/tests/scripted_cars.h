@@ -47,7 +47,7 @@ class ScriptedCars {
           node_.OnMessage(car, m);
         },
         [this](int car, const world::V2IMessage& m) { Receive(car, m); },
-        [this](int car, const world::V2IMessage& m) {
+        [this](int car, const world::V2IMessage& m, const std::string&) {
           Note(kernel_.Now(), "lost car" + std::to_string(car) + " " + m.topic + " " + m.payload);
         });
     node_.set_link(link_.get());
