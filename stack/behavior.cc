@@ -16,6 +16,9 @@ void BehaviorParams::Validate() const {
   if (max_retries < 0) throw std::invalid_argument("max_retries must be >= 0");
   if (!(recovery_reset_m >= 0.0)) throw std::invalid_argument("recovery_reset_m must be >= 0");
   if (!(tracking_window_m > 0.0)) throw std::invalid_argument("tracking_window_m must be > 0");
+  if (intersection_free_timeout < kZeroTime) {
+    throw std::invalid_argument("intersection_free_timeout_s must be >= 0 (0: off)");
+  }
   if (!(queue_margin_m >= 0.0 && queue_margin_m <= 5.0)) {
     throw std::invalid_argument("queue_margin_m must be in [0, 5] m");
   }
@@ -92,7 +95,11 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
       state->mode = BehaviorMode::kDrive;  // retry
     }
     if (state->mode != BehaviorMode::kRecovery) {
-      if (!input.intersection_free) {
+      const bool stale = params.intersection_free_timeout > kZeroTime && input.in_stop_zone &&
+                         (!input.intersection_free_stamp ||
+                          input.now - *input.intersection_free_stamp >
+                              params.intersection_free_timeout);
+      if (!input.intersection_free || stale) {
         state->mode = BehaviorMode::kIntersectionWait;
       } else if (input.collision_ahead && !state->plan_failed && params.patient_in_queue &&
                  input.near_intersection) {
@@ -138,6 +145,15 @@ bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
     if (within(i.area)) return true;
     for (const world::Box& zone : i.stop_zones) {
       if (within(zone)) return true;
+    }
+  }
+  return false;
+}
+
+bool InStopZone(std::span<const world::IntersectionSpec> intersections, const world::Vec2& p_map) {
+  for (const world::IntersectionSpec& i : intersections) {
+    for (const world::Box& zone : i.stop_zones) {
+      if (zone.Contains(p_map)) return true;
     }
   }
   return false;

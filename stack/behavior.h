@@ -50,6 +50,12 @@ struct BehaviorParams {
   // retries in about 35 s and failed for good while it waited in line.
   bool patient_in_queue{false};
   double queue_margin_m{1.5};  // assumed: three cars' lengths back from a stop box
+  // Beyond the lab's BT (0: off, the lab's IntersectionFree keeps the last message for ever): in a
+  // stop zone, a permission older than this counts as "not free", so a car whose intersection
+  // client died (a crashed or hung vehicle_communication node) waits at the next stop line
+  // instead of driving on a stale "free" through every intersection; it still clears the one it
+  // is in. Assumed 1 s: ten of the client's 100 ms ticks.
+  Duration intersection_free_timeout{kZeroTime};
 
   template <class V>
   void Describe(V& v) {
@@ -62,6 +68,7 @@ struct BehaviorParams {
     v("tracking_window_m", tracking_window_m);
     v("patient_in_queue", patient_in_queue);
     v("queue_margin_m", queue_margin_m);
+    v("intersection_free_timeout_s", intersection_free_timeout);
   }
   void Validate() const;
 };
@@ -79,12 +86,16 @@ struct BehaviorInput {
   Time now{kZeroTime};
   world::Vec2 p_map{world::Vec2::Zero()};  // the estimated position
   bool intersection_free{true};            // the intersection client's permission
+  // The sensor time of the newest permission (intersection_free_timeout); none before the first.
+  std::optional<Time> intersection_free_stamp;
   bool collision_ahead{false};             // the controller's latest report
   // The newest plan reply since the previous tick: true when it failed; none when no reply came.
   std::optional<bool> plan_failed;
   bool mission_done{false};  // the operator ended the drive (laps done)
   // Whether the estimate is within queue_margin_m of an intersection's boxes (patient_in_queue).
   bool near_intersection{false};
+  // Whether the estimate is in a stop zone (intersection_free_timeout; InStopZone).
+  bool in_stop_zone{false};
 };
 
 struct BehaviorOutput {
@@ -114,5 +125,8 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 // LaneController elsewhere. With margin_m > 0 (beyond the lab's), also within margin_m of a box.
 bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
                    const world::Vec2& p_map, double margin_m = 0.0);
+
+// Whether p_map is in a stop zone of one of the intersections (strict boxes, as the client tests).
+bool InStopZone(std::span<const world::IntersectionSpec> intersections, const world::Vec2& p_map);
 
 }  // namespace autonomsim::stack

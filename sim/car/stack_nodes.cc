@@ -249,6 +249,7 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     stack::BehaviorState behavior;
     std::optional<stack::LocalizationEkfOutput> odom;
     bool intersection_free{true};
+    std::optional<Time> intersection_free_stamp;
     bool collision_ahead{false};
     std::optional<bool> plan_failed;  // the newest /plan reply since the last tick
   };
@@ -257,7 +258,10 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
   cache.KeepLatest(node, topics.odometry, state, &State::odom);
   cache.Keep<IntersectionFree>(
       node, topics.intersection_free,
-      [state](const IntersectionFree& f, Time) { state->intersection_free = f.free; });
+      [state](const IntersectionFree& f, Time stamp) {
+        state->intersection_free = f.free;
+        state->intersection_free_stamp = stamp;
+      });
   cache.Keep<stack::ControllerStatus>(node, topics.status,
                                       [state](const stack::ControllerStatus& s, Time) {
                                         state->collision_ahead = s.collision_ahead;
@@ -275,12 +279,15 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                        .now = now,
                        .p_map = p,
                        .intersection_free = state->intersection_free,
+                       .intersection_free_stamp = state->intersection_free_stamp,
                        .collision_ahead = state->collision_ahead,
                        .plan_failed = state->plan_failed,
                        .mission_done = mission_done && mission_done(),
                        .near_intersection =
                            params.patient_in_queue &&
-                           stack::UseFollowPath(*intersections, p, params.queue_margin_m)};
+                           stack::UseFollowPath(*intersections, p, params.queue_margin_m),
+                       .in_stop_zone = params.intersection_free_timeout > kZeroTime &&
+                                       stack::InStopZone(*intersections, p)};
                    state->plan_failed.reset();
                    stack::BehaviorOutput result =
                        stack::StepBehavior(params, *route, input, &state->behavior);

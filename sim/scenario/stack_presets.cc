@@ -26,6 +26,7 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.planner.start_escape_m", "0.0", "0.3"},
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
     {"stack.behavior.patient_in_queue", "false", "true"},
+    {"stack.behavior.intersection_free_timeout_s", "0", "1.0"},
     {"stack.emergency_stop.enabled", "false", "true"},
     {"stack.lane_controller.collision.horizon_s", "1.0", "2.0"},
     {"stack.follow_path.collision.horizon_s", "1.0", "2.0"},

@@ -71,6 +71,29 @@ TEST(BehaviorTest, WaitsAtTheIntersectionUntilItIsFree) {
   EXPECT_FALSE(out.hold);
 }
 
+TEST(BehaviorTest, AStalePermissionHoldsTheCarInAStopZoneOnlyWithTheTimeout) {
+  // the client's last "free" is 2 s old: its node died
+  BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
+  input.intersection_free = true;
+  input.intersection_free_stamp = FromSeconds(8.0);
+  input.in_stop_zone = true;
+  BehaviorState lab_state;
+  EXPECT_EQ(StepBehavior({}, Straight(10.0), input, &lab_state).mode, BehaviorMode::kDrive);
+  const BehaviorParams safe{.intersection_free_timeout = std::chrono::seconds(1)};
+  BehaviorState safe_state;
+  BehaviorOutput out = StepBehavior(safe, Straight(10.0), input, &safe_state);
+  EXPECT_EQ(out.mode, BehaviorMode::kIntersectionWait);
+  EXPECT_TRUE(out.hold);
+  // outside a stop zone the car drives on (it clears the intersection it is in)
+  input.in_stop_zone = false;
+  BehaviorState outside;
+  EXPECT_EQ(StepBehavior(safe, Straight(10.0), input, &outside).mode, BehaviorMode::kDrive);
+  // a fresh permission lets it go
+  input.in_stop_zone = true;
+  input.intersection_free_stamp = FromSeconds(9.5);
+  EXPECT_EQ(StepBehavior(safe, Straight(10.0), input, &safe_state).mode, BehaviorMode::kDrive);
+}
+
 TEST(BehaviorTest, APatientCarWaitingInLineNearAnIntersectionNeverUsesUpItsRetries) {
   for (const bool patient : {false, true}) {
     const BehaviorParams params{

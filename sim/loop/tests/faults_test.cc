@@ -13,7 +13,6 @@
 #include "sim/core/config.h"
 #include "sim/loop/faults.h"
 #include "sim/loop/simulation.h"
-#include "sim/results/expectations.h"
 #include "sim/scenario/run_record.h"
 
 namespace autonomsim::sim {
@@ -128,6 +127,27 @@ TEST(Faults, ADeadCarHoldingAGrantIsFreedByTheLease) {
   ASSERT_TRUE(granted.has_value());
   EXPECT_DOUBLE_EQ(*granted, ToSeconds(expired[0].t));
   EXPECT_TRUE(EventsOf(record, "fault_end").empty());  // both last to the run's end
+}
+
+TEST(Faults, ACarWhoseV2IClientDiedDrivesOnAStaleFreeUnlessTheBehaviourTimesItOut) {
+  // car 1's vehicle_communication dies at 9 s, after its grant of intersection 0; the bt_navigator
+  // keeps the last "free" it was sent
+  const std::string fault = "[{node_crash: {car: 1, node: vehicle_communication, at_s: 9}}]";
+  const auto ungranted = [](const RunRecord& r) {
+    int n = 0;
+    for (const Event& e : EventsOf(r, "enter", 1)) n += e.granted == false;
+    return n;
+  };
+  const RunRecord lab = RunWithFaults(fault, 60.0, {"stack.preset=lab"});
+  // the lab's behaviour: car 1 drives through intersection 1 on the stale "free"
+  EXPECT_GE(ungranted(lab), 1);
+  const RunRecord fixed = RunWithFaults(
+      fault, 60.0, {"stack.preset=lab", "cars[1].stack.behavior.intersection_free_timeout_s=1"});
+  EXPECT_EQ(ungranted(fixed), 0);
+  EXPECT_TRUE(EventsOf(fixed, "collision").empty());
+  // it was still in its stop zone when the permission went stale: it waits there, granted or not
+  // (a client that cannot renew loses the grant to the lease)
+  EXPECT_TRUE(EventsOf(fixed, "enter", 1).empty());
 }
 
 TEST(Faults, APartitionLosesTheGrantAndTheClientAsksAgain) {
