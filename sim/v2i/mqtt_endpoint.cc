@@ -350,24 +350,8 @@ std::unique_ptr<TrafficLightEndpoint> MakeMqttEndpoint(
   if (config.broker.empty()) {
     return std::make_unique<PrivateMqttEndpoint>(config, params, std::move(intersection_ids));
   }
-  const auto [host, port] = ParseHostPort(config.broker);
-  MqttOptions options;
-  options.host = host;
-  options.port = port;
   const std::string epoch = NewEpoch();
-  options.client_id = "autonomsim-" + epoch;
-  options.username = config.username;
-  if (!config.password_file.empty()) {
-    std::ifstream in(config.password_file);
-    if (!in) throw MqttError("mqtt link: cannot read password_file " + config.password_file);
-    std::getline(in, options.password);
-  }
-  options.cafile = config.cafile;
-  options.certfile = config.certfile;
-  options.keyfile = config.keyfile;
-  // A run's session is of no use to anybody once it has ended.
-  options.session_expiry = std::chrono::minutes(5);
-  options.end_session_on_close = true;
+  const MqttOptions options = GivenBrokerOptions(config, "autonomsim-" + epoch);
   return std::make_unique<MqttTrafficLightEndpoint>(
       MakeMosquittoClient(options), params, std::move(intersection_ids),
       MqttEndpointOptions{

@@ -103,9 +103,8 @@ TEST(RealTimeCliTest, RealtimeWithoutABrokerIsUnusableInput) {
 
 TEST(RealTimeCliTest, ABrokerThatIsNotThereExitsTwoNamingIt) {
   const fs::path dir = testing::Scratch("realtime");
-  auto broker = sim::testing::StartSecureBroker();
-  const std::string address = broker->address();
-  broker->Stop();
+  const sim::testing::RefusingPort nobody;
+  const std::string address = nobody.address();
   const testing::Result r =
       testing::Cli("run scenarios/lab_two_cars.yaml --realtime --broker " + address +
                    " --set v2i.mqtt.timeout_s=1 --out " + (dir / "run").string() + " --quiet");

@@ -5,7 +5,11 @@
 // go, also when a test fails, and die with the test process (sim/mqtt/mqtt_process.h).
 #pragma once
 
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -53,6 +57,34 @@ inline std::string ShippedAcl() {
 }
 
 // A broker with the shipped ACL and AclUsers(), persistent sessions.
+// A loopback port held bound but not listening for the object's life: connecting to it is refused
+// at once, and no other test's broker can take it meanwhile (a stopped broker's port can be reused
+// at once under ctest -j).
+class RefusingPort {
+ public:
+  RefusingPort() : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    if (fd_ < 0) throw std::runtime_error("RefusingPort: socket");
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof address;
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+      ::close(fd_);
+      throw std::runtime_error("RefusingPort: bind");
+    }
+    port_ = ntohs(address.sin_port);
+  }
+  ~RefusingPort() { ::close(fd_); }
+  RefusingPort(const RefusingPort&) = delete;
+  RefusingPort& operator=(const RefusingPort&) = delete;
+  std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+
+ private:
+  int fd_;
+  int port_{0};
+};
+
 inline std::unique_ptr<LocalBroker> StartSecureBroker() {
   return std::make_unique<LocalBroker>(
       LocalBrokerOptions{.users = AclUsers(), .acl = ShippedAcl(), .persistence = true});

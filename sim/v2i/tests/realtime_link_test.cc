@@ -7,11 +7,6 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <fstream>
 
 #include "sim/mqtt/tests/mqtt_fixture.h"
@@ -118,18 +113,10 @@ TEST(RealTimeLinkTest, ABrokerThatCannotBeReachedOrRefusesUsIsAnErrorNamingIt) {
     EXPECT_THAT(e.what(), HasSubstr(broker->address()));
   }
 
-  // nobody listening: a loopback port we hold bound but do not listen on, so that no other test's
-  // broker can take it meanwhile (a stopped broker's port could be reused at once under ctest -j)
-  const int held = ::socket(AF_INET, SOCK_STREAM, 0);
-  ASSERT_GE(held, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::bind(held, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-  socklen_t length = sizeof address;
-  ASSERT_EQ(::getsockname(held, reinterpret_cast<sockaddr*>(&address), &length), 0);
+  // nobody listening
+  const testing::RefusingPort nobody;
   MqttLinkConfig gone = RealTimeConfig(*broker);
-  gone.broker = "127.0.0.1:" + std::to_string(ntohs(address.sin_port));
+  gone.broker = nobody.address();
   gone.timeout = std::chrono::seconds(1);
   try {
     ConnectRealTimeLink(gone, &kernel, {0}, to_car);
@@ -137,7 +124,6 @@ TEST(RealTimeLinkTest, ABrokerThatCannotBeReachedOrRefusesUsIsAnErrorNamingIt) {
   } catch (const MqttError& e) {
     EXPECT_THAT(e.what(), HasSubstr("cannot reach the MQTT broker " + gone.broker));
   }
-  ::close(held);
 }
 
 }  // namespace
