@@ -11,6 +11,7 @@
 #include <mutex>
 #include <set>
 #include <stdexcept>
+#include <thread>
 
 namespace autonomsim::sim {
 
@@ -107,10 +108,21 @@ class MosquittoClient final : public MqttClient {
   }
   // Sends SUBSCRIBE for `filter`; the caller must not hold mu_ (libmosquitto takes its own locks).
   void SendSubscribe(const std::string& filter, int qos);
+  // The network thread: libmosquitto's loop, and reconnecting with the bounded back-off, until
+  // closing_. Ours rather than mosquitto_loop_start's: that thread can miss a disconnect that
+  // arrives while it is reconnecting and then never exits, so mosquitto_loop_stop waits forever
+  // (eclipse-mosquitto/mosquitto#2545, libmosquitto 2.0.11 in Debian 12).
+  void RunNetwork();
 
   MqttOptions options_;
   mosquitto* mosq_{nullptr};
-  bool loop_started_{false};
+  std::thread network_;
+  // Set once, by the destructor; the network thread sends what is queued (our DISCONNECT) and
+  // stops.
+  std::atomic<bool> closing_{false};
+  std::mutex closing_mu_;
+  std::condition_variable closing_cv_;  // wakes the back-off wait when closing_ is set
+  std::chrono::seconds reconnect_delay_{0};  // network thread only
 
   mutable std::mutex mu_;
   std::condition_variable cv_;
@@ -164,9 +176,8 @@ MosquittoClient::MosquittoClient(MqttOptions options) : options_(std::move(optio
               options_.will->payload.data(), options_.will->qos, options_.will->retain, nullptr),
           "MQTT will on " + options_.will->topic);
   }
-  check(mosquitto_reconnect_delay_set(mosq_, static_cast<unsigned>(options_.reconnect_min.count()),
-                                      static_cast<unsigned>(options_.reconnect_max.count()), true),
-        "reconnect delay");
+  // Our network thread calls into libmosquitto while others publish and subscribe.
+  check(mosquitto_threaded_set(mosq_, true), "MQTT threading");
   mosquitto_connect_v5_callback_set(mosq_, &OnConnect);
   mosquitto_disconnect_v5_callback_set(mosq_, &OnDisconnect);
   mosquitto_message_v5_callback_set(mosq_, &OnMessage);
@@ -186,8 +197,39 @@ MosquittoClient::MosquittoClient(MqttOptions options) : options_(std::move(optio
     Log("cannot reach broker " + options_.host + ":" + std::to_string(options_.port) + " yet (" +
         ErrorText(rc) + "), retrying");
   }
-  check(mosquitto_loop_start(mosq_), "starting the MQTT network thread");
-  loop_started_ = true;
+  network_ = std::thread([this] { RunNetwork(); });
+}
+
+void MosquittoClient::RunNetwork() {
+  // select() wakes at once for anything queued (libmosquitto writes to its own socket pair); the
+  // timeout only bounds how late a keep-alive or the closing check can be.
+  constexpr int kLoopTimeoutMs = 100;
+  constexpr auto kCloseGrace = std::chrono::seconds(1);  // to send our DISCONNECT when closing
+  std::optional<std::chrono::steady_clock::time_point> close_by;
+  reconnect_delay_ = options_.reconnect_min;
+  while (true) {
+    const int rc = mosquitto_loop(mosq_, kLoopTimeoutMs, 1);
+    if (closing_) {
+      if (!close_by) close_by = std::chrono::steady_clock::now() + kCloseGrace;
+      if (rc != MOSQ_ERR_SUCCESS || std::chrono::steady_clock::now() > *close_by) return;
+      continue;
+    }
+    if (rc == MOSQ_ERR_SUCCESS) continue;
+    // Not connected (never, or lost): wait, then reconnect without blocking this thread in
+    // connect(); the loop above completes the connection or reports it failed.
+    {
+      std::unique_lock lock(closing_mu_);
+      if (closing_cv_.wait_for(lock, reconnect_delay_, [this] { return closing_.load(); })) {
+        return;
+      }
+    }
+    reconnect_delay_ = std::min(reconnect_delay_ * 2, options_.reconnect_max);
+    const int reconnect = mosquitto_reconnect_async(mosq_);
+    if (reconnect != MOSQ_ERR_SUCCESS) {
+      Log("cannot reach broker " + options_.host + ":" + std::to_string(options_.port) + " (" +
+          ErrorText(reconnect) + "), retrying");
+    }
+  }
 }
 
 MosquittoClient::~MosquittoClient() {
@@ -196,9 +238,14 @@ MosquittoClient::~MosquittoClient() {
   if (options_.end_session_on_close) {
     mosquitto_property_add_int32(&props, MQTT_PROP_SESSION_EXPIRY_INTERVAL, 0);
   }
-  mosquitto_disconnect_v5(mosq_, 0, props);
+  {
+    std::lock_guard lock(closing_mu_);
+    closing_ = true;
+  }
+  closing_cv_.notify_all();
+  mosquitto_disconnect_v5(mosq_, 0, props);  // queued; the network thread sends it
   mosquitto_property_free_all(&props);
-  if (loop_started_) mosquitto_loop_stop(mosq_, false);
+  if (network_.joinable()) network_.join();
   mosquitto_destroy(mosq_);
 }
 
@@ -311,6 +358,7 @@ void MosquittoClient::OnConnect(mosquitto*, void* obj, int rc, int, const mosqui
   {
     std::lock_guard lock(self->mu_);
     self->connected_ = true;
+    self->reconnect_delay_ = self->options_.reconnect_min;  // OnConnect runs on the network thread
     self->pending_subscriptions_.Clear();
     subscriptions = self->subscriptions_;
   }
