@@ -57,5 +57,16 @@ void BM_LaneMasksFast(benchmark::State& state) {
 }
 BENCHMARK(BM_LaneMasksFast)->Unit(benchmark::kMicrosecond);
 
+// The same stage as the fit reads it (what lane_planner hands poly_fit): row sums, no masks.
+void BM_LaneRowSums(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  BirdsEyeRowSums sums;
+  for (auto _ : state) {
+    detector.ComputeRowSums(Frame().image, &sums);
+    benchmark::DoNotOptimize(sums.yellow.data());
+  }
+}
+BENCHMARK(BM_LaneRowSums)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 }  // namespace autonomsim::stack

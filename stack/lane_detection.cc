@@ -87,37 +87,58 @@ void RequireImage(const cv::Mat& bgr) {
               " of type " + Num(bgr.type()));
 }
 
-// Per bird's-eye row: how many pixels are non-zero, and the mean column of those.
-void RowMeans(const cv::Mat& mask, std::vector<double>* rows, std::vector<double>* cols,
-              std::vector<double>* weights, int* total) {
-  rows->clear();
-  cols->clear();
-  weights->clear();
-  *total = 0;
+// Per bird's-eye row: how many pixels are non-zero, and the sum of their columns.
+void SumRows(const cv::Mat& mask, std::array<BirdsEyeRowSums::Row, kLaneImageHeight>* rows) {
   for (int r = 0; r < mask.rows; ++r) {
     const std::uint8_t* p = mask.ptr<std::uint8_t>(r);
-    std::int64_t count = 0;
-    std::int64_t col_sum = 0;
+    BirdsEyeRowSums::Row& row = (*rows)[static_cast<std::size_t>(r)];
+    row = {};
     for (int c = 0; c < mask.cols; c += 8) {
       std::uint64_t word;
       std::memcpy(&word, p + c, sizeof word);
       if (word == 0) continue;
       for (int k = 0; k < 8; ++k) {
         if (p[c + k] != 0) {
-          ++count;
-          col_sum += c + k;
+          ++row.count;
+          row.col_sum += c + k;
         }
       }
     }
-    if (count == 0) continue;
+  }
+}
+
+// The rows holding line pixels: their index, the mean column of those pixels and how many.
+void RowMeans(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums,
+              std::vector<double>* rows, std::vector<double>* cols, std::vector<double>* weights,
+              int* total) {
+  rows->clear();
+  cols->clear();
+  weights->clear();
+  *total = 0;
+  for (int r = 0; r < kLaneImageHeight; ++r) {
+    const BirdsEyeRowSums::Row& row = sums[static_cast<std::size_t>(r)];
+    if (row.count == 0) continue;
     rows->push_back(r);
-    cols->push_back(static_cast<double>(col_sum) / static_cast<double>(count));
-    weights->push_back(static_cast<double>(count));
-    *total += static_cast<int>(count);
+    cols->push_back(static_cast<double>(row.col_sum) / static_cast<double>(row.count));
+    weights->push_back(static_cast<double>(row.count));
+    *total += row.count;
   }
 }
 
 }  // namespace
+
+BirdsEyeRowSums RowSumsOfMasks(const BirdsEyeMasks& masks) {
+  BirdsEyeRowSums sums;
+  for (const cv::Mat* mask : {&masks.yellow, &masks.white}) {
+    Require(mask->type() == CV_8UC1 && mask->cols == kLaneImageWidth &&
+                mask->rows == kLaneImageHeight,
+            "bird's-eye masks must be 640x480 mono8, got " + Num(mask->cols) + "x" +
+                Num(mask->rows) + " of type " + Num(mask->type()));
+  }
+  SumRows(masks.yellow, &sums.yellow);
+  SumRows(masks.white, &sums.white);
+  return sums;
+}
 
 void HsvRange::Validate() const { RequireHsv(*this, "hsv range"); }
 
@@ -523,12 +544,46 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   }
 }
 
+void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums) {
+  RequireImage(bgr);
+  Classify(bgr);
+  *sums = BirdsEyeRowSums{};
+  const std::uint8_t* classes = classes_.data();
+  const std::uint8_t* lut = warp_lut_.data();
+  constexpr int stride = kLaneImageWidth + 2;
+  // ComputeMasks' loop, counting the non-zero outputs where it would write them
+  for (const Tile& tile : tiles_) {
+    if (!AnyLineCell(tile)) continue;
+    for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
+      const std::uint8_t* p = classes + pixel_src_[i];
+      const int c0 = p[0], c1 = p[1], c2 = p[stride], c3 = p[stride + 1];
+      if ((c0 | c1 | c2 | c3) == 0) continue;
+      const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
+      const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
+      const std::uint32_t row = pixel_dst_[i] / kLaneImageWidth;
+      const std::uint32_t col = pixel_dst_[i] - row * kLaneImageWidth;
+      if (lut[pixel_lut_[i] + yellow_bits] != 0) {
+        ++sums->yellow[row].count;
+        sums->yellow[row].col_sum += col;
+      }
+      if (lut[pixel_lut_[i] + white_bits] != 0) {
+        ++sums->white[row].count;
+        sums->white[row].col_sum += col;
+      }
+    }
+  }
+}
+
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {
-  ComputeMasks(bgr, &masks_);
-  return Fit(masks_, trace);
+  ComputeRowSums(bgr, &sums_);
+  return Fit(sums_, trace);
 }
 
 LanePoints LaneDetector::Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace) {
+  return Fit(RowSumsOfMasks(masks), trace);
+}
+
+LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace) {
   LaneDetectionTrace local;
   LaneDetectionTrace& t = trace != nullptr ? *trace : local;
   t = LaneDetectionTrace{};
@@ -536,10 +591,10 @@ LanePoints LaneDetector::Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* tra
   LanePoints out;
 
   // choose the line: yellow if it has enough pixels, else white, else nothing
-  RowMeans(masks.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
+  RowMeans(sums.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
   t.line = LaneLine::kYellow;
   if (t.yellow_px < params_.yellow_min_px) {
-    RowMeans(masks.white, &rows_, &cols_, &weights_, &t.white_px);
+    RowMeans(sums.white, &rows_, &cols_, &weights_, &t.white_px);
     t.line = LaneLine::kWhite;
     if (t.white_px < params_.line_min_px) {
       t.line = LaneLine::kNone;

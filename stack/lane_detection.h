@@ -151,6 +151,22 @@ struct BirdsEyeMasks {
   cv::Mat white;
 };
 
+// What the fit reads of the bird's-eye masks: per row, how many pixels are non-zero (line pixels)
+// and the sum of their columns. The fit of these is the fit of the masks, bit for bit.
+struct BirdsEyeRowSums {
+  struct Row {
+    std::int32_t count{0};
+    std::int64_t col_sum{0};
+    friend bool operator==(const Row&, const Row&) = default;
+  };
+  std::array<Row, kLaneImageHeight> yellow{};
+  std::array<Row, kLaneImageHeight> white{};
+  friend bool operator==(const BirdsEyeRowSums&, const BirdsEyeRowSums&) = default;
+};
+
+// The row sums of a pair of masks.
+BirdsEyeRowSums RowSumsOfMasks(const BirdsEyeMasks& masks);
+
 // The plain OpenCV mask+warp stage: cvtColor(BGR2HSV), inRange per colour, warpPerspective of each
 // mask with OpenCV's defaults (INTER_LINEAR, BORDER_CONSTANT 0), as the real node calls it.
 // `image_to_birds_eye` is the 3×3 CV_64F homography (LaneDetector::image_to_birds_eye()).
@@ -228,9 +244,14 @@ class LaneDetector {
 
   // The fast mask+warp stage alone: bit-identical to LaneMasksReference.
   void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
-  // The rest, from the bird's-eye masks: Step is ComputeMasks then Fit. The real hardware runs the
-  // two in separate slots (reference §8: lane planner, polynomial fit).
+  // The same stage as the fit reads it: RowSumsOfMasks of ComputeMasks, without writing (or
+  // clearing) the two 640×480 masks.
+  void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums);
+  // The rest, from the bird's-eye masks or their row sums (the same result): Step is
+  // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
+  // planner, polynomial fit).
   LanePoints Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace = nullptr);
+  LanePoints Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace = nullptr);
 
  private:
   struct Tile {
@@ -264,7 +285,7 @@ class LaneDetector {
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint8_t> cell_any_;
   std::vector<int> cell_prefix_;
-  BirdsEyeMasks masks_;
+  BirdsEyeRowSums sums_;
   std::vector<double> rows_, cols_, weights_;
 };
 

@@ -190,7 +190,7 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P,
-                        DepthGridMemo* memo) {
+                        DepthGridMemo* memo, std::span<const std::uint8_t> changed_rows) {
   const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
   const GridConstants g = MakeGridConstants(params);
   detail::CheckDepthImage(depth);
@@ -200,6 +200,8 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
                                    k.fy, k.cx, k.cy, k.m_per_mm,
                                    static_cast<float>(params.cell_size_m)};
   std::copy(rest.begin(), rest.end(), key.begin() + 12);
+  Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight,
+          "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for 480 rows");
   const bool valid = memo->valid_ && memo->key_ == key;
   if (!valid) {
     memo->valid_ = true;
@@ -214,7 +216,8 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
     const std::uint16_t* in = depth.mm.data() + row * kWidth;
     std::uint16_t* last = memo->depth_.data() + row * kWidth;
     auto& cells = memo->rows_[static_cast<std::size_t>(row)];
-    if (!valid || std::memcmp(in, last, kWidth * sizeof(std::uint16_t)) != 0) {
+    const bool may_differ = changed_rows.empty() || changed_rows[row] != 0;
+    if (!valid || (may_differ && std::memcmp(in, last, kWidth * sizeof(std::uint16_t)) != 0)) {
       std::memcpy(last, in, kWidth * sizeof(std::uint16_t));
       row_counts.fill(0);
       detail::CameraPointsOfRow(k, row, in, x, y, z);

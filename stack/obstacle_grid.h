@@ -28,6 +28,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "stack/costmap.h"
@@ -107,7 +108,7 @@ class DepthGridMemo {
  private:
   friend Grid234 StepDepthToGrid(const PointCloudParams&, const ObstacleGridParams&,
                                  const DepthImageView&, const std::array<double, 12>&,
-                                 DepthGridMemo*);
+                                 DepthGridMemo*, std::span<const std::uint8_t>);
   std::array<float, 24> key_{};       // the constants the rows were counted with
   bool valid_{false};
   std::vector<std::uint16_t> depth_;  // the last frame's depth, row-major
@@ -116,9 +117,12 @@ class DepthGridMemo {
 };
 
 // StepDepthToGrid counting only the rows that differ from the memo's (which it then updates).
+// `changed_rows`, if not empty, is one flag per row from whoever wrote the image (e.g.
+// vehicle::DepthRowHistory): a row flagged 0 is promised to be the one the memo saw last and is
+// not compared.
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P,
-                        DepthGridMemo* memo);
+                        DepthGridMemo* memo, std::span<const std::uint8_t> changed_rows = {});
 
 struct ObstacleLayerParams {
   // reference §4: a cell is an obstacle when its count is above 250.

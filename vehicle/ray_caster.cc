@@ -141,6 +141,30 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
   };
   for (std::size_t i = 0; i < n; ++i) index_[i] = index_of(&raster.bgr[3 * i]);
   index_[n] = index_of(raster.floor_bgr.data());
+
+  std::vector<std::size_t> uses(palette_.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) ++uses[index_[i]];
+  common_index_ = static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) -
+                                            uses.begin());
+  cells_x_ = (width_ + kCommonCell - 1) / kCommonCell;
+  const int cells_y = (height_ + kCommonCell - 1) / kCommonCell;
+  std::vector<std::uint8_t> other(static_cast<std::size_t>(cells_x_) * cells_y, 0);
+  for (int row = 0; row < height_; ++row) {
+    for (int col = 0; col < width_; ++col) {
+      if (index_[static_cast<std::size_t>(row) * width_ + col] != common_index_) {
+        other[static_cast<std::size_t>(row / kCommonCell) * cells_x_ + col / kCommonCell] = 1;
+      }
+    }
+  }
+  const std::size_t stride = static_cast<std::size_t>(cells_x_) + 1;
+  others_.assign(stride * (static_cast<std::size_t>(cells_y) + 1), 0u);
+  for (int y = 0; y < cells_y; ++y) {
+    std::uint32_t in_row = 0;
+    for (int x = 0; x < cells_x_; ++x) {
+      in_row += other[static_cast<std::size_t>(y) * cells_x_ + x];
+      others_[(y + 1) * stride + x + 1] = others_[y * stride + x + 1] + in_row;
+    }
+  }
 }
 
 CameraRays::CameraRays(const CameraModel& camera)
@@ -204,6 +228,37 @@ CameraRays::CameraRays(const CameraModel& camera)
     }
   }
 
+  const int blocks = blocks_per_row();
+  floor_blocks_.assign(static_cast<std::size_t>(blocks) * height_, FloorBlock{});
+  for (int v = 0; v < height_; ++v) {
+    for (int k = 0; k < blocks; ++k) {
+      const int u0 = k * kBlockSize;
+      const int u1 = u0 + kBlockSize;
+      if (u1 > width_) continue;
+      double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
+      bool all_floor = true;
+      for (int u = u0; u < u1 && all_floor; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+        all_floor = floor_t_[i] < kInf;
+        x_lo = std::min(x_lo, double{floor_x_[i]});
+        x_hi = std::max(x_hi, double{floor_x_[i]});
+        y_lo = std::min(y_lo, double{floor_y_[i]});
+        y_hi = std::max(y_hi, double{floor_y_[i]});
+      }
+      if (!all_floor) continue;
+      FloorBlock& block = floor_blocks_[static_cast<std::size_t>(v) * blocks + k];
+      block.centre_x = static_cast<float>(0.5 * (x_lo + x_hi));
+      block.centre_y = static_cast<float>(0.5 * (y_lo + y_hi));
+      double radius = 0.0;
+      for (int u = u0; u < u1; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+        radius = std::max(radius, std::hypot(floor_x_[i] - double{block.centre_x},
+                                             floor_y_[i] - double{block.centre_y}));
+      }
+      block.radius = std::nextafter(static_cast<float>(radius), kInf);  // rounded up
+    }
+  }
+
   for (int v0 = 0; v0 < height_; v0 += kTileSize) {
     for (int u0 = 0; u0 < width_; u0 += kTileSize) {
       Tile tile{u0,
@@ -238,7 +293,13 @@ CameraRenderer::CameraRenderer(std::shared_ptr<const CameraRays> rays,
 
 void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                             ColorImage* color, DepthImage* depth) {
-  RenderImpl(X_map_car, prisms, color, depth, nullptr);
+  RenderImpl(X_map_car, prisms, color, depth, nullptr, nullptr);
+}
+
+void CameraRenderer::RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                                 DepthImage* depth, DepthRowHistory* history) {
+  Require(depth != nullptr && history != nullptr, "CameraRenderer::RenderDepth needs its outputs");
+  RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history);
 }
 
 void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
@@ -248,7 +309,7 @@ void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism
                                 std::to_string(color_region.columns.size()) + " rows for a camera of " +
                                 std::to_string(rays_->height()));
   }
-  RenderImpl(X_map_car, prisms, color, depth, &color_region);
+  RenderImpl(X_map_car, prisms, color, depth, &color_region, nullptr);
 }
 
 namespace {
@@ -269,7 +330,7 @@ void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region,
 
 void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                 ColorImage* color, DepthImage* depth,
-                                const RowSpans* color_region) {
+                                const RowSpans* color_region, DepthRowHistory* history) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
@@ -289,15 +350,41 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
     std::fill(tile_stamp_.begin(), tile_stamp_.end(), 0u);
     frame_ = 1;
   }
-  RenderFloor(X_map_car, color, depth, color_region);
-  for (const Prism& prism : prisms) RenderPrism(X_map_car, prism, color, depth);
+  depth_rows_hit_.assign(static_cast<std::size_t>(h), 0);
+  RenderFloor(X_map_car, color, depth, color_region, history);
+  // Without a depth image, only the colour region's pixels of a prism are needed.
+  const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
+  for (const Prism& prism : prisms) RenderPrism(X_map_car, prism, color, depth, prism_region);
+  if (history != nullptr) {
+    // rows that differ from the bare floor now or did in the last frame
+    for (int v = 0; v < h; ++v) {
+      history->changed_[v] |= depth_rows_hit_[v];
+    }
+    history->prism_rows_ = depth_rows_hit_;
+    history->buffer_ = depth->mm.data();
+    history->valid_ = true;
+  }
 }
 
 void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
-                                 DepthImage* depth, const RowSpans* color_region) {
+                                 DepthImage* depth, const RowSpans* color_region,
+                                 DepthRowHistory* history) {
   const CameraRays& r = *rays_;
   if (depth != nullptr) {
-    std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
+    const std::size_t h = static_cast<std::size_t>(r.height());
+    if (history != nullptr && history->valid_ && history->buffer_ == depth->mm.data() &&
+        history->prism_rows_.size() == h) {
+      // the buffer holds the last frame: only its prisms' rows go back to the floor
+      const std::size_t w = static_cast<std::size_t>(r.width());
+      for (std::size_t v = 0; v < h; ++v) {
+        if (history->prism_rows_[v] == 0) continue;
+        std::memcpy(depth->mm.data() + v * w, r.floor_depth_mm().data() + v * w, w * 2);
+      }
+      history->changed_ = history->prism_rows_;
+    } else {
+      std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
+      if (history != nullptr) history->changed_.assign(h, 1);
+    }
   }
   if (color == nullptr) return;
   const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
@@ -335,9 +422,10 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const std::uint32_t* palette = tex.palette();
   const float* fx = r.floor_x().data();
   const float* fy = r.floor_y().data();
-  for (const CameraRays::Run& run : *floor_runs) {
-    for (int i = run.begin; i < run.end; i += kLanes) {
-      const int n = std::min(kLanes, run.end - i);
+  // Pixels [begin, end), each looked up.
+  const auto look_up = [&](int begin, int end) {
+    for (int i = begin; i < end; i += kLanes) {
+      const int n = std::min(kLanes, end - i);
       const F4 x = Load(fx + i, n);
       const F4 y = Load(fy + i, n);
       const F4 col = a00 * x + a01 * y + a02;
@@ -347,14 +435,58 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
       const I4 index = inside ? texel_row * width + texel_col : outside;
       for (int k = 0; k < n; ++k) {
-        // 4 bytes where the next pixel of the run overwrites the fourth, 3 at the run's end
+        // 4 bytes where the next pixel overwrites the fourth, 3 at the end
         const std::uint32_t* texel = &palette[texel_index[index[k]]];
-        if (i + k + 1 < run.end) {
+        if (i + k + 1 < end) {
           std::memcpy(out + 3 * (i + k), texel, 4);
         } else {
           std::memcpy(out + 3 * (i + k), texel, 3);
         }
       }
+    }
+  };
+  // A whole block whose circle lies on texels of the common colour is that colour: the circle's
+  // texture square, widened by a texel for the float arithmetic (the centre's transform is the
+  // pixels' own, and its error is below 1e-3 texel), must be inside the raster and hold nothing
+  // else. For x >= 0, truncation is floor, and every pixel's texel lies between those of the
+  // square's corners.
+  constexpr int kBlock = CameraRays::kBlockSize;
+  const int w = r.width();
+  const int blocks_per_row = r.blocks_per_row();
+  const CameraRays::FloorBlock* blocks = r.floor_blocks().data();
+  std::array<std::uint8_t, 3 * kBlock> common_block;
+  for (int k = 0; k < kBlock; ++k) {
+    std::memcpy(common_block.data() + 3 * k, &palette[tex.common_index()], 3);
+  }
+  const auto texels_per_m = static_cast<float>(1.0 / m);
+  const auto tex_cols = static_cast<float>(tex.width());
+  const auto tex_rows = static_cast<float>(tex.height());
+  const auto common = [&](const CameraRays::FloorBlock& block) {
+    if (!common_floor_blocks_on_ || block.radius < 0.0f) return false;
+    const float col = a00 * block.centre_x + a01 * block.centre_y + a02;
+    const float row = a10 * block.centre_x + a11 * block.centre_y + a12;
+    const float reach = block.radius * texels_per_m + 1.0f;
+    const float col0 = col - reach, col1 = col + reach;
+    const float row0 = row - reach, row1 = row + reach;
+    return col0 >= 0.0f && row0 >= 0.0f && col1 < tex_cols && row1 < tex_rows &&
+           tex.AllCommon(static_cast<int>(col0), static_cast<int>(row0), static_cast<int>(col1),
+                         static_cast<int>(row1));
+  };
+  for (const CameraRays::Run& run : *floor_runs) {
+    const int row = run.begin / w;  // a run lies in one row
+    int i = run.begin;
+    while (i < run.end) {
+      const int column = i - row * w;
+      if (column % kBlock == 0 && i + kBlock <= run.end &&
+          common(blocks[row * blocks_per_row + column / kBlock])) {
+        std::memcpy(out + 3 * i, common_block.data(), common_block.size());
+        ++common_floor_blocks_;
+        i += kBlock;
+        continue;
+      }
+      const int next = std::min(run.end, row * w + (column / kBlock + 1) * kBlock);
+      look_up(i, next);
+      i = next;
     }
   }
 }
@@ -371,7 +503,7 @@ void CameraRenderer::InitTileDepth(std::size_t tile_index) {
 }
 
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
-                                 ColorImage* color, DepthImage* depth) {
+                                 ColorImage* color, DepthImage* depth, const RowSpans* region) {
   const CameraRays& r = *rays_;
   const CameraParams& params = r.camera().params();
   const world::OrientedBox& box = prism.footprint;
@@ -480,9 +612,14 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
     if (tile.x_max < x_lo || tile.x_min > x_hi || tile.y_max < y_lo || tile.y_min > y_hi) continue;
     if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
     for (int v = tile.v0; v < tile.v1; ++v) {
-      for (int u = tile.u0; u < tile.u1; u += kLanes) {
+      int u_begin = tile.u0, u_end = tile.u1;
+      if (region != nullptr) {
+        u_begin = std::max(u_begin, region->columns[static_cast<std::size_t>(v)].first);
+        u_end = std::min(u_end, region->columns[static_cast<std::size_t>(v)].second);
+      }
+      for (int u = u_begin; u < u_end; u += kLanes) {
         const int i = v * w + u;
-        const int n = std::min(kLanes, tile.u1 - u);
+        const int n = std::min(kLanes, u_end - u);
         // within the prism's bounds on the image?
         const F4 nx = Load(ray_x + i, n);
         const F4 ny = Load(ray_y + i, n);
@@ -526,6 +663,7 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
           if (out != nullptr)
             std::memcpy(out + 3 * p, face_bgr[static_cast<std::size_t>(face)].data(), 3);
           if (depth_mm != nullptr) {
+            depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
             depth_mm[p] = t[k] >= near_m && t[k] <= far_m
                               ? static_cast<std::uint16_t>(t[k] * 1000.0f + 0.5f)
                               : std::uint16_t{0};

@@ -110,6 +110,24 @@ class FloorTexture {
   const std::uint32_t* palette() const { return palette_.data(); }
   std::uint32_t outside_index() const { return static_cast<std::uint32_t>(index_.size() - 1); }
 
+  // The colour most of the raster has (the bare floor of a track), as a palette index.
+  std::uint8_t common_index() const { return common_index_; }
+  // Whether every texel of columns [col0, col1] and rows [row0, row1] (inclusive, inside the
+  // raster) has common_index(). Conservative: false may also mean that a texel of a cell of
+  // kCommonCell × kCommonCell texels touching the rectangle has another colour. A summed-area
+  // table of those cells answers in four look-ups.
+  static constexpr int kCommonCell = 4;
+  bool AllCommon(int col0, int row0, int col1, int row1) const {
+    const std::size_t stride = static_cast<std::size_t>(cells_x_) + 1;
+    const auto at = [&](int cell_row, int cell_col) {
+      return others_[static_cast<std::size_t>(cell_row) * stride +
+                     static_cast<std::size_t>(cell_col)];
+    };
+    const int x0 = col0 / kCommonCell, x1 = col1 / kCommonCell;
+    const int y0 = row0 / kCommonCell, y1 = row1 / kCommonCell;
+    return at(y1 + 1, x1 + 1) - at(y0, x1 + 1) - at(y1 + 1, x0) + at(y0, x0) == 0;
+  }
+
  private:
   int width_;
   int height_;
@@ -117,6 +135,11 @@ class FloorTexture {
   world::Vec2 origin_m_;
   std::vector<std::uint8_t> index_;
   std::vector<std::uint32_t> palette_;
+  std::uint8_t common_index_{0};
+  int cells_x_{0};
+  // others_[(y + 1) · (cells_x_ + 1) + x + 1]: how many cells of rows [0, y] × columns [0, x] hold
+  // a texel whose index is not common_index_.
+  std::vector<std::uint32_t> others_;
 };
 
 // Per-pixel geometry of one camera on a car, in the car's base frame: immutable, and shareable by
@@ -163,6 +186,20 @@ class CameraRays {
   const std::vector<Run>& surround_runs() const { return surround_runs_; }  // see nothing
   const std::vector<Tile>& tiles() const { return tiles_; }
 
+  // Aligned blocks of kBlockSize pixels of a row, columns [k · kBlockSize, (k + 1) · kBlockSize):
+  // where all of a block's pixels see the floor, a circle (base frame, metres) holding their floor
+  // points. A frame whose floor texture is one colour all over a block's circle gives the block
+  // that colour without looking its pixels up (the bare floor between the painted lines).
+  static constexpr int kBlockSize = 16;
+  struct FloorBlock {
+    float centre_x{0.0f}, centre_y{0.0f};
+    float radius{-1.0f};  // < 0: not every pixel of the block sees the floor
+  };
+  // [row · blocks_per_row() + k]; the last block of a row is partial if the width is not a
+  // multiple of kBlockSize and then never used.
+  const std::vector<FloorBlock>& floor_blocks() const { return floor_blocks_; }
+  int blocks_per_row() const { return (width_ + kBlockSize - 1) / kBlockSize; }
+
  private:
   CameraModel camera_;
   int width_;
@@ -175,6 +212,7 @@ class CameraRays {
   std::vector<Run> floor_runs_;
   std::vector<Run> surround_runs_;
   std::vector<Tile> tiles_;
+  std::vector<FloorBlock> floor_blocks_;
 };
 
 // The pixels a consumer of a colour image reads, per image row: columns [begin, end) (begin ==
@@ -182,6 +220,30 @@ class CameraRays {
 // (demand-driven sensing): the lane detector reads a third of the image.
 struct RowSpans {
   std::vector<std::pair<int, int>> columns;  // one entry per image row
+};
+
+// What a consumer keeps with a depth buffer it renders one camera into frame after frame, so that
+// the renderer rewrites only the rows that can have changed: the bare floor's depth is the same in
+// every frame, and only the rows a prism covered in the last frame or covers in this one differ
+// from it. After each frame, changed_rows() says which rows may differ from the previous frame in
+// the same buffer (all of them after the first frame, or after Forget()).
+class DepthRowHistory {
+ public:
+  // Per image row: 1 where this frame's depth may differ from the previous frame's, else 0;
+  // empty where that is not known (every row may differ).
+  std::span<const std::uint8_t> changed_rows() const { return changed_; }
+  // Something else wrote the buffer (a black frame, noise): the next frame is rendered whole.
+  void Forget() {
+    valid_ = false;
+    changed_.clear();
+  }
+
+ private:
+  friend class CameraRenderer;
+  bool valid_{false};
+  const std::uint16_t* buffer_{nullptr};  // the buffer it describes
+  std::vector<std::uint8_t> prism_rows_;  // per row: the last frame's prisms wrote depth there
+  std::vector<std::uint8_t> changed_;
 };
 
 // Renders one camera. Owns its scratch memory, so frames allocate nothing once the output images
@@ -205,14 +267,27 @@ class CameraRenderer {
   // Render's, the others of `color` are left as they were (the depth image is always whole).
   void Render(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
               DepthImage* depth, const RowSpans& color_region);
+  // The depth image alone, into a buffer that `history` describes (DepthRowHistory): only the
+  // rows the last frame's prisms covered are set back to the bare floor. The image is exactly
+  // Render's.
+  void RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms, DepthImage* depth,
+                   DepthRowHistory* history);
+
+  // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
+  // their pixels up: on by default; off, every floor pixel is looked up (the reference that tests
+  // and benchmarks compare with). The images are the same either way.
+  void set_common_floor_blocks(bool on) { common_floor_blocks_on_ = on; }
+  // How many blocks were filled that way, over every frame so far.
+  std::uint64_t common_floor_blocks() const { return common_floor_blocks_; }
 
  private:
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
-                  DepthImage* depth, const RowSpans* color_region);
+                  DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history);
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
-                   const RowSpans* color_region);
+                   const RowSpans* color_region, DepthRowHistory* history);
+  // `region`: only its pixels (colour alone), or null: all of the prism's.
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, ColorImage* color,
-                   DepthImage* depth);
+                   DepthImage* depth, const RowSpans* region);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;
@@ -222,6 +297,9 @@ class CameraRenderer {
   std::vector<std::uint32_t> tile_stamp_;  // the frame in which a tile's nearest_t_ was set
   std::uint32_t frame_{0};
   std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;  // scratch
+  std::vector<std::uint8_t> depth_rows_hit_;  // per row: a prism wrote depth there this frame
+  bool common_floor_blocks_on_{true};
+  std::uint64_t common_floor_blocks_{0};
 };
 
 // Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a

@@ -30,22 +30,26 @@ struct CloudMessage {  // /points, PointCloud640
   std::shared_ptr<const stack::PointCloud640> cloud;
   Time stamp{};
 };
-struct BirdViewMessage {  // /camera/bird_view, Image640mono
-  stack::BirdsEyeMasks masks;
+// /camera/bird_view, Image640mono on the wire (its size is the message type's). What poly_fit
+// reads of the bird's-eye image, its per-row line pixel counts and column sums, is what the C++
+// message carries: the fit of those is the fit of the masks (stack::BirdsEyeRowSums).
+struct BirdViewMessage {
+  stack::BirdsEyeRowSums sums;
   Time stamp{};
 };
 
 // What a node keeps between frames: scratch buffers only (a result depends on its frame alone).
 struct DepthScratch {
   vehicle::DepthImage depth;
-  stack::DepthGridMemo grid_memo;  // the fused node's: it counts only the rows that changed
+  vehicle::DepthRowHistory history;  // the renderer rewrites only rows that can have changed
+  stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the rows that changed
 };
 struct ColorScratch {
   vehicle::ColorImage color;
 };
 
 stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch) {
-  frame.Render(nullptr, &scratch->depth);
+  frame.RenderDepth(&scratch->depth, &scratch->history);
   return stack::DepthImageView{scratch->depth.width, scratch->depth.height, scratch->depth.mm};
 }
 
@@ -89,7 +93,8 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
         [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
           return Report(p,
                         stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch), p.P,
-                                               &scratch->grid_memo),
+                                               &scratch->grid_memo,
+                                               scratch->history.changed_rows()),
                         frame.stamp);
         });
     return obstacles;
@@ -157,13 +162,13 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                    params, std::make_shared<ColorScratch>(),
                    [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
                      BirdViewMessage out{.stamp = frame.stamp};
-                     p.detector->ComputeMasks(RenderColor(frame, scratch, *p.reads), &out.masks);
+                     p.detector->ComputeRowSums(RenderColor(frame, scratch, *p.reads), &out.sums);
                      return out;
                    });
   AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,
                    std::move(params), std::shared_ptr<void>(),
                    [](const LaneParams& p, const BirdViewMessage& in, void*) {
-                     return Report(p, p.detector->Fit(in.masks), in.stamp);
+                     return Report(p, p.detector->Fit(in.sums), in.stamp);
                    });
   return lanes;
 }

@@ -112,6 +112,12 @@ void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
   camera->Render(*this, color, depth, &color_region);
 }
 
+void CameraFrame::RenderDepth(vehicle::DepthImage* depth,
+                              vehicle::DepthRowHistory* history) const {
+  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
+  camera->RenderDepth(*this, depth, history);
+}
+
 const std::string& CameraFrame::topic() const { return camera->params().topic; }
 
 std::int64_t CameraFrame::bytes() const { return ImageBytes(camera->params()); }
@@ -146,6 +152,18 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
     renderer_.Render(frame.X_map_car, frame.prisms, color, depth);
   }
   vehicle::AddCameraNoise(params_.noise, params_.camera, frame.noise_seed, color, depth);
+  ++frames_rendered_;
+}
+
+void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
+                               vehicle::DepthRowHistory* history) const {
+  const bool noisy = params_.noise.enabled && params_.noise.depth_stddev_per_m > 0.0;
+  if (frame.blackout || noisy) {  // the buffer is not the bare floor plus prisms
+    Render(frame, nullptr, depth);
+    history->Forget();
+    return;
+  }
+  renderer_.RenderDepth(frame.X_map_car, frame.prisms, depth, history);
   ++frames_rendered_;
 }
 

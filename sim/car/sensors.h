@@ -110,6 +110,9 @@ struct CameraFrame {
   // pixels are Render's, bit for bit; the others are left as the buffer held them.
   void Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
               const vehicle::RowSpans& color_region) const;
+  // The depth image alone, into a buffer `history` describes (vehicle::DepthRowHistory): Render's
+  // image, with only the rows that can have changed since the buffer's last frame rewritten.
+  void RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history) const;
   const std::string& topic() const;
   std::int64_t bytes() const;  // of the message on the topic
 };
@@ -126,6 +129,8 @@ class CameraSensor {
 
   void Render(const CameraFrame& frame, vehicle::ColorImage* color, vehicle::DepthImage* depth,
               const vehicle::RowSpans* color_region = nullptr) const;
+  void RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
+                   vehicle::DepthRowHistory* history) const;
 
  private:
   CameraStreamParams params_;

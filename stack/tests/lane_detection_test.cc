@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -176,7 +178,38 @@ TEST_F(LaneTrack, FastMasksAreBitIdenticalToOpenCv) {
     EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << p.what;
     EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << p.what;
     EXPECT_GT(cv::countNonZero(reference.yellow) + cv::countNonZero(reference.white), 0) << p.what;
+    // what the fit reads, without the masks: the same sums, the same lane points
+    BirdsEyeRowSums sums;
+    detector.ComputeRowSums(AsMat(frame.color), &sums);
+    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << p.what;
+    LaneDetectionTrace from_sums, from_masks;
+    const LanePoints a = detector.Fit(sums, &from_sums);
+    const LanePoints b = detector.Fit(reference, &from_masks);
+    EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0) << p.what;
+    EXPECT_EQ(from_sums.yellow_px, from_masks.yellow_px) << p.what;
+    EXPECT_EQ(from_sums.white_px, from_masks.white_px) << p.what;
   }
+}
+
+TEST(LaneMasks, RowSumsCountTheNonZeroPixelsOfEachRowAndSumTheirColumns) {
+  BirdsEyeMasks masks{cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC1),
+                      cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC1)};
+  masks.yellow.at<std::uint8_t>(3, 7) = 1;
+  masks.yellow.at<std::uint8_t>(3, 639) = 255;
+  masks.white.at<std::uint8_t>(479, 0) = 17;
+  masks.white.at<std::uint8_t>(479, 8) = 200;
+  const BirdsEyeRowSums sums = RowSumsOfMasks(masks);
+  EXPECT_EQ(sums.yellow[3].count, 2);
+  EXPECT_EQ(sums.yellow[3].col_sum, 7 + 639);
+  EXPECT_EQ(sums.white[479].count, 2);
+  EXPECT_EQ(sums.white[479].col_sum, 8);
+  int other_rows = 0;
+  for (int r = 0; r < kLaneImageHeight; ++r) {
+    other_rows += (r != 3 && sums.yellow[r].count != 0) + (r != 479 && sums.white[r].count != 0);
+  }
+  EXPECT_EQ(other_rows, 0);
+  EXPECT_THROW(RowSumsOfMasks(BirdsEyeMasks{cv::Mat::zeros(10, 10, CV_8UC1), masks.white}),
+               std::invalid_argument);
 }
 
 TEST(LaneMasks, BitIdenticalOnNoiseForBothThresholdSets) {
@@ -197,6 +230,9 @@ TEST(LaneMasks, BitIdenticalOnNoiseForBothThresholdSets) {
     detector.ComputeMasks(bgr, &fast);
     EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << set;
     EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << set;
+    BirdsEyeRowSums sums;
+    detector.ComputeRowSums(bgr, &sums);
+    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << set;
   }
 }
 
@@ -230,6 +266,9 @@ TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
     detector.ComputeMasks(bgr, &fast);
     EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << set;
     EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << set;
+    BirdsEyeRowSums sums;
+    detector.ComputeRowSums(bgr, &sums);
+    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << set;
     // the line pixels were seen (pure white is no line to the real car's thresholds; yellow is)
     EXPECT_GT(cv::countNonZero(reference.white) + cv::countNonZero(reference.yellow), 1000) << set;
   }

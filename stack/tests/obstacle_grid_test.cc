@@ -376,7 +376,10 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
   PointCloud640 cloud;
   int frames = 0, partial_cells = 0;
   DepthGridMemo memo;
-  std::array<DepthGridMemo, 2> kept;  // one per scale
+  std::array<DepthGridMemo, 2> kept;     // one per scale
+  std::array<DepthGridMemo, 2> flagged;  // one per scale, told which rows changed
+  std::array<std::vector<std::uint16_t>, 2> last_depth;
+  int skipped_rows = 0;
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const world::Pose2 pose = frames_->PoseOnRoute(poses[i].first, poses[i].second);
     std::vector<vehicle::Prism> prisms;
@@ -402,6 +405,23 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
       EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &kept[hardware_scale]),
                 fused)
           << poses[i].first << " s " << poses[i].second;
+      // with the rows that changed since the memo's last frame flagged (as the renderer's
+      // DepthRowHistory says them), the others not compared
+      std::vector<std::uint8_t> changed(PointCloud640::kHeight, 1);
+      std::vector<std::uint16_t>& last = last_depth[hardware_scale];
+      if (!last.empty()) {
+        for (int row = 0; row < PointCloud640::kHeight; ++row) {
+          changed[row] = !std::equal(frame.depth.mm.begin() + row * 640,
+                                     frame.depth.mm.begin() + (row + 1) * 640,
+                                     last.begin() + row * 640);
+          skipped_rows += changed[row] == 0;
+        }
+      }
+      last = frame.depth.mm;
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(),
+                                &flagged[hardware_scale], changed),
+                fused)
+          << poses[i].first << " s " << poses[i].second;
       EXPECT_EQ(fused, ScalarTranscription(hardware_scale, params, frame.depth, P()))
           << poses[i].first << " s " << poses[i].second;
       for (int c = 0; c < Grid234::kCells; ++c)
@@ -411,6 +431,21 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
   }
   EXPECT_GE(frames, 20);
   EXPECT_GT(partial_cells, 20);  // the comparison saw unsaturated counts, not just 0 and 255
+  EXPECT_GT(skipped_rows, 1000);
+
+  // A row flagged unchanged is taken on trust: the memo's counts of its last frame.
+  DepthGridMemo memo_trusting;
+  const world::Pose2 pose = frames_->PoseOnRoute(poses.front().first, poses.front().second);
+  const testing::RgbdFrame bare = frames_->Render(pose, {});
+  const std::vector<vehicle::Prism> box{BoxAhead(pose, 0.6, 0.0, 0.2)};
+  const testing::RgbdFrame boxed = frames_->Render(pose, box);
+  const Grid234 bare_grid = StepDepthToGrid({}, params, View(bare.depth), P(), &memo_trusting);
+  ASSERT_NE(StepDepthToGrid({}, params, View(boxed.depth), P()), bare_grid);
+  const std::vector<std::uint8_t> none(PointCloud640::kHeight, 0);
+  EXPECT_EQ(StepDepthToGrid({}, params, View(boxed.depth), P(), &memo_trusting, none), bare_grid);
+  EXPECT_THROW(StepDepthToGrid({}, params, View(boxed.depth), P(), &memo_trusting,
+                               std::vector<std::uint8_t>(3, 1)),
+               std::invalid_argument);
 }
 
 // Random depths everywhere (a fixed seed): points all over the box, at every rounding.

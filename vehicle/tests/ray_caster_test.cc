@@ -478,6 +478,7 @@ TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
                                                      std::min(params.width_px, 340 + half)};
   }
   int untouched = 0;
+  int prism_pixels_in_region = 0;
   for (int k = 0; k < 24; ++k) {
     const world::Pose2 pose{-1.0 + 0.1 * k, 0.4 - 0.05 * k, 0.26 * k};
     const Eigen::Isometry3d X_map_car = Lift(pose);
@@ -494,6 +495,9 @@ TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
     demand.bgr.assign(full.bgr.size(), 0xAB);  // what the buffer held
     renderer.Render(pose, prisms, &demand, &demand_depth, region);
     EXPECT_EQ(demand_depth.mm, full_depth.mm);
+    // colour alone: the prisms too are computed only inside the region
+    ColorImage colour_only;
+    renderer.Render(pose, prisms, &colour_only, nullptr, region);
     for (int row = 0; row < params.height_px; ++row) {
       const auto [c0, c1] = region.columns[static_cast<std::size_t>(row)];
       for (int col = 0; col < params.width_px; ++col) {
@@ -501,6 +505,9 @@ TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
         if (col >= c0 && col < c1) {
           ASSERT_TRUE(std::equal(&full.bgr[i], &full.bgr[i] + 3, &demand.bgr[i]))
               << "pose " << k << " row " << row << " col " << col;
+          ASSERT_TRUE(std::equal(&full.bgr[i], &full.bgr[i] + 3, &colour_only.bgr[i]))
+              << "colour alone: pose " << k << " row " << row << " col " << col;
+          prism_pixels_in_region += full.bgr[i] != 0 && full.bgr[i] != 255 && full.bgr[i] != 110;
         } else {
           untouched += demand.bgr[i] == 0xAB && demand.bgr[i + 1] == 0xAB;
         }
@@ -508,8 +515,79 @@ TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
     }
   }
   EXPECT_GT(untouched, 24 * 100000);  // the floor outside the region was not computed
+  EXPECT_GT(prism_pixels_in_region, 24 * 1000);  // the comparison saw the prisms
   EXPECT_THROW(renderer.Render(world::Pose2{}, {}, nullptr, nullptr, RowSpans{}),
                std::invalid_argument);
+}
+
+TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLookUp) {
+  // Thin lines every 0.3 m both ways (a block's circle often touches one), a second bare colour
+  // beyond the raster; poses all over it, some looking out of it, with cars and boxes in view.
+  const CameraParams params = ColorCameraParams();
+  world::FloorRaster raster = BlackFloor(4.0);
+  raster.floor_bgr = {10, 20, 30};
+  for (int k = -6; k <= 6; ++k) {
+    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
+    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
+  }
+  CameraRenderer fast = MakeRenderer(params, raster);
+  CameraRenderer each_pixel = MakeRenderer(params, raster);
+  each_pixel.set_common_floor_blocks(false);
+  for (int k = 0; k < 24; ++k) {
+    const world::Pose2 pose{-1.8 + 0.16 * k, 1.2 - 0.11 * k, 0.27 * k};
+    const Eigen::Isometry3d X_map_car = Lift(pose);
+    const Eigen::Vector3d ahead = X_map_car * Eigen::Vector3d(0.9, 0.1, 0.0);
+    const std::vector<Prism> prisms{Box(ahead.x(), ahead.y(), 0.3 * k, 0.525, 0.296, 0.2)};
+    ColorImage a, b;
+    fast.Render(pose, prisms, &a, nullptr);
+    each_pixel.Render(pose, prisms, &b, nullptr);
+    ASSERT_EQ(a.bgr, b.bgr) << "pose " << k;
+  }
+  EXPECT_EQ(each_pixel.common_floor_blocks(), 0u);
+  // most of a 640x480 view is bare floor: 40 blocks a row, hundreds of rows
+  EXPECT_GT(fast.common_floor_blocks(), 24u * 2000u);
+}
+
+TEST(RayCasterTest, ADepthBufferWithItsHistoryIsRewrittenOnlyWhereItCanHaveChanged) {
+  // A box drives into view, across and out again; one buffer, frame after frame.
+  const CameraParams params = DepthCameraParams();
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  DepthImage buffer, previous, whole;
+  DepthRowHistory history;
+  int unflagged = 0;
+  for (int k = 0; k < 30; ++k) {
+    std::vector<Prism> prisms;
+    if (k >= 3 && k < 25) prisms.push_back(Box(1.2, -0.8 + 0.08 * k, 0.2 * k, 0.525, 0.296, 0.2));
+    if (k == 10) prisms.push_back(Box(0.8, 0.0, 0.0, 0.2, 0.2, 0.3));  // one frame only
+    renderer.RenderDepth(world::Pose2{}, prisms, &buffer, &history);
+    renderer.Render(world::Pose2{}, prisms, nullptr, &whole);
+    ASSERT_EQ(buffer.mm, whole.mm) << "frame " << k;
+    const std::span<const std::uint8_t> changed = history.changed_rows();
+    ASSERT_EQ(changed.size(), static_cast<std::size_t>(params.height_px));
+    for (int v = 0; v < params.height_px; ++v) {
+      const auto row = [&](const DepthImage& image) {
+        return std::vector<std::uint16_t>(image.mm.begin() + v * params.width_px,
+                                          image.mm.begin() + (v + 1) * params.width_px);
+      };
+      if (k == 0) {
+        EXPECT_EQ(changed[v], 1) << "the first frame is all new";
+      } else if (row(whole) != row(previous)) {
+        ASSERT_EQ(changed[v], 1) << "frame " << k << " row " << v;
+      }
+      unflagged += changed[v] == 0;
+    }
+    previous = whole;
+  }
+  EXPECT_GT(unflagged, 29 * 200);  // rows without the box are not rewritten
+  // After Forget the next frame is whole again and says so.
+  history.Forget();
+  EXPECT_TRUE(history.changed_rows().empty());
+  std::fill(buffer.mm.begin(), buffer.mm.end(), 7);
+  renderer.RenderDepth(world::Pose2{}, {}, &buffer, &history);
+  renderer.Render(world::Pose2{}, {}, nullptr, &whole);
+  EXPECT_EQ(buffer.mm, whole.mm);
+  EXPECT_EQ(std::count(history.changed_rows().begin(), history.changed_rows().end(), 1),
+            params.height_px);
 }
 
 TEST(RayCasterTest, OutsideTheRasterIsBareFloorAndAboveTheHorizonTheSurround) {
