@@ -139,7 +139,18 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
     }
     return it->second;
   };
-  for (std::size_t i = 0; i < n; ++i) index_[i] = index_of(&raster.bgr[3 * i]);
+  // runs of one colour are long: the hash map only where the colour changes
+  std::uint32_t last_colour = 0;
+  std::uint8_t last_index = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t colour = 0;
+    std::memcpy(&colour, &raster.bgr[3 * i], 3);
+    if (i == 0 || colour != last_colour) {
+      last_colour = colour;
+      last_index = index_of(&raster.bgr[3 * i]);
+    }
+    index_[i] = last_index;
+  }
   index_[n] = index_of(raster.floor_bgr.data());
 
   std::vector<std::size_t> uses(palette_.size(), 0);
