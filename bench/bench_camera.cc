@@ -140,6 +140,21 @@ void BM_RenderDepth(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderDepth)->Unit(benchmark::kMicrosecond);
 
+// The depth camera as the obstacle nodes render it in the loop: one buffer frame after frame, with
+// its DepthRowHistory (only the rows a prism covered last frame go back to the bare floor).
+void BM_RenderDepthWithHistory(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer camera = Renderer(scene.depth_rays);
+  vehicle::DepthImage depth;
+  vehicle::DepthRowHistory history;
+  for (auto _ : state) {
+    camera.RenderDepth(scene.pose, scene.prisms, &depth, &history);
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_RenderDepthWithHistory)->Unit(benchmark::kMicrosecond);
+
 // An RGB-D frame with the seeded noise on (both images).
 void BM_RenderRgbdWithNoise(benchmark::State& state) {
   const Scene& scene = TheScene();

@@ -72,6 +72,22 @@ void BM_PointCloudObstacleGridMemo(benchmark::State& state) {
 }
 BENCHMARK(BM_PointCloudObstacleGridMemo)->Unit(benchmark::kMicrosecond);
 
+// The same, told which rows may have changed (none: the same frame again), as the renderer's
+// DepthRowHistory tells the node: no row is compared.
+void BM_PointCloudObstacleGridMemoTold(benchmark::State& state) {
+  const CloudScene& scene = TheCloudScene();
+  const PointCloudParams cloud_params;
+  const ObstacleGridParams grid_params;
+  DepthGridMemo memo;
+  const std::vector<std::uint8_t> none(PointCloud640::kHeight, 0);
+  StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo);
+  for (auto _ : state) {
+    Grid234 grid = StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo, none);
+    benchmark::DoNotOptimize(grid);
+  }
+}
+BENCHMARK(BM_PointCloudObstacleGridMemoTold)->Unit(benchmark::kMicrosecond);
+
 void BM_PointCloudThenObstacleGrid(benchmark::State& state) {
   const CloudScene& scene = TheCloudScene();
   const PointCloudParams cloud_params;

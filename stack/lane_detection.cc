@@ -327,6 +327,7 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
   image_to_birds_eye_ = cv::getPerspectiveTransform(src, dst);
   birds_eye_to_image_ = cv::getPerspectiveTransform(dst, src);
 
+  v_min_ = std::min(thresholds_.yellow.lower_hsv[2], thresholds_.white.lower_hsv[2]);
   for (int i = 1; i < 256; ++i) {
     sdiv_[i] = static_cast<int>(std::lrint((255 << kHsvShift) / (1.0 * i)));
     hdiv_[i] = static_cast<int>(std::lrint((180 << kHsvShift) / (6.0 * i)));
@@ -441,22 +442,35 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
   cell_prefix_.assign(static_cast<std::size_t>(cells_x + 1) * (cells_y + 1), 0);
 }
 
+std::uint8_t LaneDetector::ClassOf(std::uint8_t blue, std::uint8_t green, std::uint8_t red) const {
+  const int b = blue, g = green, r = red;
+  const int v = std::max({b, g, r});
+  if (v < v_min_) return 0;
+  // OpenCV's 8-bit BGR2HSV (see detail::BgrToHsv8), with the tables precomputed.
+  const int diff = v - std::min({b, g, r});
+  const int s = (diff * sdiv_[v] + (1 << (kHsvShift - 1))) >> kHsvShift;
+  int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+  h = (h * hdiv_[diff] + (1 << (kHsvShift - 1))) >> kHsvShift;
+  if (h < 0) h += 180;
+  const std::array<std::uint8_t, 3> hsv{static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s),
+                                        static_cast<std::uint8_t>(v)};
+  return static_cast<std::uint8_t>(InRange(thresholds_.yellow, hsv) |
+                                   (InRange(thresholds_.white, hsv) << 1));
+}
+
 void LaneDetector::Classify(const cv::Mat& bgr) {
   constexpr int W = kLaneImageWidth;
   constexpr int padded_w = W + 2;
   const int cells_x = (W + kCellSize - 1) / kCellSize;
   std::fill(cell_any_.begin(), cell_any_.end(), 0);
-  const HsvRange& yellow = thresholds_.yellow;
-  const HsvRange& white = thresholds_.white;
   // No pixel darker than both ranges' V bounds is a line pixel: most of the floor is black.
-  const int v_min = std::min(yellow.lower_hsv[2], white.lower_hsv[2]);
   // Eight pixels (24 bytes) at a time, the dark ones are told apart with word arithmetic: a byte
   // above n shows in the high bit of (byte + 127 - n) | byte (for n <= 127; a carry out of a byte
   // of 128 or more only ever follows a byte that already shows). No byte >= v_min: all 8 dark.
   constexpr std::uint64_t kOnes = 0x0101010101010101ull;
   constexpr std::uint64_t kHighBits = 0x8080808080808080ull;
-  const bool word_test = v_min >= 1 && v_min <= 128;
-  const std::uint64_t add = kOnes * static_cast<std::uint64_t>(127 - (v_min - 1));
+  const bool word_test = v_min_ >= 1 && v_min_ <= 128;
+  const std::uint64_t add = kOnes * static_cast<std::uint64_t>(127 - (v_min_ - 1));
   const auto all_dark = [&](const std::uint8_t* eight) {
     std::uint64_t w[3];
     std::memcpy(w, eight, sizeof w);
@@ -474,31 +488,48 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
         continue;
       }
       for (const int block_end = std::min(c + 8, span.col_end); c < block_end; ++c) {
-        const int b = p[3 * c];
-        const int g = p[3 * c + 1];
-        const int r = p[3 * c + 2];
-        const int v = std::max({b, g, r});
-        if (v < v_min) {
-          out[c] = 0;
-          continue;
-        }
-        // OpenCV's 8-bit BGR2HSV (see detail::BgrToHsv8), with the tables precomputed.
-        const int diff = v - std::min({b, g, r});
-        const int s = (diff * sdiv_[v] + (1 << (kHsvShift - 1))) >> kHsvShift;
-        int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
-        h = (h * hdiv_[diff] + (1 << (kHsvShift - 1))) >> kHsvShift;
-        if (h < 0) h += 180;
-        const std::array<std::uint8_t, 3> hsv{
-            static_cast<std::uint8_t>(h), static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(v)};
-        const std::uint8_t cls =
-            static_cast<std::uint8_t>(InRange(yellow, hsv) | (InRange(white, hsv) << 1));
+        const std::uint8_t cls = ClassOf(p[3 * c], p[3 * c + 1], p[3 * c + 2]);
         out[c] = cls;
         if (cls != 0) cells[c / kCellSize] = 1;
       }
     }
   }
+  IndexLineCells();
+}
+
+void LaneDetector::FindLineCells() {
+  constexpr int padded_w = kLaneImageWidth + 2;
+  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
+  std::fill(cell_any_.begin(), cell_any_.end(), 0);
+  for (const SourceSpan& span : spans_) {
+    const std::uint8_t* in = classes_.data() + (span.row + 1) * padded_w + 1;
+    std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
+    static_assert(kCellSize == 8, "a cell's row is one 64-bit word");
+    // the cells wholly inside the span a word each, then the partial ones at its ends
+    const int first_full = (span.col_begin + kCellSize - 1) / kCellSize;
+    const int end_full = span.col_end / kCellSize;
+    for (int k = first_full; k < end_full; ++k) {
+      std::uint64_t word;
+      std::memcpy(&word, in + k * kCellSize, sizeof word);
+      cells[k] |= static_cast<std::uint8_t>(word != 0);
+    }
+    const auto partial = [&](int begin, int end) {
+      for (int c = begin; c < end; ++c) cells[c / kCellSize] |= static_cast<std::uint8_t>(in[c] != 0);
+    };
+    if (first_full > end_full) {  // the span lies inside one cell
+      partial(span.col_begin, span.col_end);
+    } else {
+      partial(span.col_begin, first_full * kCellSize);
+      partial(end_full * kCellSize, span.col_end);
+    }
+  }
+  IndexLineCells();
+}
+
+void LaneDetector::IndexLineCells() {
   // Inclusive prefix counts: cell_prefix_[(y + 1) · (cells_x + 1) + x + 1] = Σ over [0, y] × [0,
   // x].
+  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
   const int cells_y = static_cast<int>(cell_any_.size()) / cells_x;
   for (int y = 0; y < cells_y; ++y) {
     int row_sum = 0;
@@ -547,6 +578,15 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
 void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums) {
   RequireImage(bgr);
   Classify(bgr);
+  SumWarpedClasses(sums);
+}
+
+void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums) {
+  FindLineCells();
+  SumWarpedClasses(sums);
+}
+
+void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums) {
   *sums = BirdsEyeRowSums{};
   const std::uint8_t* classes = classes_.data();
   const std::uint8_t* lut = warp_lut_.data();

@@ -247,6 +247,17 @@ class LaneDetector {
   // The same stage as the fit reads it: RowSumsOfMasks of ComputeMasks, without writing (or
   // clearing) the two 640×480 masks.
   void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums);
+  // The class a pixel of this colour gets: bit 0 yellow, bit 1 white (the thresholds' HSV boxes,
+  // in OpenCV's 8-bit HSV); a pure function of the colour.
+  std::uint8_t ClassOf(std::uint8_t b, std::uint8_t g, std::uint8_t r) const;
+  // For a producer that knows each pixel's class without the colour image (a renderer whose
+  // floor has few colours labels each colour once): it writes ClassOf of the colour of every
+  // source_spans() pixel (u, v) at source_classes()[v · kClassStride + u] (the others are not
+  // read; do not write outside the image), then ComputeRowSumsFromClasses gives ComputeRowSums of
+  // that image.
+  static constexpr int kClassStride = kLaneImageWidth + 2;
+  std::uint8_t* source_classes() { return classes_.data() + kClassStride + 1; }
+  void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums);
   // The rest, from the bird's-eye masks or their row sums (the same result): Step is
   // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
   // planner, polynomial fit).
@@ -260,8 +271,13 @@ class LaneDetector {
     std::uint16_t cell_x1, cell_y1;
   };
 
+  // The classes of the source pixels into classes_, and the line cells from them.
   void Classify(const cv::Mat& bgr);
+  void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
+  void IndexLineCells();  // cell_prefix_ from cell_any_
   bool AnyLineCell(const Tile& tile) const;
+  // The warp loop over classes_: the row sums of the bird's-eye masks.
+  void SumWarpedClasses(BirdsEyeRowSums* sums);
 
   LaneDetectionParams params_;
   LaneCameraCalibration camera_;
@@ -272,6 +288,8 @@ class LaneDetector {
   // OpenCV's 8-bit HSV division tables.
   std::array<int, 256> sdiv_{};
   std::array<int, 256> hdiv_{};
+  // No colour darker than this (V below both ranges' lower bounds) is in a line class.
+  int v_min_{0};
   // The bilinear warp of a 0/255 mask: output for (alpha index, which of the 4 neighbours are 255).
   std::vector<std::uint8_t> warp_lut_;  // 1024 × 16
   // Active output pixels (whose source square touches the image), grouped by output tile.

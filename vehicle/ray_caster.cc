@@ -313,6 +313,27 @@ void CameraRenderer::RenderDepth(const world::Pose2& X_map_car, std::span<const 
   RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history);
 }
 
+void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                                  const RowSpans& region, const ColourLabel& label,
+                                  LabelView out) {
+  if (static_cast<int>(region.columns.size()) != rays_->height()) {
+    throw std::invalid_argument("CameraRenderer: a label region of " +
+                                std::to_string(region.columns.size()) + " rows for a camera of " +
+                                std::to_string(rays_->height()));
+  }
+  Require(out.origin != nullptr && out.stride >= rays_->width() && label != nullptr,
+          "CameraRenderer::RenderLabels needs an output of the camera's width and a label");
+  LabelOut labels{.view = out, .label = &label};
+  const FloorTexture& tex = *floor_;
+  for (int k = 0; k < tex.palette_size(); ++k) {
+    Bgr bgr;
+    std::memcpy(bgr.data(), &tex.palette()[k], 3);
+    labels.palette[static_cast<std::size_t>(k)] = label(bgr);
+  }
+  labels.surround = label(surround_);
+  RenderImpl(X_map_car, prisms, nullptr, nullptr, &region, nullptr, &labels);
+}
+
 void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                             ColorImage* color, DepthImage* depth, const RowSpans& color_region) {
   if (static_cast<int>(color_region.columns.size()) != rays_->height()) {
@@ -341,7 +362,8 @@ void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region,
 
 void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                 ColorImage* color, DepthImage* depth,
-                                const RowSpans* color_region, DepthRowHistory* history) {
+                                const RowSpans* color_region, DepthRowHistory* history,
+                                const LabelOut* labels) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
@@ -355,17 +377,19 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
     depth->height = h;
     depth->mm.resize(n);
   }
-  if (color == nullptr && depth == nullptr) return;
+  if (color == nullptr && depth == nullptr && labels == nullptr) return;
   // A new frame: every tile's nearest_t_ is stale until a prism touches it.
   if (++frame_ == 0) {
     std::fill(tile_stamp_.begin(), tile_stamp_.end(), 0u);
     frame_ = 1;
   }
   depth_rows_hit_.assign(static_cast<std::size_t>(h), 0);
-  RenderFloor(X_map_car, color, depth, color_region, history);
+  RenderFloor(X_map_car, color, depth, color_region, history, labels);
   // Without a depth image, only the colour region's pixels of a prism are needed.
   const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
-  for (const Prism& prism : prisms) RenderPrism(X_map_car, prism, color, depth, prism_region);
+  for (const Prism& prism : prisms) {
+    RenderPrism(X_map_car, prism, color, depth, prism_region, labels);
+  }
   if (history != nullptr) {
     // rows that differ from the bare floor now or did in the last frame
     for (int v = 0; v < h; ++v) {
@@ -379,7 +403,7 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
 
 void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
                                  DepthImage* depth, const RowSpans* color_region,
-                                 DepthRowHistory* history) {
+                                 DepthRowHistory* history, const LabelOut* labels) {
   const CameraRays& r = *rays_;
   if (depth != nullptr) {
     const std::size_t h = static_cast<std::size_t>(r.height());
@@ -397,7 +421,7 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       if (history != nullptr) history->changed_.assign(h, 1);
     }
   }
-  if (color == nullptr) return;
+  if (color == nullptr && labels == nullptr) return;
   const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
   const std::vector<CameraRays::Run>* surround_runs = &r.surround_runs();
   if (color_region != nullptr) {
@@ -407,8 +431,20 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
     surround_runs = &surround_in_region_;
   }
 
-  std::uint8_t* out = color->bgr.data();
+  // Colour: 3 bytes per pixel at out + 3 · i. Labels: one byte, at label_row[i] for pixel i of
+  // row v (label_row is the view's row v shifted back by v · width).
+  const int w = r.width();
+  std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
+  const auto label_row = [&](int v) {
+    return labels->view.origin + static_cast<std::ptrdiff_t>(v) * labels->view.stride -
+           static_cast<std::ptrdiff_t>(v) * w;
+  };
   for (const CameraRays::Run& run : *surround_runs) {
+    if (labels != nullptr) {
+      std::memset(label_row(run.begin / w) + run.begin, labels->surround,
+                  static_cast<std::size_t>(run.end - run.begin));
+      continue;
+    }
     for (int i = run.begin; i < run.end; ++i) std::memcpy(out + 3 * i, surround_.data(), 3);
   }
 
@@ -433,8 +469,8 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const std::uint32_t* palette = tex.palette();
   const float* fx = r.floor_x().data();
   const float* fy = r.floor_y().data();
-  // Pixels [begin, end), each looked up.
-  const auto look_up = [&](int begin, int end) {
+  // Pixels [begin, end) of row v, each looked up.
+  const auto look_up = [&](int v, int begin, int end) {
     for (int i = begin; i < end; i += kLanes) {
       const int n = std::min(kLanes, end - i);
       const F4 x = Load(fx + i, n);
@@ -445,6 +481,11 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       const I4 texel_col = __builtin_convertvector(inside ? col : zero, I4);
       const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
       const I4 index = inside ? texel_row * width + texel_col : outside;
+      if (labels != nullptr) {
+        std::uint8_t* label = label_row(v) + i;
+        for (int k = 0; k < n; ++k) label[k] = labels->palette[texel_index[index[k]]];
+        continue;
+      }
       for (int k = 0; k < n; ++k) {
         // 4 bytes where the next pixel overwrites the fourth, 3 at the end
         const std::uint32_t* texel = &palette[texel_index[index[k]]];
@@ -462,7 +503,6 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   // else. For x >= 0, truncation is floor, and every pixel's texel lies between those of the
   // square's corners.
   constexpr int kBlock = CameraRays::kBlockSize;
-  const int w = r.width();
   const int blocks_per_row = r.blocks_per_row();
   const CameraRays::FloorBlock* blocks = r.floor_blocks().data();
   std::array<std::uint8_t, 3 * kBlock> common_block;
@@ -490,13 +530,17 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       const int column = i - row * w;
       if (column % kBlock == 0 && i + kBlock <= run.end &&
           common(blocks[row * blocks_per_row + column / kBlock])) {
-        std::memcpy(out + 3 * i, common_block.data(), common_block.size());
+        if (labels != nullptr) {
+          std::memset(label_row(row) + i, labels->palette[tex.common_index()], kBlock);
+        } else {
+          std::memcpy(out + 3 * i, common_block.data(), common_block.size());
+        }
         ++common_floor_blocks_;
         i += kBlock;
         continue;
       }
       const int next = std::min(run.end, row * w + (column / kBlock + 1) * kBlock);
-      look_up(i, next);
+      look_up(row, i, next);
       i = next;
     }
   }
@@ -514,7 +558,8 @@ void CameraRenderer::InitTileDepth(std::size_t tile_index) {
 }
 
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
-                                 ColorImage* color, DepthImage* depth, const RowSpans* region) {
+                                 ColorImage* color, DepthImage* depth, const RowSpans* region,
+                                 const LabelOut* labels) {
   const CameraRays& r = *rays_;
   const CameraParams& params = r.camera().params();
   const world::OrientedBox& box = prism.footprint;
@@ -584,6 +629,10 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
     for (int ch = 0; ch < 3; ++ch) {
       face_bgr[f][ch] = static_cast<std::uint8_t>(std::lround(prism.bgr[ch] * shade));
     }
+  }
+  std::array<std::uint8_t, 7> face_label{};
+  if (labels != nullptr) {
+    for (std::size_t f = 0; f < 7; ++f) face_label[f] = (*labels->label)(face_bgr[f]);
   }
 
   // the ray test in the prism's frame: origin o, direction R(-psi) · dir; the slabs' bounds
@@ -673,6 +722,10 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
           nearest_t_[p] = t[k];
           if (out != nullptr)
             std::memcpy(out + 3 * p, face_bgr[static_cast<std::size_t>(face)].data(), 3);
+          if (labels != nullptr) {
+            labels->view.origin[static_cast<std::ptrdiff_t>(v) * labels->view.stride + u + k] =
+                face_label[static_cast<std::size_t>(face)];
+          }
           if (depth_mm != nullptr) {
             depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
             depth_mm[p] = t[k] >= near_m && t[k] <= far_m

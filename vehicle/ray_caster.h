@@ -19,6 +19,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -108,6 +109,7 @@ class FloorTexture {
   // per texel keeps a lookup's memory four times smaller than the colour would.
   const std::uint8_t* palette_index() const { return index_.data(); }
   const std::uint32_t* palette() const { return palette_.data(); }
+  int palette_size() const { return static_cast<int>(palette_.size()); }
   std::uint32_t outside_index() const { return static_cast<std::uint32_t>(index_.size() - 1); }
 
   // The colour most of the raster has (the bare floor of a track), as a palette index.
@@ -246,6 +248,15 @@ class DepthRowHistory {
   std::vector<std::uint8_t> changed_;
 };
 
+// Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u].
+struct LabelView {
+  std::uint8_t* origin{nullptr};
+  std::ptrdiff_t stride{0};
+};
+// A label per colour, for a consumer that reads a function of each pixel's colour alone (the lane
+// detector reads its line classes). Called once per colour in view, not per pixel.
+using ColourLabel = std::function<std::uint8_t(const Bgr&)>;
+
 // Renders one camera. Owns its scratch memory, so frames allocate nothing once the output images
 // have their size; one renderer per thread. A frame depends only on its inputs, never on the
 // frames rendered before it.
@@ -273,6 +284,12 @@ class CameraRenderer {
   void RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms, DepthImage* depth,
                    DepthRowHistory* history);
 
+  // label(c) for each pixel of `region` whose colour Render would make c, written to `out`; no
+  // other pixel is written. The floor has few colours and a prism's faces seven, so this costs
+  // what the colour does, without the colour image.
+  void RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                    const RowSpans& region, const ColourLabel& label, LabelView out);
+
   // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
   // their pixels up: on by default; off, every floor pixel is looked up (the reference that tests
   // and benchmarks compare with). The images are the same either way.
@@ -281,13 +298,22 @@ class CameraRenderer {
   std::uint64_t common_floor_blocks() const { return common_floor_blocks_; }
 
  private:
+  // RenderLabels' output: where, and the labels of the floor's and the surround's colours.
+  struct LabelOut {
+    LabelView view;
+    const ColourLabel* label{nullptr};
+    std::array<std::uint8_t, 256> palette{};  // by floor palette index
+    std::uint8_t surround{0};
+  };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
-                  DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history);
+                  DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,
+                  const LabelOut* labels = nullptr);
+  // Colour (or, with `labels`, labels) and depth of the floor and the surround.
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
-                   const RowSpans* color_region, DepthRowHistory* history);
+                   const RowSpans* color_region, DepthRowHistory* history, const LabelOut* labels);
   // `region`: only its pixels (colour alone), or null: all of the prism's.
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, ColorImage* color,
-                   DepthImage* depth, const RowSpans* region);
+                   DepthImage* depth, const RowSpans* region, const LabelOut* labels);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;

@@ -124,6 +124,25 @@ struct LaneParams {
   std::function<void(const stack::LanePoints&, Time)> hook;
 };
 
+// The bird's-eye row sums of a frame. The detector reads a function of each pixel's colour alone,
+// its line class, so the renderer labels the pixels it reads with their colour's class (a few
+// colours in view) instead of drawing them for the detector to classify one by one; with colour
+// noise on, the colour image it is.
+void LaneRowSums(const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch,
+                 stack::BirdsEyeRowSums* sums) {
+  stack::LaneDetector& detector = *p.detector;
+  const vehicle::ColourLabel line_class = [&detector](const vehicle::Bgr& c) {
+    return detector.ClassOf(c[0], c[1], c[2]);
+  };
+  if (frame.RenderLabels(*p.reads, line_class,
+                         vehicle::LabelView{detector.source_classes(),
+                                            stack::LaneDetector::kClassStride})) {
+    detector.ComputeRowSumsFromClasses(sums);
+  } else {
+    detector.ComputeRowSums(RenderColor(frame, scratch, *p.reads), sums);
+  }
+}
+
 stack::LanePoints Report(const LaneParams& params, stack::LanePoints lanes, Time stamp) {
   if (params.hook) params.hook(lanes, stamp);
   return lanes;
@@ -151,7 +170,9 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
     AddComponentNode(graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes,
                      std::move(params), std::make_shared<ColorScratch>(),
                      [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
-                       return Report(p, p.detector->Step(RenderColor(frame, scratch, *p.reads)), frame.stamp);
+                       stack::BirdsEyeRowSums sums;
+                       LaneRowSums(p, frame, scratch, &sums);
+                       return Report(p, p.detector->Fit(sums), frame.stamp);
                      });
     return lanes;
   }
@@ -162,7 +183,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                    params, std::make_shared<ColorScratch>(),
                    [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
                      BirdViewMessage out{.stamp = frame.stamp};
-                     p.detector->ComputeRowSums(RenderColor(frame, scratch, *p.reads), &out.sums);
+                     LaneRowSums(p, frame, scratch, &out.sums);
                      return out;
                    });
   AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,

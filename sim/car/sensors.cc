@@ -1,5 +1,7 @@
 #include "sim/car/sensors.h"
 
+#include <cstring>
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -118,6 +120,12 @@ void CameraFrame::RenderDepth(vehicle::DepthImage* depth,
   camera->RenderDepth(*this, depth, history);
 }
 
+bool CameraFrame::RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
+                               vehicle::LabelView out) const {
+  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
+  return camera->RenderLabels(*this, region, label, out);
+}
+
 const std::string& CameraFrame::topic() const { return camera->params().topic; }
 
 std::int64_t CameraFrame::bytes() const { return ImageBytes(camera->params()); }
@@ -153,6 +161,25 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
   }
   vehicle::AddCameraNoise(params_.noise, params_.camera, frame.noise_seed, color, depth);
   ++frames_rendered_;
+}
+
+bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
+                                const vehicle::ColourLabel& label, vehicle::LabelView out) const {
+  if (params_.noise.enabled && params_.noise.color_stddev > 0.0) return false;
+  if (frame.blackout) {  // every pixel black
+    const std::uint8_t black = label(vehicle::Bgr{0, 0, 0});
+    for (std::size_t v = 0; v < region.columns.size(); ++v) {
+      const auto [begin, end] = region.columns[v];
+      if (begin < end) {
+        std::memset(out.origin + static_cast<std::ptrdiff_t>(v) * out.stride + begin, black,
+                    static_cast<std::size_t>(end - begin));
+      }
+    }
+  } else {
+    renderer_.RenderLabels(frame.X_map_car, frame.prisms, region, label, out);
+  }
+  ++frames_rendered_;
+  return true;
 }
 
 void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,

@@ -113,6 +113,11 @@ struct CameraFrame {
   // The depth image alone, into a buffer `history` describes (vehicle::DepthRowHistory): Render's
   // image, with only the rows that can have changed since the buffer's last frame rewritten.
   void RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history) const;
+  // label(colour) of each `region` pixel (vehicle::CameraRenderer::RenderLabels), without the
+  // colour image. False, and nothing written, where a pixel's colour is not the scene's own (the
+  // colour noise is on): render the colour then.
+  bool RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
+                    vehicle::LabelView out) const;
   const std::string& topic() const;
   std::int64_t bytes() const;  // of the message on the topic
 };
@@ -131,6 +136,8 @@ class CameraSensor {
               const vehicle::RowSpans* color_region = nullptr) const;
   void RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
                    vehicle::DepthRowHistory* history) const;
+  bool RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
+                    const vehicle::ColourLabel& label, vehicle::LabelView out) const;
 
  private:
   CameraStreamParams params_;

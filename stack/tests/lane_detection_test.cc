@@ -182,6 +182,21 @@ TEST_F(LaneTrack, FastMasksAreBitIdenticalToOpenCv) {
     BirdsEyeRowSums sums;
     detector.ComputeRowSums(AsMat(frame.color), &sums);
     EXPECT_EQ(sums, RowSumsOfMasks(reference)) << p.what;
+    // classes written by a producer (ClassOf of each pixel it reads) give the same sums; a black
+    // image first, so that the detector's own classes of this frame are not what is read
+    BirdsEyeRowSums of_black;
+    detector.ComputeRowSums(cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC3), &of_black);
+    ASSERT_NE(of_black, sums) << p.what;
+    for (const LaneDetector::SourceSpan& span : detector.source_spans()) {
+      for (int c = span.col_begin; c < span.col_end; ++c) {
+        const std::uint8_t* px = frame.color.bgr.data() + 3 * (span.row * kLaneImageWidth + c);
+        detector.source_classes()[span.row * LaneDetector::kClassStride + c] =
+            detector.ClassOf(px[0], px[1], px[2]);
+      }
+    }
+    BirdsEyeRowSums from_classes;
+    detector.ComputeRowSumsFromClasses(&from_classes);
+    EXPECT_EQ(from_classes, sums) << p.what;
     LaneDetectionTrace from_sums, from_masks;
     const LanePoints a = detector.Fit(sums, &from_sums);
     const LanePoints b = detector.Fit(reference, &from_masks);

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <set>
 #include <vector>
 
 namespace autonomsim::vehicle {
@@ -588,6 +589,62 @@ TEST(RayCasterTest, ADepthBufferWithItsHistoryIsRewrittenOnlyWhereItCanHaveChang
   EXPECT_EQ(buffer.mm, whole.mm);
   EXPECT_EQ(std::count(history.changed_rows().begin(), history.changed_rows().end(), 1),
             params.height_px);
+}
+
+TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsWritten) {
+  // Lines of two colours, cars and boxes in view (their shaded faces: more colours), 24 poses;
+  // a label that tells many colours apart; the labels into a padded buffer, as the lane detector
+  // keeps its classes.
+  const CameraParams params = ColorCameraParams();
+  world::FloorRaster raster = BlackFloor(4.0);
+  for (int k = -6; k <= 6; ++k) {
+    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
+    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
+  }
+  CameraRenderer renderer = MakeRenderer(params, raster);
+  RowSpans region;
+  region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
+  for (int row = 150; row < params.height_px; ++row) {
+    if (row % 41 == 0) continue;
+    region.columns[static_cast<std::size_t>(row)] = {std::max(0, 310 - 2 * (row - 150)),
+                                                     std::min(params.width_px, 330 + 3 * (row - 150))};
+  }
+  const ColourLabel label = [](const Bgr& c) {
+    return static_cast<std::uint8_t>(1 + (c[0] * 7 + c[1] * 3 + c[2]) % 251);
+  };
+  const std::ptrdiff_t stride = params.width_px + 2;
+  std::vector<std::uint8_t> padded(static_cast<std::size_t>(stride) * (params.height_px + 2));
+  std::set<std::uint8_t> seen;
+  for (int k = 0; k < 24; ++k) {
+    const world::Pose2 pose{-1.6 + 0.14 * k, 1.0 - 0.09 * k, 0.27 * k};
+    const Eigen::Isometry3d X_map_car = Lift(pose);
+    const Eigen::Vector3d ahead = X_map_car * Eigen::Vector3d(0.8 + 0.03 * k, 0.15, 0.0);
+    const Eigen::Vector3d side = X_map_car * Eigen::Vector3d(0.6, -0.3, 0.0);
+    const std::vector<Prism> prisms{Box(ahead.x(), ahead.y(), 0.3 * k, 0.525, 0.296, 0.2),
+                                    Box(side.x(), side.y(), 0.0, 0.2, 0.2, 0.3, Bgr{40, 40, 190})};
+    ColorImage full;
+    renderer.Render(pose, prisms, &full, nullptr);
+    std::fill(padded.begin(), padded.end(), 0);
+    renderer.RenderLabels(pose, prisms, region, label, LabelView{padded.data() + stride + 1, stride});
+    for (int v = -1; v <= params.height_px; ++v) {
+      for (int u = -1; u <= params.width_px; ++u) {
+        const std::uint8_t got = padded[static_cast<std::size_t>((v + 1) * stride + u + 1)];
+        const bool asked = v >= 0 && v < params.height_px &&
+                           u >= region.columns[static_cast<std::size_t>(v)].first &&
+                           u < region.columns[static_cast<std::size_t>(v)].second;
+        if (!asked) {
+          ASSERT_EQ(got, 0) << "pose " << k << " (" << u << ", " << v << ") was not asked for";
+          continue;
+        }
+        ASSERT_EQ(got, label(PixelAt(full, u, v))) << "pose " << k << " (" << u << ", " << v << ")";
+        seen.insert(got);
+      }
+    }
+  }
+  EXPECT_GE(seen.size(), 6u);  // floor, lines, surround and prism faces were all compared
+  EXPECT_THROW(renderer.RenderLabels(world::Pose2{}, {}, RowSpans{}, label,
+                                     LabelView{padded.data(), stride}),
+               std::invalid_argument);
 }
 
 TEST(RayCasterTest, OutsideTheRasterIsBareFloorAndAboveTheHorizonTheSurround) {
