@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "sim/core/config.h"
@@ -257,6 +258,56 @@ TEST(SensorSuiteTest, WithoutNoiseAFrameIsTheRenderersExactPicture) {
   // the frame holds the world of its instant: car 1 and the box, not car 0 itself
   ASSERT_EQ(frame.prisms.size(), 2u);
   EXPECT_EQ(frame.prisms[1].footprint.pose.x_m, 1.0);
+}
+
+TEST(SensorSuiteTest, LabelsAndTheDepthHistoryGiveTheFramesOwnPicture) {
+  // The consumers' cheaper renderings of a frame: labels of its colours, and depth into a buffer
+  // with its history, frame after frame; a blacked-out colour camera labels black; with colour
+  // noise the labels are refused (the colour must be rendered).
+  DrivingWorld world(2);
+  std::vector<CameraFrame> colour_frames, depth_frames;
+  world.suites[0]->OnColorFrame([&](const CameraFrame& f) { colour_frames.push_back(f); });
+  world.suites[0]->OnDepthFrame([&](const CameraFrame& f) { depth_frames.push_back(f); });
+  world.kernel.RunUntil(Milliseconds(1000));
+  world.suites[0]->SetColorCameraFault(SensorSuite::CameraFault::kBlackout);
+  world.kernel.RunUntil(Milliseconds(1200));
+  ASSERT_GT(colour_frames.size(), 20u);
+  ASSERT_TRUE(colour_frames.back().blackout);
+
+  const int w = colour_frames.front().camera->Info().width;
+  const int h = colour_frames.front().camera->Info().height;
+  vehicle::RowSpans all;
+  all.columns.assign(static_cast<std::size_t>(h), {0, w});
+  const vehicle::ColourLabel label = [](const vehicle::Bgr& c) {
+    return static_cast<std::uint8_t>(1 + (c[0] * 7 + c[1] * 3 + c[2]) % 251);
+  };
+  std::vector<std::uint8_t> labels(static_cast<std::size_t>(w) * h);
+  for (const CameraFrame& frame : {colour_frames[5], colour_frames.back()}) {
+    vehicle::ColorImage colour;
+    frame.Render(&colour, nullptr);
+    ASSERT_TRUE(frame.RenderLabels(all, label, vehicle::LabelView{labels.data(), w}));
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      ASSERT_EQ(labels[i], label({colour.bgr[3 * i], colour.bgr[3 * i + 1], colour.bgr[3 * i + 2]}))
+          << "pixel " << i << (frame.blackout ? " (blackout)" : "");
+    }
+  }
+
+  vehicle::DepthImage buffer, whole;
+  vehicle::DepthRowHistory history;
+  for (const CameraFrame& frame : depth_frames) {
+    frame.RenderDepth(&buffer, &history);
+    frame.Render(nullptr, &whole);
+    ASSERT_EQ(buffer.mm, whole.mm) << "frame " << frame.sequence;
+  }
+
+  DrivingWorld noisy(2, WithCameraNoise());
+  std::optional<CameraFrame> noisy_frame;
+  noisy.suites[0]->OnColorFrame([&](const CameraFrame& f) { noisy_frame = f; });
+  noisy.kernel.RunUntil(Milliseconds(100));
+  ASSERT_TRUE(noisy_frame.has_value());
+  std::fill(labels.begin(), labels.end(), 7);
+  EXPECT_FALSE(noisy_frame->RenderLabels(all, label, vehicle::LabelView{labels.data(), w}));
+  EXPECT_EQ(std::count(labels.begin(), labels.end(), 7), w * h);  // nothing written
 }
 
 TEST(SensorSuiteTest, CamerasCanBeDrivenFromOutside) {
