@@ -98,6 +98,27 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
 // /1: bare floor blocks filled at once (the default); /0: every pixel looked up
 BENCHMARK(BM_RenderColorLaneRegion)->ArgName("blocks")->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
+// The colour camera as the lane nodes render it in the loop now: the line class of each pixel the
+// detector reads (CameraRenderer::RenderLabels), straight into the detector's class buffer.
+void BM_RenderLaneLabels(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
+  stack::LaneDetector detector(stack::LaneDetectionParams{},
+                               sim::LaneCalibration(color_camera.camera()));
+  const vehicle::RowSpans region =
+      sim::LaneDetectorReads(detector, color_camera.camera().height());
+  const vehicle::ColourLabel line_class = [&detector](const vehicle::Bgr& c) {
+    return detector.ClassOf(c[0], c[1], c[2]);
+  };
+  const vehicle::LabelView out{detector.source_classes(), stack::LaneDetector::kClassStride};
+  for (auto _ : state) {
+    color_camera.RenderLabels(scene.pose, scene.prisms, region, line_class, out);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RenderLaneLabels)->Unit(benchmark::kMicrosecond);
+
 // The same without prisms: the floor alone.
 void BM_RenderRgbdEmptyTrack(benchmark::State& state) {
   const Scene& scene = TheScene();
