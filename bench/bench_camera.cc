@@ -90,7 +90,10 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations());
-  // pixels filled as a block of the bare floor's colour, per frame
+  // the pixels asked for, and those filled as a block of the bare floor's colour, per frame
+  double region_px = 0;
+  for (const auto& [begin, end] : region.columns) region_px += end - begin;
+  state.counters["region_px"] = region_px;
   state.counters["block_px"] = benchmark::Counter(
       static_cast<double>(color_camera.common_floor_blocks()) * vehicle::CameraRays::kBlockSize,
       benchmark::Counter::kAvgIterations);

@@ -157,23 +157,44 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
   for (std::size_t i = 0; i < n; ++i) ++uses[index_[i]];
   common_index_ = static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) -
                                             uses.begin());
-  cells_x_ = (width_ + kCommonCell - 1) / kCommonCell;
+  const int cells_x = (width_ + kCommonCell - 1) / kCommonCell;
   const int cells_y = (height_ + kCommonCell - 1) / kCommonCell;
-  std::vector<std::uint8_t> other(static_cast<std::size_t>(cells_x_) * cells_y, 0);
+  cells_y_ = static_cast<std::size_t>(cells_y);
+  words_per_row_ = static_cast<std::size_t>((cells_x + 63) / 64);
+  // other[y][x]: the cell holds a texel of another colour; near: the same within d, grown by one
+  // cell per level
+  std::vector<std::uint8_t> near(static_cast<std::size_t>(cells_x) * cells_y, 0);
   for (int row = 0; row < height_; ++row) {
     for (int col = 0; col < width_; ++col) {
       if (index_[static_cast<std::size_t>(row) * width_ + col] != common_index_) {
-        other[static_cast<std::size_t>(row / kCommonCell) * cells_x_ + col / kCommonCell] = 1;
+        near[static_cast<std::size_t>(row / kCommonCell) * cells_x + col / kCommonCell] = 1;
       }
     }
   }
-  const std::size_t stride = static_cast<std::size_t>(cells_x_) + 1;
-  others_.assign(stride * (static_cast<std::size_t>(cells_y) + 1), 0u);
-  for (int y = 0; y < cells_y; ++y) {
-    std::uint32_t in_row = 0;
-    for (int x = 0; x < cells_x_; ++x) {
-      in_row += other[static_cast<std::size_t>(y) * cells_x_ + x];
-      others_[(y + 1) * stride + x + 1] = others_[y * stride + x + 1] + in_row;
+  common_near_.assign((kMaxReachCells + 1) * cells_y_ * words_per_row_, 0);
+  std::vector<std::uint8_t> grown(near.size());
+  for (int d = 0; d <= kMaxReachCells; ++d) {
+    if (d > 0) {
+      for (int y = 0; y < cells_y; ++y) {
+        for (int x = 0; x < cells_x; ++x) {
+          std::uint8_t any = 0;
+          for (int yy = std::max(0, y - 1); yy <= std::min(cells_y - 1, y + 1); ++yy) {
+            for (int xx = std::max(0, x - 1); xx <= std::min(cells_x - 1, x + 1); ++xx) {
+              any |= near[static_cast<std::size_t>(yy) * cells_x + xx];
+            }
+          }
+          grown[static_cast<std::size_t>(y) * cells_x + x] = any;
+        }
+      }
+      near.swap(grown);
+    }
+    for (int y = 0; y < cells_y; ++y) {
+      for (int x = 0; x < cells_x; ++x) {
+        if (near[static_cast<std::size_t>(y) * cells_x + x] == 0) {
+          common_near_[(static_cast<std::size_t>(d) * cells_y_ + y) * words_per_row_ + x / 64] |=
+              std::uint64_t{1} << (x % 64);
+        }
+      }
     }
   }
 }
@@ -517,11 +538,8 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
     const float col = a00 * block.centre_x + a01 * block.centre_y + a02;
     const float row = a10 * block.centre_x + a11 * block.centre_y + a12;
     const float reach = block.radius * texels_per_m + 1.0f;
-    const float col0 = col - reach, col1 = col + reach;
-    const float row0 = row - reach, row1 = row + reach;
-    return col0 >= 0.0f && row0 >= 0.0f && col1 < tex_cols && row1 < tex_rows &&
-           tex.AllCommon(static_cast<int>(col0), static_cast<int>(row0), static_cast<int>(col1),
-                         static_cast<int>(row1));
+    return col - reach >= 0.0f && row - reach >= 0.0f && col + reach < tex_cols &&
+           row + reach < tex_rows && tex.CommonWithin(col, row, reach);
   };
   for (const CameraRays::Run& run : *floor_runs) {
     const int row = run.begin / w;  // a run lies in one row

@@ -114,20 +114,23 @@ class FloorTexture {
 
   // The colour most of the raster has (the bare floor of a track), as a palette index.
   std::uint8_t common_index() const { return common_index_; }
-  // Whether every texel of columns [col0, col1] and rows [row0, row1] (inclusive, inside the
-  // raster) has common_index(). Conservative: false may also mean that a texel of a cell of
-  // kCommonCell × kCommonCell texels touching the rectangle has another colour. A summed-area
-  // table of those cells answers in four look-ups.
+  // Whether every texel within `reach` texels (in column and row) of the texture point (col, row)
+  // has common_index(); the square must be inside the raster (col, row >= reach). Conservative:
+  // false may also mean that a texel of another colour is a little farther away (at most two
+  // cells of kCommonCell texels), or that reach is above kMaxReachCells cells. One bit look-up:
+  // per distance d in cells, a bitmap of the cells whose neighbours within d are all common.
   static constexpr int kCommonCell = 4;
-  bool AllCommon(int col0, int row0, int col1, int row1) const {
-    const std::size_t stride = static_cast<std::size_t>(cells_x_) + 1;
-    const auto at = [&](int cell_row, int cell_col) {
-      return others_[static_cast<std::size_t>(cell_row) * stride +
-                     static_cast<std::size_t>(cell_col)];
-    };
-    const int x0 = col0 / kCommonCell, x1 = col1 / kCommonCell;
-    const int y0 = row0 / kCommonCell, y1 = row1 / kCommonCell;
-    return at(y1 + 1, x1 + 1) - at(y0, x1 + 1) - at(y1 + 1, x0) + at(y0, x0) == 0;
+  static constexpr int kMaxReachCells = 8;
+  bool CommonWithin(float col, float row, float reach) const {
+    const int d = static_cast<int>(reach * (1.0f / kCommonCell)) + 1;
+    if (d > kMaxReachCells) return false;
+    const int x = static_cast<int>(col) / kCommonCell;
+    const int y = static_cast<int>(row) / kCommonCell;
+    const std::uint64_t word =
+        common_near_[(static_cast<std::size_t>(d) * cells_y_ + static_cast<std::size_t>(y)) *
+                         words_per_row_ +
+                     static_cast<std::size_t>(x >> 6)];
+    return ((word >> (x & 63)) & 1u) != 0;
   }
 
  private:
@@ -138,10 +141,11 @@ class FloorTexture {
   std::vector<std::uint8_t> index_;
   std::vector<std::uint32_t> palette_;
   std::uint8_t common_index_{0};
-  int cells_x_{0};
-  // others_[(y + 1) · (cells_x_ + 1) + x + 1]: how many cells of rows [0, y] × columns [0, x] hold
-  // a texel whose index is not common_index_.
-  std::vector<std::uint32_t> others_;
+  std::size_t cells_y_{0};
+  std::size_t words_per_row_{0};
+  // bit x of word [(d · cells_y_ + y) · words_per_row_ + x / 64]: every texel of the cells within
+  // d (Chebyshev) of cell (x, y) has common_index_; d = 0..kMaxReachCells.
+  std::vector<std::uint64_t> common_near_;
 };
 
 // Per-pixel geometry of one camera on a car, in the car's base frame: immutable, and shareable by
