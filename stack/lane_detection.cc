@@ -558,6 +558,14 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   masks->white.setTo(0);
   std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
   std::uint8_t* white = masks->white.ptr<std::uint8_t>();
+  ForEachWarpedLinePixel([&](std::uint32_t dst, std::uint8_t yellow_value, std::uint8_t white_value) {
+    yellow[dst] = yellow_value;
+    white[dst] = white_value;
+  });
+}
+
+template <class Visit>
+void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
   const std::uint8_t* classes = classes_.data();
   const std::uint8_t* lut = warp_lut_.data();
   constexpr int stride = kLaneImageWidth + 2;
@@ -569,8 +577,7 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
       if ((c0 | c1 | c2 | c3) == 0) continue;
       const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
       const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
-      yellow[pixel_dst_[i]] = lut[pixel_lut_[i] + yellow_bits];
-      white[pixel_dst_[i]] = lut[pixel_lut_[i] + white_bits];
+      visit(pixel_dst_[i], lut[pixel_lut_[i] + yellow_bits], lut[pixel_lut_[i] + white_bits]);
     }
   }
 }
@@ -588,30 +595,19 @@ void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums) {
 
 void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums) {
   *sums = BirdsEyeRowSums{};
-  const std::uint8_t* classes = classes_.data();
-  const std::uint8_t* lut = warp_lut_.data();
-  constexpr int stride = kLaneImageWidth + 2;
-  // ComputeMasks' loop, counting the non-zero outputs where it would write them
-  for (const Tile& tile : tiles_) {
-    if (!AnyLineCell(tile)) continue;
-    for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
-      const std::uint8_t* p = classes + pixel_src_[i];
-      const int c0 = p[0], c1 = p[1], c2 = p[stride], c3 = p[stride + 1];
-      if ((c0 | c1 | c2 | c3) == 0) continue;
-      const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
-      const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
-      const std::uint32_t row = pixel_dst_[i] / kLaneImageWidth;
-      const std::uint32_t col = pixel_dst_[i] - row * kLaneImageWidth;
-      if (lut[pixel_lut_[i] + yellow_bits] != 0) {
-        ++sums->yellow[row].count;
-        sums->yellow[row].col_sum += col;
-      }
-      if (lut[pixel_lut_[i] + white_bits] != 0) {
-        ++sums->white[row].count;
-        sums->white[row].col_sum += col;
-      }
+  // counting the non-zero outputs where ComputeMasks writes them
+  ForEachWarpedLinePixel([sums](std::uint32_t dst, std::uint8_t yellow, std::uint8_t white) {
+    const std::uint32_t row = dst / kLaneImageWidth;
+    const std::uint32_t col = dst - row * kLaneImageWidth;
+    if (yellow != 0) {
+      ++sums->yellow[row].count;
+      sums->yellow[row].col_sum += col;
     }
-  }
+    if (white != 0) {
+      ++sums->white[row].count;
+      sums->white[row].col_sum += col;
+    }
+  });
 }
 
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {

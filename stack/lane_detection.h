@@ -276,7 +276,11 @@ class LaneDetector {
   void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
   void IndexLineCells();  // cell_prefix_ from cell_any_
   bool AnyLineCell(const Tile& tile) const;
-  // The warp loop over classes_: the row sums of the bird's-eye masks.
+  // The warp over classes_: visit(output index, yellow value, white value) for each output pixel
+  // that may be non-zero (the others stay 0, the border value).
+  template <class Visit>
+  void ForEachWarpedLinePixel(Visit visit) const;
+  // The row sums of the bird's-eye masks, from classes_.
   void SumWarpedClasses(BirdsEyeRowSums* sums);
 
   LaneDetectionParams params_;
