@@ -5,8 +5,9 @@
 // The structure of the problem does the work. The car moves in the plane and its cameras are
 // rigidly mounted, so every pixel's ray, its floor hit in the car's frame and that hit's depth are
 // constants of the camera (CameraRays, computed once, lens distortion included). A frame then
-// costs, per floor pixel, one 2D rigid transform and one raster look-up, and the empty floor's
-// depth image is a copy. Prisms are culled to those in front of the camera; each one's corners
+// costs, per floor pixel, one 2D rigid transform and one raster look-up (and a block of 16 pixels
+// over the bare floor between the painted lines costs one look-up in all), and the empty floor's
+// depth image is a copy (only of the rows a prism changed, for a consumer that keeps its buffer). Prisms are culled to those in front of the camera; each one's corners
 // bound it on the image, and only the pixels of the tiles under that bound get the exact
 // ray–prism test, which keeps the nearest surface.
 //
