@@ -110,9 +110,7 @@ void BM_RenderLaneLabels(benchmark::State& state) {
                                sim::LaneCalibration(color_camera.camera()));
   const vehicle::RowSpans region =
       sim::LaneDetectorReads(detector, color_camera.camera().height());
-  const vehicle::ColourLabel line_class = [&detector](const vehicle::Bgr& c) {
-    return detector.ClassOf(c[0], c[1], c[2]);
-  };
+  const vehicle::ColourLabel line_class = sim::LaneLineClass(detector);
   const vehicle::LabelView out{detector.source_classes(), stack::LaneDetector::kClassStride};
   for (auto _ : state) {
     color_camera.RenderLabels(scene.pose, scene.prisms, region, line_class, out);

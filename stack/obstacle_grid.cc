@@ -201,7 +201,8 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
                                    static_cast<float>(params.cell_size_m)};
   std::copy(rest.begin(), rest.end(), key.begin() + 12);
   Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight,
-          "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for 480 rows");
+          "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for " +
+              Num(PointCloud640::kHeight) + " rows");
   const bool valid = memo->valid_ && memo->key_ == key;
   if (!valid) {
     memo->valid_ = true;

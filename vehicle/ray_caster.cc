@@ -334,14 +334,18 @@ void CameraRenderer::RenderDepth(const world::Pose2& X_map_car, std::span<const 
   RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history);
 }
 
-void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
-                                  const RowSpans& region, const ColourLabel& label,
-                                  LabelView out) {
+void CameraRenderer::CheckRegion(const RowSpans& region, const char* what) const {
   if (static_cast<int>(region.columns.size()) != rays_->height()) {
-    throw std::invalid_argument("CameraRenderer: a label region of " +
+    throw std::invalid_argument(std::string("CameraRenderer: a ") + what + " region of " +
                                 std::to_string(region.columns.size()) + " rows for a camera of " +
                                 std::to_string(rays_->height()));
   }
+}
+
+void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                                  const RowSpans& region, const ColourLabel& label,
+                                  LabelView out) {
+  CheckRegion(region, "label");
   Require(out.origin != nullptr && out.stride >= rays_->width() && label != nullptr,
           "CameraRenderer::RenderLabels needs an output of the camera's width and a label");
   LabelOut labels{.view = out, .label = &label};
@@ -357,11 +361,7 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
 
 void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                             ColorImage* color, DepthImage* depth, const RowSpans& color_region) {
-  if (static_cast<int>(color_region.columns.size()) != rays_->height()) {
-    throw std::invalid_argument("CameraRenderer: a colour region of " +
-                                std::to_string(color_region.columns.size()) + " rows for a camera of " +
-                                std::to_string(rays_->height()));
-  }
+  CheckRegion(color_region, "colour");
   RenderImpl(X_map_car, prisms, color, depth, &color_region, nullptr);
 }
 
@@ -758,8 +758,7 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
 
 void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, std::uint64_t seed,
                     ColorImage* color, DepthImage* depth) {
-  if (!noise.enabled) return;
-  if (depth != nullptr && noise.depth_stddev_per_m > 0.0) {
+  if (depth != nullptr && noise.AltersDepth()) {
     const std::uint64_t base = Mix64(seed ^ kDepthDomain);
     for (std::size_t i = 0; i < depth->mm.size(); ++i) {
       const std::uint16_t mm = depth->mm[i];
@@ -770,7 +769,7 @@ void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, 
       depth->mm[i] = DepthMillimetres(noisy, camera.clip_near_m, camera.clip_far_m);
     }
   }
-  if (color != nullptr && noise.color_stddev > 0.0) {
+  if (color != nullptr && noise.AltersColor()) {
     // one 64-bit draw per pixel gives its three channels' normals (21 bits each)
     const std::uint64_t base = Mix64(seed ^ kColorDomain);
     const auto stddev = static_cast<float>(noise.color_stddev);

@@ -93,6 +93,9 @@ struct CameraNoiseParams {
     v("color_stddev", color_stddev);
   }
   void Validate() const;  // depth_stddev_per_m in [0, 0.1], color_stddev in [0, 64]
+  // Whether AddCameraNoise changes the depth image, the colour image.
+  bool AltersDepth() const { return enabled && depth_stddev_per_m > 0.0; }
+  bool AltersColor() const { return enabled && color_stddev > 0.0; }
 };
 
 // The floor raster as the ray caster reads it: one 32-bit texel (B, G, R, 0 in memory) per raster
@@ -303,6 +306,8 @@ class CameraRenderer {
   std::uint64_t common_floor_blocks() const { return common_floor_blocks_; }
 
  private:
+  // std::invalid_argument unless `region` has a row per image row.
+  void CheckRegion(const RowSpans& region, const char* what) const;
   // RenderLabels' output: where, and the labels of the floor's and the surround's colours.
   struct LabelOut {
     LabelView view;

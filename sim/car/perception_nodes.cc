@@ -121,6 +121,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
 struct LaneParams {
   std::shared_ptr<stack::LaneDetector> detector;  // its tables are shared by the lane nodes
   std::shared_ptr<const vehicle::RowSpans> reads;  // the image pixels the detector reads
+  vehicle::ColourLabel line_class;                 // LaneLineClass(*detector)
   std::function<void(const stack::LanePoints&, Time)> hook;
 };
 
@@ -131,10 +132,7 @@ struct LaneParams {
 void LaneRowSums(const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch,
                  stack::BirdsEyeRowSums* sums) {
   stack::LaneDetector& detector = *p.detector;
-  const vehicle::ColourLabel line_class = [&detector](const vehicle::Bgr& c) {
-    return detector.ClassOf(c[0], c[1], c[2]);
-  };
-  if (frame.RenderLabels(*p.reads, line_class,
+  if (frame.RenderLabels(*p.reads, p.line_class,
                          vehicle::LabelView{detector.source_classes(),
                                             stack::LaneDetector::kClassStride})) {
     detector.ComputeRowSumsFromClasses(sums);
@@ -160,6 +158,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                     .hook = std::move(hook)};
   params.reads = std::make_shared<const vehicle::RowSpans>(
       LaneDetectorReads(*params.detector, sensors.color_camera().model().height()));
+  params.line_class = LaneLineClass(*params.detector);
 
   if (mapping.count("lane_detection") != 0) {
     if (InHardware(mapping, "lane_detection", kSoftware)) {
@@ -204,6 +203,10 @@ vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int hei
     if (span.row < height) reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
   }
   return reads;
+}
+
+vehicle::ColourLabel LaneLineClass(const stack::LaneDetector& detector) {
+  return [&detector](const vehicle::Bgr& c) { return detector.ClassOf(c[0], c[1], c[2]); };
 }
 
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {

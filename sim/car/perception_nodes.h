@@ -52,6 +52,10 @@ stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera)
 // lane nodes ask the renderer for (vehicle::RowSpans, demand-driven colour).
 vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int height);
 
+// The detector's line class of a colour (LaneDetector::ClassOf) as a renderer's label
+// (vehicle::CameraRenderer::RenderLabels); `detector` must outlive it.
+vehicle::ColourLabel LaneLineClass(const stack::LaneDetector& detector);
+
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a
 // mapping the shape cannot take (e.g. lane_detection in hardware: map lane_planner and poly_fit).

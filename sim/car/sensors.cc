@@ -1,8 +1,7 @@
 #include "sim/car/sensors.h"
 
-#include <cstring>
-
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -103,27 +102,32 @@ std::vector<vehicle::Prism> ScenePrisms(const std::vector<CarBody>& cars,
   return prisms;
 }
 
+namespace {
+const CameraSensor& CameraOf(const CameraFrame& frame) {
+  if (frame.camera == nullptr) {
+    throw std::logic_error("CameraFrame::Render: the frame has no camera");
+  }
+  return *frame.camera;
+}
+}  // namespace
+
 void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth) const {
-  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
-  camera->Render(*this, color, depth);
+  CameraOf(*this).Render(*this, color, depth);
 }
 
 void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
                          const vehicle::RowSpans& color_region) const {
-  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
-  camera->Render(*this, color, depth, &color_region);
+  CameraOf(*this).Render(*this, color, depth, &color_region);
 }
 
 void CameraFrame::RenderDepth(vehicle::DepthImage* depth,
                               vehicle::DepthRowHistory* history) const {
-  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
-  camera->RenderDepth(*this, depth, history);
+  CameraOf(*this).RenderDepth(*this, depth, history);
 }
 
 bool CameraFrame::RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
                                vehicle::LabelView out) const {
-  if (camera == nullptr) throw std::logic_error("CameraFrame::Render: the frame has no camera");
-  return camera->RenderLabels(*this, region, label, out);
+  return CameraOf(*this).RenderLabels(*this, region, label, out);
 }
 
 const std::string& CameraFrame::topic() const { return camera->params().topic; }
@@ -165,7 +169,7 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
 
 bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                                 const vehicle::ColourLabel& label, vehicle::LabelView out) const {
-  if (params_.noise.enabled && params_.noise.color_stddev > 0.0) return false;
+  if (params_.noise.AltersColor()) return false;
   if (frame.blackout) {  // every pixel black
     const std::uint8_t black = label(vehicle::Bgr{0, 0, 0});
     for (std::size_t v = 0; v < region.columns.size(); ++v) {
@@ -184,8 +188,7 @@ bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpan
 
 void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
                                vehicle::DepthRowHistory* history) const {
-  const bool noisy = params_.noise.enabled && params_.noise.depth_stddev_per_m > 0.0;
-  if (frame.blackout || noisy) {  // the buffer is not the bare floor plus prisms
+  if (frame.blackout || params_.noise.AltersDepth()) {  // not the bare floor plus prisms
     Render(frame, nullptr, depth);
     history->Forget();
     return;

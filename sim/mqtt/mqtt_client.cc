@@ -358,10 +358,10 @@ void MosquittoClient::OnConnect(mosquitto*, void* obj, int rc, int, const mosqui
   {
     std::lock_guard lock(self->mu_);
     self->connected_ = true;
-    self->reconnect_delay_ = self->options_.reconnect_min;  // OnConnect runs on the network thread
     self->pending_subscriptions_.Clear();
     subscriptions = self->subscriptions_;
   }
+  self->reconnect_delay_ = self->options_.reconnect_min;  // OnConnect runs on the network thread
   self->Log("connected to " + where + " as '" + self->options_.client_id + "'");
   for (const auto& [filter, qos] : subscriptions) self->SendSubscribe(filter, qos);
   self->cv_.notify_all();
