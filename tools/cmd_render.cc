@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 int RenderCommand(const std::string& scenario_file, int car_id, double at_s, const std::string& out,
                   std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
-                  bool force) {
+                  const std::optional<std::string>& backend, bool force) {
   try {  // refused before anything runs
     sim::CheckOutputFolder(out, force);
   } catch (const sim::ConfigError& e) {
@@ -32,6 +32,8 @@ int RenderCommand(const std::string& scenario_file, int car_id, double at_s, con
     return kExitUnusableInput;
   }
   const sim::Scenario& scenario = loaded->scenario;
+  const sim::CameraBackend camera_backend =
+      sim::ParseCameraBackend(backend.value_or(scenario.camera_backend));
   if (scenario.FindCar(car_id) == nullptr) {
     std::string ids;
     for (const sim::CarConfig& c : scenario.cars)
@@ -49,17 +51,22 @@ int RenderCommand(const std::string& scenario_file, int car_id, double at_s, con
   const Time at = FromSeconds(at_s);
   const auto start = std::chrono::steady_clock::now();
   const sim::WorldSnapshot snapshot = sim::SnapshotAt(*loaded, at);
-  // The per-car sensor parameters and the scene's colours join the scenario file when the sensors
-  // join the closed loop; until then the real car's defaults.
-  const sim::SensorSuiteParams sensors;
-  const vehicle::SceneAppearance appearance;
-  const std::vector<sim::RenderedCamera> cameras = sim::RenderCameras(
-      loaded->track, snapshot, car_id, sensors, appearance, sim::RngStreams(scenario.seed));
+  std::vector<sim::RenderedCamera> cameras;
+  try {
+    cameras = sim::RenderCameras(loaded->track, snapshot, car_id,
+                                 scenario.FindCar(car_id)->sensors, scenario.appearance,
+                                 sim::RngStreams(scenario.seed), camera_backend);
+  } catch (const vehicle::GlUnavailable& e) {
+    fmt::print(stderr, "error: --backend gl: no OpenGL ES context can be made here: {}\n",
+               e.what());
+    return kExitUnusableInput;
+  }
   sim::WriteRenderFolder(cameras, at, car_id, out, force);
   for (const sim::RenderedCamera& camera : cameras) {
     fmt::print("{}: {}\n", camera.name, (fs::path(out) / camera.name).string());
   }
-  fmt::print("car {} at {} s of {} rendered in {:.2f} s wall\n", car_id, at_s, scenario.name,
+  fmt::print("car {} at {} s of {} rendered ({}) in {:.2f} s wall\n", car_id, at_s, scenario.name,
+             camera_backend == sim::CameraBackend::kGl ? "gl" : "raycast",
              WallSecondsSince(start));
   return kExitOk;
 }
@@ -74,6 +81,7 @@ Command AddRenderCommand(CLI::App& parent) {
     std::string out;
     std::optional<std::uint64_t> seed;
     std::vector<std::string> overrides;
+    std::optional<std::string> backend;
     bool force{false};
   };
   auto o = std::make_shared<Options>();
@@ -94,13 +102,20 @@ Command AddRenderCommand(CLI::App& parent) {
                    "(else refused: see --force)")
       ->required()
       ->type_name("DIR");
+  render
+      ->add_option("--backend", o->backend,
+                   "How the images are made: raycast (the ray caster) or gl (rasterised with "
+                   "OpenGL ES in an offscreen EGL context); default: the scenario's "
+                   "camera_backend, raycast unless it says otherwise")
+      ->check(CLI::IsMember({"raycast", "gl"}))
+      ->type_name("raycast|gl");
   render->add_flag("--force", o->force,
                    "Replace --out even if this program did not write it (never a device)");
   AddSeedOption(render, &o->seed);
   AddSetOption(render, &o->overrides);
   return {render, [o] {
             return RenderCommand(o->scenario, o->car, o->at_s, o->out, o->seed, o->overrides,
-                                 o->force);
+                                 o->backend, o->force);
           }};
 }
 

@@ -575,6 +575,24 @@ void CameraRenderer::InitTileDepth(std::size_t tile_index) {
   tile_stamp_[tile_index] = frame_;
 }
 
+std::array<Bgr, 7> PrismFaceColours(const Prism& prism) {
+  const double cw = std::cos(prism.footprint.pose.yaw_rad);
+  const double sw = std::sin(prism.footprint.pose.yaw_rad);
+  const std::array<Eigen::Vector3d, 6> normals{
+      Eigen::Vector3d(-cw, -sw, 0.0), Eigen::Vector3d(cw, sw, 0.0),
+      Eigen::Vector3d(sw, -cw, 0.0),  Eigen::Vector3d(-sw, cw, 0.0),
+      Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.0, 0.0, -1.0)};
+  std::array<Bgr, 7> face_bgr;
+  for (std::size_t f = 0; f < 7; ++f) {
+    const double shade =
+        f < 6 ? kAmbient + kDiffuse * std::max(0.0, normals[f].dot(kLightDirection)) : 1.0;
+    for (int ch = 0; ch < 3; ++ch) {
+      face_bgr[f][ch] = static_cast<std::uint8_t>(std::lround(prism.bgr[ch] * shade));
+    }
+  }
+  return face_bgr;
+}
+
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
                                  ColorImage* color, DepthImage* depth, const RowSpans* region,
                                  const LabelOut* labels) {
@@ -633,21 +651,7 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   }
   if (!(x_lo <= x_hi)) return;  // wholly behind the camera
 
-  // per-face colours: -x, +x, -y, +y, top, bottom (local axes)
-  const double cw = std::cos(box.pose.yaw_rad);
-  const double sw = std::sin(box.pose.yaw_rad);
-  const std::array<Eigen::Vector3d, 6> normals{
-      Eigen::Vector3d(-cw, -sw, 0.0), Eigen::Vector3d(cw, sw, 0.0),
-      Eigen::Vector3d(sw, -cw, 0.0),  Eigen::Vector3d(-sw, cw, 0.0),
-      Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.0, 0.0, -1.0)};
-  std::array<Bgr, 7> face_bgr;  // [6]: the camera is inside the prism
-  for (std::size_t f = 0; f < 7; ++f) {
-    const double shade =
-        f < 6 ? kAmbient + kDiffuse * std::max(0.0, normals[f].dot(kLightDirection)) : 1.0;
-    for (int ch = 0; ch < 3; ++ch) {
-      face_bgr[f][ch] = static_cast<std::uint8_t>(std::lround(prism.bgr[ch] * shade));
-    }
-  }
+  const std::array<Bgr, 7> face_bgr = PrismFaceColours(prism);
   std::array<std::uint8_t, 7> face_label{};
   if (labels != nullptr) {
     for (std::size_t f = 0; f < 7; ++f) face_label[f] = (*labels->label)(face_bgr[f]);

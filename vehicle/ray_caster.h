@@ -40,6 +40,11 @@ struct Prism {
   Bgr bgr{0, 0, 0};
 };
 
+// The colour of each face of a prism as the cameras see it: its colour shaded by one fixed light
+// from above (ambient + diffuse, so that a box's faces are told apart), in the order -x, +x, -y,
+// +y (the footprint's local axes), top, bottom, and [6] unshaded, for a camera inside the prism.
+std::array<Bgr, 7> PrismFaceColours(const Prism& prism);
+
 struct ColorImage {
   int width{0};
   int height{0};

@@ -52,12 +52,16 @@ SensorMessageType RangeType() { return {"sensor_msgs/Range", 8 + 1 + 16}; }
 
 SensorEnvironment::SensorEnvironment(const vehicle::PhysicsWorld* physics,
                                      const world::FloorRaster& floor,
-                                     const vehicle::SceneAppearance& appearance)
+                                     const vehicle::SceneAppearance& appearance, bool gl)
     : physics_(physics),
       appearance_(appearance),
       floor_(std::make_shared<const vehicle::FloorTexture>(floor)) {
   Require(physics_ != nullptr, "SensorEnvironment needs a physics world");
   appearance_.Validate();
+  if (gl) {
+    gl_scene_ = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(), *floor_,
+                                                   appearance_.surround());
+  }
 }
 
 std::shared_ptr<const vehicle::CameraRays> SensorEnvironment::Rays(
@@ -139,6 +143,10 @@ CameraSensor::CameraSensor(SensorEnvironment* environment, const CameraStreamPar
       renderer_(environment->Rays(params.camera), environment->floor(),
                 environment->appearance().surround()) {
   params_.Validate();
+  if (environment->gl_scene() != nullptr) {
+    gl_ = std::make_unique<vehicle::GlCameraRenderer>(environment->gl_scene(),
+                                                      environment->Rays(params.camera));
+  }
 }
 
 void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
@@ -158,7 +166,9 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
     ++frames_rendered_;
     return;
   }
-  if (color_region != nullptr) {
+  if (gl_ != nullptr) {
+    gl_->Render(frame.X_map_car, frame.prisms, color, depth);
+  } else if (color_region != nullptr) {
     renderer_.Render(frame.X_map_car, frame.prisms, color, depth, *color_region);
   } else {
     renderer_.Render(frame.X_map_car, frame.prisms, color, depth);
@@ -169,7 +179,7 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
 
 bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                                 const vehicle::ColourLabel& label, vehicle::LabelView out) const {
-  if (params_.noise.AltersColor()) return false;
+  if (params_.noise.AltersColor() || gl_ != nullptr) return false;
   if (frame.blackout) {  // every pixel black
     const std::uint8_t black = label(vehicle::Bgr{0, 0, 0});
     for (std::size_t v = 0; v < region.columns.size(); ++v) {
@@ -188,7 +198,8 @@ bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpan
 
 void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
                                vehicle::DepthRowHistory* history) const {
-  if (frame.blackout || params_.noise.AltersDepth()) {  // not the bare floor plus prisms
+  // not the bare floor plus prisms, or not rendered row by row
+  if (frame.blackout || params_.noise.AltersDepth() || gl_ != nullptr) {
     Render(frame, nullptr, depth);
     history->Forget();
     return;

@@ -26,6 +26,7 @@
 #include "sim/core/priorities.h"
 #include "sim/core/random.h"
 #include "vehicle/camera_model.h"
+#include "vehicle/gl_camera.h"
 #include "vehicle/imu.h"
 #include "vehicle/physics_world.h"
 #include "vehicle/ray_caster.h"
@@ -53,16 +54,21 @@ SensorMessageType WheelSpeedType();  // geometry_msgs/TwistWithCovarianceStamped
 SensorMessageType RangeType();       // sensor_msgs/Range, 25 B
 
 // What the sensors of every car share: the world they look at, the floor's texture, the scene's
-// colours, and the per-pixel ray tables (one per distinct camera, however many cars carry it).
+// colours, the per-pixel ray tables (one per distinct camera, however many cars carry it), and,
+// with the GL backend, the scene in an OpenGL ES context.
 class SensorEnvironment {
  public:
   // `physics` is not owned and must outlive the environment and every suite and frame using it.
+  // `gl`: the cameras render with the rasteriser (vehicle/gl_camera.h) instead of the ray caster;
+  // vehicle::GlUnavailable if no OpenGL ES context can be made here.
   SensorEnvironment(const vehicle::PhysicsWorld* physics, const world::FloorRaster& floor,
-                    const vehicle::SceneAppearance& appearance);
+                    const vehicle::SceneAppearance& appearance, bool gl = false);
 
   const vehicle::PhysicsWorld& physics() const { return *physics_; }
   const vehicle::SceneAppearance& appearance() const { return appearance_; }
   const std::shared_ptr<const vehicle::FloorTexture>& floor() const { return floor_; }
+  // The GL backend's scene; null with the ray caster.
+  const std::shared_ptr<vehicle::GlScene>& gl_scene() const { return gl_scene_; }
   // Built on first use for these params, then shared.
   std::shared_ptr<const vehicle::CameraRays> Rays(const vehicle::CameraParams& camera);
   // Every other car and every enabled obstacle, now.
@@ -73,6 +79,7 @@ class SensorEnvironment {
   vehicle::SceneAppearance appearance_;
   std::shared_ptr<const vehicle::FloorTexture> floor_;
   std::vector<std::pair<vehicle::CameraParams, std::shared_ptr<const vehicle::CameraRays>>> rays_;
+  std::shared_ptr<vehicle::GlScene> gl_scene_;
 };
 
 // A car body or obstacle box as the sensors see it.
@@ -122,7 +129,10 @@ struct CameraFrame {
   std::int64_t bytes() const;  // of the message on the topic
 };
 
-// A camera of one car: its model, its renderer and its stream.
+// A camera of one car: its model, its renderer and its stream. With the GL backend its images
+// come whole from the rasteriser: a colour region is rendered with the rest of the image, labels
+// are not rendered on their own (RenderLabels is false: the consumer labels the colour image),
+// and a depth buffer's history is forgotten each frame.
 class CameraSensor {
  public:
   CameraSensor(SensorEnvironment* environment, const CameraStreamParams& params);
@@ -142,6 +152,7 @@ class CameraSensor {
  private:
   CameraStreamParams params_;
   mutable vehicle::CameraRenderer renderer_;  // scratch memory only: rendering is pure
+  mutable std::unique_ptr<vehicle::GlCameraRenderer> gl_;  // the GL backend's, or null
   mutable std::uint64_t frames_rendered_{0};
 };
 

@@ -92,7 +92,13 @@ void Simulation::Impl::AddCars() {
 
 void Simulation::Impl::AddSensorsAndBoards() {
   floor = world::RasterizeFloor(loaded.track);
-  sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance);
+  try {
+    sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance,
+                                                       scenario.camera_backend == "gl");
+  } catch (const vehicle::GlUnavailable& e) {
+    throw ConfigError("camera_backend: gl: no OpenGL ES context can be made here: " +
+                      std::string(e.what()));
+  }
   for (std::size_t i = 0; i < agents.size(); ++i) {
     const CarConfig& config = *agents[i].config;
     // On a board the cameras are the graph's source nodes, which capture the frames.

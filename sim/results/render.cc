@@ -80,18 +80,30 @@ WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
   return SnapshotWithPoses(scenario.scenario, poses, t);
 }
 
+CameraBackend ParseCameraBackend(const std::string& name) {
+  if (name == "raycast") return CameraBackend::kRayCast;
+  if (name == "gl") return CameraBackend::kGl;
+  throw std::invalid_argument("a camera backend is 'raycast' or 'gl', not '" + name + "'");
+}
+
 CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& sensors,
-                       const vehicle::SceneAppearance& appearance)
+                       const vehicle::SceneAppearance& appearance, CameraBackend backend)
     : sensors_(sensors), appearance_(appearance) {
   sensors_.Validate();
   appearance_.Validate();
   const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
+  std::shared_ptr<vehicle::GlScene> scene;
+  if (backend == CameraBackend::kGl) {
+    scene = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(), *floor,
+                                               appearance_.surround());
+  }
   for (const CameraStreamParams* stream : {&sensors_.color_camera, &sensors_.depth_camera}) {
-    const vehicle::CameraModel model(stream->camera);
+    const auto rays =
+        std::make_shared<const vehicle::CameraRays>(vehicle::CameraModel(stream->camera));
     cameras_.push_back(
-        {stream, std::make_unique<vehicle::CameraRenderer>(
-                     std::make_shared<const vehicle::CameraRays>(model), floor,
-                     appearance_.surround())});
+        {stream,
+         std::make_unique<vehicle::CameraRenderer>(rays, floor, appearance_.surround()),
+         scene != nullptr ? std::make_unique<vehicle::GlCameraRenderer>(scene, rays) : nullptr});
   }
 }
 
@@ -115,7 +127,11 @@ std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, in
     camera.params = c.stream->camera;
     camera.info = model.Info();
     camera.X_map_camera = model.X_map_camera(self->pose);
-    c.renderer->Render(self->pose, prisms, &camera.color, &camera.depth);
+    if (c.gl != nullptr) {
+      c.gl->Render(self->pose, prisms, &camera.color, &camera.depth);
+    } else {
+      c.renderer->Render(self->pose, prisms, &camera.color, &camera.depth);
+    }
     const std::uint64_t seed =
         streams.Stream("car" + std::to_string(car_id) + "/" + camera.name + "/render_noise")
             .NextU64();
@@ -128,8 +144,8 @@ std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, in
 std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
                                           int car_id, const SensorSuiteParams& sensors,
                                           const vehicle::SceneAppearance& appearance,
-                                          const RngStreams& streams) {
-  return CarCameras(track, sensors, appearance).Render(snapshot, car_id, streams);
+                                          const RngStreams& streams, CameraBackend backend) {
+  return CarCameras(track, sensors, appearance, backend).Render(snapshot, car_id, streams);
 }
 
 nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) {

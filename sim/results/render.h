@@ -57,12 +57,20 @@ struct RenderedCamera {
   vehicle::DepthImage depth;
 };
 
+// Which renderer makes the images: the ray caster (vehicle/ray_caster.h) or the rasteriser
+// (vehicle/gl_camera.h); a scenario's camera_backend, "raycast" or "gl".
+enum class CameraBackend { kRayCast, kGl };
+// "raycast" or "gl"; std::invalid_argument otherwise.
+CameraBackend ParseCameraBackend(const std::string& name);
+
 // One car's cameras (the colour and the depth camera of `sensors`) over a track, made once and
 // rendered at any number of snapshots (a video's frames).
 class CarCameras {
  public:
+  // vehicle::GlUnavailable for kGl where no OpenGL ES context can be made.
   CarCameras(const world::Track& track, const SensorSuiteParams& sensors,
-             const vehicle::SceneAppearance& appearance);
+             const vehicle::SceneAppearance& appearance,
+             CameraBackend backend = CameraBackend::kRayCast);
   // Every camera on car `car_id` in the snapshot (the car's own body is left out). Noise follows
   // each camera's noise params, seeded from the stream "car<id>/<camera name>/render_noise".
   // std::invalid_argument if the car is not in the snapshot.
@@ -73,6 +81,7 @@ class CarCameras {
   struct Camera {
     const CameraStreamParams* stream;
     std::unique_ptr<vehicle::CameraRenderer> renderer;
+    std::unique_ptr<vehicle::GlCameraRenderer> gl;  // the GL backend's, or null
   };
   SensorSuiteParams sensors_;
   vehicle::SceneAppearance appearance_;
@@ -83,7 +92,8 @@ class CarCameras {
 std::vector<RenderedCamera> RenderCameras(const world::Track& track, const WorldSnapshot& snapshot,
                                           int car_id, const SensorSuiteParams& sensors,
                                           const vehicle::SceneAppearance& appearance,
-                                          const RngStreams& streams);
+                                          const RngStreams& streams,
+                                          CameraBackend backend = CameraBackend::kRayCast);
 
 // camera_info.json: width, height, distortion_model, K, D, R, P (row-major) as the camera
 // publishes them, and X_map_camera (4×4 row-major, optical frame: z forward, x right, y down).

@@ -308,6 +308,9 @@ struct Scenario {
   std::vector<FaultClause> faults;  // in any order; sim/loop/faults.h
   OutputConfig output;
   vehicle::SceneAppearance appearance;  // how cars and obstacles look to the cameras
+  // How the cameras' images are made: "raycast", the ray caster (vehicle/ray_caster.h), or "gl",
+  // the rasteriser in an offscreen OpenGL ES context (vehicle/gl_camera.h), its cross-check.
+  std::string camera_backend{"raycast"};
 
   template <class V>
   void Describe(V& v) {
@@ -326,6 +329,7 @@ struct Scenario {
     v("faults", faults);
     v("output", output);
     v("appearance", appearance);
+    v("camera_backend", camera_backend);
   }
   void Validate() const;
 };
