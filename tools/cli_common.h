@@ -41,7 +41,9 @@ inline constexpr const char* kVideoDescription =
     "Write the top-down replay of a finished run as an MPEG-4 video: the track to scale, the "
     "cars with their trails, intersections tinted by their holder, collisions and the clock; "
     "with --cameras ID also that car's colour camera (the detected lane drawn in) and depth "
-    "camera. Frames at FROM + k * SPEED / FPS seconds of the run";
+    "camera; with --chase ID and --overview the run in 3D, from behind that car and from above "
+    "the track (OpenGL ES in an offscreen EGL context). Frames at FROM + k * SPEED / FPS seconds "
+    "of the run";
 
 // Parses the command line and runs the subcommand given: a parse error (or --help) exits as CLI11
 // says (2 for an error), an exception from the command is an error message and exit 2.

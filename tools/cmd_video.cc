@@ -20,6 +20,8 @@ struct VideoArgs {
   std::string run_dir;
   std::string out;
   std::optional<int> cameras;
+  std::optional<int> chase;
+  bool overview{false};
   double fps{20.0};
   double speed{1.0};
   double from_s{0.0};
@@ -45,7 +47,9 @@ int VideoCommand(const VideoArgs& a) {
                             .from_s = a.from_s,
                             .to_s = a.to_s,
                             .trail_s = a.trail_s,
-                            .camera_car = a.cameras};
+                            .camera_car = a.cameras,
+                            .chase_car = a.chase,
+                            .overview = a.overview};
   const bool tty = ::isatty(STDERR_FILENO) != 0;
   std::size_t last_decile = 0;
   if (!a.quiet) {
@@ -64,6 +68,10 @@ int VideoCommand(const VideoArgs& a) {
     sim::WriteVideo(*run, options, out);
   } catch (const std::invalid_argument& e) {
     fmt::print(stderr, "error: {}\n", e.what());
+    return kExitUnusableInput;
+  } catch (const vehicle::GlUnavailable& e) {
+    fmt::print(stderr, "error: --chase/--overview: no OpenGL ES context can be made here: {}\n",
+               e.what());
     return kExitUnusableInput;
   }
   fmt::print("video: {} ({} frames at {:g} fps, {:g}x real time; {:.1f} MB, made in {:.1f} s)\n",
@@ -85,6 +93,12 @@ Command AddVideoCommand(CLI::App& parent) {
       ->type_name("FILE.mp4");
   video->add_option("--cameras", a->cameras, "Show this car's camera views (a car with a board)")
       ->type_name("ID");
+  video
+      ->add_option("--chase", a->chase,
+                   "Show the run in 3D from a chase camera behind this car (OpenGL ES, offscreen)")
+      ->type_name("ID");
+  video->add_flag("--overview", a->overview,
+                  "Show the run in 3D from above one side of the track (OpenGL ES, offscreen)");
   video->add_option("--fps", a->fps, "Frames per second of the video (default 20)")
       ->check(CLI::PositiveNumber);
   video->add_option("--speed", a->speed, "Simulated seconds per second of video (default 1)")

@@ -356,7 +356,8 @@ GlScene::Target& GlScene::TargetOfSize(int width, int height) {
   return *targets_.back();
 }
 
-void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out) {
+void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out,
+                     GlImages wanted) {
   if (!(view.width_px > 0 && view.height_px > 0 && view.near_m > 0.0 &&
         view.far_m > view.near_m && view.K[0] > 0.0 && view.K[4] > 0.0)) {
     throw std::invalid_argument("GlScene::Render: a view needs a size, fx, fy > 0 and 0 < near < far");
@@ -458,14 +459,20 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   out->width = w;
   out->height = h;
-  out->bgr.resize(3 * pixels);
-  out->z_m.resize(pixels);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  rgba_bytes_.resize(4 * pixels);
-  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba_bytes_.data());
-  cv::cvtColor(cv::Mat(h, w, CV_8UC4, rgba_bytes_.data()), cv::Mat(h, w, CV_8UC3, out->bgr.data()),
-               cv::COLOR_RGBA2RGB);
+  if (wanted.colour) {
+    out->bgr.resize(3 * pixels);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    rgba_bytes_.resize(4 * pixels);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba_bytes_.data());
+    cv::cvtColor(cv::Mat(h, w, CV_8UC4, rgba_bytes_.data()),
+                 cv::Mat(h, w, CV_8UC3, out->bgr.data()), cv::COLOR_RGBA2RGB);
+  }
+  if (!wanted.z) {
+    CheckGl("rendering a view");
+    return;
+  }
+  out->z_m.resize(pixels);
   glReadBuffer(GL_COLOR_ATTACHMENT1);
   if (read_red_) {
     glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, out->z_m.data());
@@ -551,11 +558,11 @@ void GlCameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Pri
       return;
     }
   }
-  scene_->Render(pinhole_, prisms, &frame_);
-  const cv::Mat frame_bgr(frame_.height, frame_.width, CV_8UC3, frame_.bgr.data());
-  const cv::Mat frame_z(frame_.height, frame_.width, CV_32FC1, frame_.z_m.data());
+  scene_->Render(pinhole_, prisms, &frame_,
+                 GlImages{.colour = color != nullptr, .z = depth != nullptr});
   const cv::Mat map = resample_ ? cv::Mat(h, w, CV_16SC2, map_xy_.data()) : cv::Mat();
   if (color != nullptr) {
+    const cv::Mat frame_bgr(frame_.height, frame_.width, CV_8UC3, frame_.bgr.data());
     cv::Mat out(h, w, CV_8UC3, color->bgr.data());
     if (resample_) {
       cv::remap(frame_bgr, out, map, cv::noArray(), cv::INTER_NEAREST);
@@ -582,7 +589,8 @@ void GlCameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Pri
   interpolated_inverse_z_.resize(pixels);
   cv::Mat nearest(h, w, CV_32FC1, nearest_z_.data());
   cv::Mat interpolated(h, w, CV_32FC1, interpolated_inverse_z_.data());
-  cv::remap(frame_z, nearest, map, cv::noArray(), cv::INTER_NEAREST);
+  cv::remap(cv::Mat(frame_.height, frame_.width, CV_32FC1, frame_.z_m.data()), nearest, map,
+            cv::noArray(), cv::INTER_NEAREST);
   cv::remap(cv::Mat(frame_.height, frame_.width, CV_32FC1, inverse_z_.data()), interpolated,
             cv::Mat(h, w, CV_32FC2, exact_xy_.data()), cv::noArray(), cv::INTER_LINEAR);
   for (std::size_t i = 0; i < pixels; ++i) {

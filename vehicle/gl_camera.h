@@ -98,6 +98,12 @@ struct GlFrame {
   std::vector<float> z_m;
 };
 
+// Which of a GlFrame's images a render reads back.
+struct GlImages {
+  bool colour{true};
+  bool z{true};
+};
+
 // The scene on the GPU: the floor texture, the shaders, the prisms' vertex buffer, and the
 // offscreen framebuffers (one per view size, kept). One per context; not thread-safe.
 class GlScene {
@@ -111,8 +117,10 @@ class GlScene {
 
   const GlContext& context() const { return *context_; }
   Bgr surround() const { return surround_; }
-  // The view of the floor and `prisms`, into `out` (resized).
-  void Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out);
+  // The view of the floor and `prisms`, into `out` (resized); only the images asked for are read
+  // back (the read-back is most of a frame's cost on a CPU renderer).
+  void Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out,
+              GlImages wanted = GlImages{});
 
  private:
   struct Target;

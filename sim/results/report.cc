@@ -15,6 +15,7 @@
 #include "sim/car/stack_config.h"
 #include "sim/core/random.h"
 #include "sim/results/camera_views.h"
+#include "sim/results/scene_views.h"
 #include "sim/results/report/report_assets.h"
 #include "sim/results/track_figure.h"
 #include "world/floor_raster.h"
@@ -237,9 +238,48 @@ json BoardsJson(const RunSummary& summary) {
   return out;
 }
 
+// The 3D views (scene_views.h), made on first use; or, where no OpenGL ES context can be made,
+// the reason, which the page shows in their place.
+class LazySceneViews {
+ public:
+  explicit LazySceneViews(const FinishedRun& run) : run_(run) {}
+  SceneViews* get() {
+    if (!tried_) {
+      tried_ = true;
+      try {
+        views_.emplace(run_.track, run_.scenario);
+      } catch (const vehicle::GlUnavailable& e) {
+        unavailable_ = e.what();
+      }
+    }
+    return views_ ? &*views_ : nullptr;
+  }
+  const std::string& unavailable() const { return unavailable_; }
+
+ private:
+  const FinishedRun& run_;
+  bool tried_{false};
+  std::optional<SceneViews> views_;
+  std::string unavailable_;
+};
+
+const cv::Size kReportViewSize(480, 300);
+
+// The overview at the run's end: {t, overview} or {note} without OpenGL ES.
+json SceneJson(const FinishedRun& run, LazySceneViews& views) {
+  const Time end = run.record.trajectory.empty() ? kZeroTime : run.record.trajectory.back().t;
+  if (SceneViews* v = views.get()) {
+    return {{"t", ToSeconds(end)},
+            {"overview", DataUrl(v->Overview(SnapshotOf(run, end), kReportViewSize), "jpeg")}};
+  }
+  return {{"note", "no 3D views: no OpenGL ES context could be made here (" +
+                       views.unavailable() + ")"}};
+}
+
 // The failing instants worth a picture: each failed expectation pinned to a car with a board,
-// at the car's last sample at or before the instant; one snapshot per (instant, car).
-json SnapshotsJson(const FinishedRun& run, const ReportOptions& options) {
+// at the car's last sample at or before the instant; one snapshot per (instant, car), with the
+// car's cameras and, where OpenGL ES is available, the chase and overview views then.
+json SnapshotsJson(const FinishedRun& run, const ReportOptions& options, LazySceneViews& scene) {
   std::map<std::pair<Time, int>, std::vector<std::string>> wanted;  // (t, car) -> expectations
   std::set<int> with_board;
   for (const CarConfig& car : run.scenario.cars) {
@@ -263,10 +303,15 @@ json SnapshotsJson(const FinishedRun& run, const ReportOptions& options) {
     const auto& [t, car] = key;
     auto& viewer = viewers[car];
     if (!viewer) viewer = std::make_unique<CarCameraViewer>(run.track, run.scenario, car);
-    const CameraViewImages views = viewer->Render(SnapshotOf(run, t), streams);
+    const WorldSnapshot world = SnapshotOf(run, t);
+    const CameraViewImages views = viewer->Render(world, streams);
     json snapshot = {{"t", ToSeconds(t)}, {"car", car}, {"reasons", reasons}, {"lane", views.lane}};
     if (!views.color.empty()) snapshot["color"] = DataUrl(views.color, "jpeg");
     if (!views.depth.empty()) snapshot["depth"] = DataUrl(views.depth, "jpeg");
+    if (SceneViews* v = scene.get()) {
+      snapshot["chase"] = DataUrl(v->Chase(world, car, kReportViewSize), "jpeg");
+      snapshot["overview"] = DataUrl(v->Overview(world, kReportViewSize), "jpeg");
+    }
     out.push_back(std::move(snapshot));
   }
   return out;
@@ -275,6 +320,8 @@ json SnapshotsJson(const FinishedRun& run, const ReportOptions& options) {
 }  // namespace
 
 json ReportData(const FinishedRun& run, const ReportOptions& options) {
+  LazySceneViews scene(run);
+  json snapshots = SnapshotsJson(run, options, scene);
   return {{"meta", MetaJson(run)},
           {"floor", FloorJson(run.track)},
           {"track", TrackJson(run.track)},
@@ -284,7 +331,8 @@ json ReportData(const FinishedRun& run, const ReportOptions& options) {
           {"events", EventsJson(run.record)},
           {"expectations", ExpectationsJson(run.summary)},
           {"boards", BoardsJson(run.summary)},
-          {"snapshots", SnapshotsJson(run, options)}};
+          {"snapshots", std::move(snapshots)},
+          {"scene", SceneJson(run, scene)}};
 }
 
 std::string JsonForScript(const json& data) {

@@ -13,6 +13,7 @@
 
 #include "sim/core/random.h"
 #include "sim/results/camera_views.h"
+#include "sim/results/scene_views.h"
 #include "sim/results/track_figure.h"
 
 namespace autonomsim::sim {
@@ -22,6 +23,8 @@ namespace fs = std::filesystem;
 
 constexpr int kCameraPanelPx = 500;  // to the right of the figure, when cameras are shown
 constexpr int kCameraWidthPx = 480;  // each camera view's width in the panel
+constexpr int kScenePanelPx = 500;   // to the right of those, when 3D views are shown
+const cv::Size kSceneViewSize(480, 300);
 const cv::Scalar kVideoText(235, 235, 235), kQueueText(65, 179, 227);
 constexpr int kVideoFont = cv::FONT_HERSHEY_SIMPLEX;
 
@@ -122,11 +125,18 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
     }
     viewer.emplace(run.track, run.scenario, *options.camera_car);
   }
+  if (options.chase_car && run.scenario.FindCar(*options.chase_car) == nullptr) {
+    throw std::invalid_argument(
+        fmt::format("--chase {}: the run has no car {}", *options.chase_car, *options.chase_car));
+  }
+  std::optional<SceneViews> scene;
+  if (options.chase_car || options.overview) scene.emplace(run.track, run.scenario);
 
   TrackFigureBase base = DrawTrackFigureBase(run.scenario, run.track, false);
   const int legend_end = DrawTrackLegend(base.image, run.scenario, base.legend_x, false);
   const TrackFigureLayout& at = base.layout;
-  int width = base.image.cols + (viewer ? kCameraPanelPx : 0);
+  const int scene_x = base.image.cols + (viewer ? kCameraPanelPx : 0) + 10;
+  int width = base.image.cols + (viewer ? kCameraPanelPx : 0) + (scene ? kScenePanelPx : 0);
   int height = base.image.rows;
   width += width % 2;  // encoders want even sizes
   height += height % 2;
@@ -245,6 +255,17 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
             y += 36;
             cv::putText(frame, "depth camera", {x, y - 8}, kVideoFont, 0.5, kVideoText, 1, cv::LINE_AA);
           }
+        }
+      }
+      if (scene) {
+        const WorldSnapshot snapshot = SnapshotWithPoses(run.scenario, poses, t);
+        int y = 20;
+        for (const bool chase : {true, false}) {
+          if (chase ? !options.chase_car : !options.overview) continue;
+          const cv::Mat view = chase ? scene->Chase(snapshot, *options.chase_car, kSceneViewSize)
+                                     : scene->Overview(snapshot, kSceneViewSize);
+          view.copyTo(frame(cv::Rect(cv::Point(scene_x, y), kSceneViewSize)));
+          y += kSceneViewSize.height + 16;
         }
       }
       writer.write(frame);

@@ -14,7 +14,9 @@
 //   events: [{t, type, car, intersection, other_car, obstacle, granted, lap, fault, detail}],
 //   expectations: [{name, passed, detail, at_s, car}],
 //   boards: {"car0": {cores, load_bin_s, cpu_load_percent, e2e_topic, e2e_mean_ms, e2e_max_ms}},
-//   snapshots: [{t, car, reasons, lane, color, depth}]
+//   snapshots: [{t, car, reasons, lane, color, depth, chase, overview}] (images: JPEG data URLs;
+//              chase and overview, the 3D views, where OpenGL ES was available)
+//   scene: {t, overview} (the 3D overview at the run's end) or {note} (why there is none)
 // }
 // Units: metres, seconds, radians; the map's x is east and y north.
 "use strict";
@@ -649,6 +651,16 @@
   }
 
   // ---------- camera snapshots ----------
+  function buildScene() {
+    const box = $("scene");
+    if (data.scene.overview) {
+      box.append(el("figure", {}, el("img", { src: data.scene.overview, alt: "overview at the end" }),
+        el("figcaption", {}, "3D: the track from above its south side at the run's end, t = " +
+          data.scene.t.toFixed(2) + " s (each car in its colour, its id above it)")));
+    } else {
+      box.append(el("p", { class: "muted" }, data.scene.note));
+    }
+  }
   function buildSnapshots() {
     const box = $("snapshots");
     if (!data.snapshots.length) {
@@ -663,6 +675,10 @@
         el("figcaption", {}, "colour camera: the lane detector's region (grey), its fitted line (yellow or white) and the trajectory it sends (green)")));
       if (s.depth) images.append(el("figure", {}, el("img", { src: s.depth, alt: "depth camera" }),
         el("figcaption", {}, "depth camera, false colour")));
+      if (s.chase) images.append(el("figure", {}, el("img", { src: s.chase, alt: "chase view" }),
+        el("figcaption", {}, "3D: behind car " + s.car)));
+      if (s.overview) images.append(el("figure", {}, el("img", { src: s.overview, alt: "overview" }),
+        el("figcaption", {}, "3D: the track from above its south side")));
       box.append(el("div", { class: "snapshot" },
         el("h3", {}, el("a", { onclick: () => seek(s.t) }, "t = " + s.t.toFixed(2) + " s"),
           ", car " + s.car + ": " + s.reasons.join(", ")),
@@ -783,6 +799,7 @@
     buildPlots();
     buildExpectations();
     buildSnapshots();
+    buildScene();
     render();
     window.reportLoadMs = performance.now();
     const m = data.meta;
