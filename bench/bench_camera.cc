@@ -1,6 +1,8 @@
 // The ray-cast cameras (issue 3). BM_RenderRgbd is the figure of merit: one 640×480 depth frame
 // (the depth camera) and one 640×480 colour frame (the colour camera, lens distortion on) of a car
 // on the lab track with another car and a box in view, on one thread. Target: <= 1 ms.
+// BM_RenderRgbdCameras and BM_RenderRgbdGl: the ray caster and the GL backend side by side, at
+// 640×480 and 1280×720, for 1 and 4 RGB-D cameras.
 //
 //     build/bin/bench_camera --benchmark_filter=BM_RenderRgbd
 #include <benchmark/benchmark.h>
@@ -13,6 +15,7 @@
 #include "sim/core/track_loader.h"
 #include "stack/lane_detection.h"
 #include "vehicle/camera_model.h"
+#include "vehicle/gl_camera.h"
 #include "vehicle/ray_caster.h"
 #include "world/floor_raster.h"
 
@@ -72,6 +75,112 @@ void BM_RenderRgbd(benchmark::State& state) {
                           static_cast<std::int64_t>(color.bgr.size() + 2 * depth.mm.size()));
 }
 BENCHMARK(BM_RenderRgbd)->Unit(benchmark::kMicrosecond);
+
+// RGB-D cameras at a resolution, N of them: the ray caster against the rasteriser (issue 20).
+// A camera is a colour and a depth camera, as on the car: at 640×480 the real ones (the colour
+// camera with its lens distortion); at 1280×720 the same at twice the focal length, cropped to
+// 16:9. Camera k sits on car k's pose (the scene's car, then along the lane behind it), so four
+// cameras see four different frames.
+struct RgbdRig {
+  std::vector<std::shared_ptr<const vehicle::CameraRays>> color, depth;  // one of each per size
+  std::vector<world::Pose2> poses;
+};
+
+vehicle::CameraParams AtSize(vehicle::CameraParams params, int width, int height) {
+  if (width == params.width_px && height == params.height_px) return params;
+  const double scale = static_cast<double>(width) / params.width_px;
+  params.K[0] *= scale;
+  params.K[4] *= scale;
+  params.K[2] = scale * (params.K[2] + 0.5) - 0.5;
+  params.K[5] = scale * (params.K[5] + 0.5) - 0.5 - 0.5 * (scale * params.height_px - height);
+  params.P = {params.K[0], 0.0, params.K[2], 0.0, 0.0, params.K[4], params.K[5], 0.0,
+              0.0,         0.0, 1.0,         0.0};
+  params.width_px = width;
+  params.height_px = height;
+  return params;
+}
+
+RgbdRig Rig(int width, int height, int cameras) {
+  RgbdRig rig;
+  rig.color.push_back(std::make_shared<const vehicle::CameraRays>(
+      vehicle::CameraModel(AtSize(vehicle::ColorCameraParams(), width, height))));
+  rig.depth.push_back(std::make_shared<const vehicle::CameraRays>(
+      vehicle::CameraModel(AtSize(vehicle::DepthCameraParams(), width, height))));
+  for (int k = 0; k < cameras; ++k) {
+    world::Pose2 pose = TheScene().pose;
+    pose.x_m -= 0.35 * k;
+    rig.poses.push_back(pose);
+  }
+  return rig;
+}
+
+void SetRgbdCounters(benchmark::State& state, int width, int height, int cameras) {
+  state.SetItemsProcessed(state.iterations() * cameras);  // RGB-D frames
+  state.counters["Mpx_per_s"] = benchmark::Counter(
+      2.0 * width * height * cameras * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_RenderRgbdCameras(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
+  const int cameras = static_cast<int>(state.range(2));
+  const RgbdRig rig = Rig(width, height, cameras);
+  vehicle::CameraRenderer color_camera = Renderer(rig.color[0]);
+  vehicle::CameraRenderer depth_camera = Renderer(rig.depth[0]);
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+  for (auto _ : state) {
+    for (const world::Pose2& pose : rig.poses) {
+      color_camera.Render(pose, TheScene().prisms, &color, nullptr);
+      depth_camera.Render(pose, TheScene().prisms, nullptr, &depth);
+      benchmark::DoNotOptimize(color.bgr.data());
+      benchmark::DoNotOptimize(depth.mm.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  SetRgbdCounters(state, width, height, cameras);
+}
+
+// The same frames from the GL backend (vehicle/gl_camera.h), read back to the CPU. Its label
+// names the renderer (llvmpipe on a machine without a GPU; a GPU's name where one is lent). Skipped
+// with a message where no OpenGL ES context can be made.
+void BM_RenderRgbdGl(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
+  const int cameras = static_cast<int>(state.range(2));
+  std::shared_ptr<vehicle::GlScene> scene;
+  try {
+    scene = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(), *TheScene().floor,
+                                               vehicle::SceneAppearance{}.surround());
+  } catch (const vehicle::GlUnavailable& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const RgbdRig rig = Rig(width, height, cameras);
+  vehicle::GlCameraRenderer color_camera(scene, rig.color[0]);
+  vehicle::GlCameraRenderer depth_camera(scene, rig.depth[0]);
+  vehicle::ColorImage color;
+  vehicle::DepthImage depth;
+  for (auto _ : state) {
+    for (const world::Pose2& pose : rig.poses) {
+      color_camera.Render(pose, TheScene().prisms, &color, nullptr);
+      depth_camera.Render(pose, TheScene().prisms, nullptr, &depth);
+      benchmark::DoNotOptimize(color.bgr.data());
+      benchmark::DoNotOptimize(depth.mm.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  SetRgbdCounters(state, width, height, cameras);
+  state.SetLabel(scene->context().renderer());
+}
+
+void RgbdSizes(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"width", "height", "cameras"});
+  for (const auto& [w, h] : {std::pair{640, 480}, std::pair{1280, 720}}) {
+    for (const int cameras : {1, 4}) b->Args({w, h, cameras});
+  }
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+BENCHMARK(BM_RenderRgbdCameras)->Apply(RgbdSizes);
+BENCHMARK(BM_RenderRgbdGl)->Apply(RgbdSizes);
 
 // The colour camera as the lane nodes render it in the loop: only the pixels the lane detector
 // reads (its warp's source spans, a third of the image).
