@@ -2,6 +2,7 @@
 // instant, one folder per camera.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -15,86 +16,112 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int RenderCommand(const std::string& scenario_file, int car_id, double at_s, const std::string& out,
-                  std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
-                  const std::optional<std::string>& backend, bool force) {
+struct RenderArgs {
+  std::string scenario;
+  int car{0};
+  std::vector<double> at_s;
+  std::string out;
+  std::optional<std::uint64_t> seed;
+  std::vector<std::string> overrides;
+  std::optional<std::string> backend;
+  bool labels{false};
+  bool force{false};
+};
+
+int RenderCommand(const RenderArgs& a) {
   try {  // refused before anything runs
-    sim::CheckOutputFolder(out, force);
+    sim::CheckOutputFolder(a.out, a.force);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
   std::optional<sim::LoadedScenario> loaded;
   try {
-    loaded.emplace(sim::LoadScenario(scenario_file, overrides, seed));
+    loaded.emplace(sim::LoadScenario(a.scenario, a.overrides, a.seed));
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
   const sim::Scenario& scenario = loaded->scenario;
   const sim::CameraBackend camera_backend =
-      sim::ParseCameraBackend(backend.value_or(scenario.camera_backend));
-  if (scenario.FindCar(car_id) == nullptr) {
+      sim::ParseCameraBackend(a.backend.value_or(scenario.camera_backend));
+  const sim::CarConfig* car = scenario.FindCar(a.car);
+  if (car == nullptr) {
     std::string ids;
     for (const sim::CarConfig& c : scenario.cars)
       ids += (ids.empty() ? "" : ", ") + std::to_string(c.id);
-    fmt::print(stderr, "error: --car {}: {} has no such car (its cars: {})\n", car_id,
-               scenario_file, ids);
+    fmt::print(stderr, "error: --car {}: {} has no such car (its cars: {})\n", a.car, a.scenario,
+               ids);
     return kExitUnusableInput;
   }
   const double duration_s = ToSeconds(scenario.duration);
-  if (!(std::isfinite(at_s) && at_s >= 0.0 && at_s <= duration_s)) {
-    fmt::print(stderr, "error: --at {}: must be within the scenario's [0, {}] s\n", at_s,
-               duration_s);
-    return kExitUnusableInput;
+  std::vector<Time> instants;
+  for (const double at_s : a.at_s) {
+    if (!(std::isfinite(at_s) && at_s >= 0.0 && at_s <= duration_s)) {
+      fmt::print(stderr, "error: --at {}: must be within the scenario's [0, {}] s\n", at_s,
+                 duration_s);
+      return kExitUnusableInput;
+    }
+    const Time t = FromSeconds(at_s);
+    if (a.at_s.size() > 1 && t % std::chrono::milliseconds(1) != Time{0}) {
+      fmt::print(stderr, "error: --at {}: several instants must each be whole milliseconds\n",
+                 at_s);
+      return kExitUnusableInput;
+    }
+    instants.push_back(t);
   }
-  const Time at = FromSeconds(at_s);
+  std::sort(instants.begin(), instants.end());
+  instants.erase(std::unique(instants.begin(), instants.end()), instants.end());
   const auto start = std::chrono::steady_clock::now();
-  const sim::WorldSnapshot snapshot = sim::SnapshotAt(*loaded, at);
-  std::vector<sim::RenderedCamera> cameras;
+  const std::vector<sim::WorldSnapshot> snapshots = sim::SnapshotsAt(*loaded, instants);
+  std::optional<sim::CarCameras> cameras;
   try {
-    cameras = sim::RenderCameras(loaded->track, snapshot, car_id,
-                                 scenario.FindCar(car_id)->sensors, scenario.appearance,
-                                 sim::RngStreams(scenario.seed), camera_backend);
+    cameras.emplace(loaded->track, car->sensors, scenario.appearance, camera_backend);
   } catch (const vehicle::GlUnavailable& e) {
     fmt::print(stderr, "error: --backend gl: no OpenGL ES context can be made here: {}\n",
                e.what());
     return kExitUnusableInput;
   }
-  sim::WriteRenderFolder(cameras, at, car_id, out, force);
-  for (const sim::RenderedCamera& camera : cameras) {
-    fmt::print("{}: {}\n", camera.name, (fs::path(out) / camera.name).string());
+  const sim::RngStreams streams(scenario.seed);
+  std::vector<sim::RenderedInstant> rendered;
+  for (const sim::WorldSnapshot& snapshot : snapshots) {
+    rendered.push_back({snapshot.t, cameras->Render(snapshot, a.car, streams, a.labels),
+                        a.labels ? cameras->InstancesJson(snapshot, a.car) : nlohmann::json()});
   }
-  fmt::print("car {} at {} s of {} rendered ({}) in {:.2f} s wall\n", car_id, at_s, scenario.name,
+  sim::WriteRenderFolder(rendered, a.car, cameras->ClassNames(), a.out, a.force);
+  if (rendered.size() == 1) {
+    for (const sim::RenderedCamera& camera : rendered.front().cameras) {
+      fmt::print("{}: {}\n", camera.name, (fs::path(a.out) / camera.name).string());
+    }
+  } else {
+    fmt::print("{} instants: {}/t_*/\n", rendered.size(), a.out);
+  }
+  fmt::print("car {} at {} instant(s) of {} rendered ({}{}) in {:.2f} s wall\n", a.car,
+             rendered.size(), scenario.name,
              camera_backend == sim::CameraBackend::kGl ? "gl" : "raycast",
-             WallSecondsSince(start));
+             a.labels ? ", with labels" : "", WallSecondsSince(start));
   return kExitOk;
 }
 
 }  // namespace
 
 Command AddRenderCommand(CLI::App& parent) {
-  struct Options {
-    std::string scenario;
-    int car{0};
-    double at_s{0.0};
-    std::string out;
-    std::optional<std::uint64_t> seed;
-    std::vector<std::string> overrides;
-    std::optional<std::string> backend;
-    bool force{false};
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<RenderArgs>();
   CLI::App* render = parent.add_subcommand(
       "render",
       "Run a scenario up to an instant and write what one car's cameras see then: "
       "DIR/<camera>/ with what that camera publishes: color_camera/color.png; "
       "depth_camera/depth.png (uint16 mm) and depth_preview.png (false colour, with a colour "
-      "bar); camera_info.json for each");
+      "bar); camera_info.json for each. With several instants (--at 5 10 15), one run and a "
+      "folder per instant, DIR/t_0005.000/<camera>/...: a camera dataset");
   render->add_option("SCENARIO", o->scenario, "Scenario file (YAML)")->required();
   render->add_option("--car", o->car, "The car's id")->required()->type_name("ID");
-  render->add_option("--at", o->at_s, "The instant, seconds of simulated time")
+  render
+      ->add_option("--at", o->at_s,
+                   "The instant(s), seconds of simulated time (several: whole milliseconds)")
       ->required()
+      ->expected(1, -1)
+      ->delimiter(',')
       ->type_name("T");
   render
       ->add_option("--out", o->out,
@@ -109,14 +136,15 @@ Command AddRenderCommand(CLI::App& parent) {
                    "camera_backend, raycast unless it says otherwise")
       ->check(CLI::IsMember({"raycast", "gl"}))
       ->type_name("raycast|gl");
+  render->add_flag("--labels", o->labels,
+                   "Also write ground-truth labels: <camera>/labels.png (each pixel's class: "
+                   "floor, paint colour, car, obstacle), <camera>/instances.png (which object) "
+                   "and labels.json, their legend");
   render->add_flag("--force", o->force,
                    "Replace --out even if this program did not write it (never a device)");
   AddSeedOption(render, &o->seed);
   AddSetOption(render, &o->overrides);
-  return {render, [o] {
-            return RenderCommand(o->scenario, o->car, o->at_s, o->out, o->seed, o->overrides,
-                                 o->backend, o->force);
-          }};
+  return {render, [o] { return RenderCommand(*o); }};
 }
 
 }  // namespace autonomsim::cli

@@ -345,10 +345,19 @@ void CameraRenderer::CheckRegion(const RowSpans& region, const char* what) const
 void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                   const RowSpans& region, const ColourLabel& label,
                                   LabelView out) {
+  RenderLabels(X_map_car, prisms, region, label, out, {});
+}
+
+void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                                  const RowSpans& region, const ColourLabel& label, LabelView out,
+                                  std::span<const std::uint8_t> prism_labels) {
   CheckRegion(region, "label");
+  Require(prism_labels.empty() || prism_labels.size() == prisms.size(),
+          "CameraRenderer::RenderLabels: " + std::to_string(prism_labels.size()) +
+              " prism labels for " + std::to_string(prisms.size()) + " prisms");
   Require(out.origin != nullptr && out.stride >= rays_->width() && label != nullptr,
           "CameraRenderer::RenderLabels needs an output of the camera's width and a label");
-  LabelOut labels{.view = out, .label = &label};
+  LabelOut labels{.view = out, .label = &label, .prism_labels = prism_labels};
   const FloorTexture& tex = *floor_;
   for (int k = 0; k < tex.palette_size(); ++k) {
     Bgr bgr;
@@ -408,8 +417,8 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
   RenderFloor(X_map_car, color, depth, color_region, history, labels);
   // Without a depth image, only the colour region's pixels of a prism are needed.
   const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
-  for (const Prism& prism : prisms) {
-    RenderPrism(X_map_car, prism, color, depth, prism_region, labels);
+  for (std::size_t k = 0; k < prisms.size(); ++k) {
+    RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels);
   }
   if (history != nullptr) {
     // rows that differ from the bare floor now or did in the last frame
@@ -594,8 +603,8 @@ std::array<Bgr, 7> PrismFaceColours(const Prism& prism) {
 }
 
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
-                                 ColorImage* color, DepthImage* depth, const RowSpans* region,
-                                 const LabelOut* labels) {
+                                 std::size_t index, ColorImage* color, DepthImage* depth,
+                                 const RowSpans* region, const LabelOut* labels) {
   const CameraRays& r = *rays_;
   const CameraParams& params = r.camera().params();
   const world::OrientedBox& box = prism.footprint;
@@ -653,7 +662,9 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
 
   const std::array<Bgr, 7> face_bgr = PrismFaceColours(prism);
   std::array<std::uint8_t, 7> face_label{};
-  if (labels != nullptr) {
+  if (labels != nullptr && !labels->prism_labels.empty()) {
+    face_label.fill(labels->prism_labels[index]);
+  } else if (labels != nullptr) {
     for (std::size_t f = 0; f < 7; ++f) face_label[f] = (*labels->label)(face_bgr[f]);
   }
 

@@ -302,6 +302,12 @@ class CameraRenderer {
   // what the colour does, without the colour image.
   void RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                     const RowSpans& region, const ColourLabel& label, LabelView out);
+  // The same, except that each pixel of prism k is labelled prism_labels[k] whatever its colour
+  // (one entry per prism; std::invalid_argument otherwise): which object a pixel sees, the ground
+  // truth of a dataset's instance and class labels.
+  void RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
+                    const RowSpans& region, const ColourLabel& label, LabelView out,
+                    std::span<const std::uint8_t> prism_labels);
 
   // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
   // their pixels up: on by default; off, every floor pixel is looked up (the reference that tests
@@ -319,6 +325,7 @@ class CameraRenderer {
     const ColourLabel* label{nullptr};
     std::array<std::uint8_t, 256> palette{};  // by floor palette index
     std::uint8_t surround{0};
+    std::span<const std::uint8_t> prism_labels;  // per prism; empty: label(face colour)
   };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
                   DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,
@@ -327,8 +334,10 @@ class CameraRenderer {
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
                    const RowSpans* color_region, DepthRowHistory* history, const LabelOut* labels);
   // `region`: only its pixels (colour alone), or null: all of the prism's.
-  void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, ColorImage* color,
-                   DepthImage* depth, const RowSpans* region, const LabelOut* labels);
+  // `index`: the prism's place in the frame's list (its entry of LabelOut::prism_labels).
+  void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, std::size_t index,
+                   ColorImage* color, DepthImage* depth, const RowSpans* region,
+                   const LabelOut* labels);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 #include <numbers>
+#include <numeric>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -58,26 +59,54 @@ WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
                                 " s is outside the scenario's [0, " +
                                 std::to_string(ToSeconds(scenario.scenario.duration)) + "] s");
   }
-  std::vector<world::Pose2> poses = scenario.start_poses;
-  if (t > kZeroTime) {
-    LoadedScenario cut = scenario;
-    cut.scenario.duration = t;
-    cut.scenario.output.trajectory_period = t;  // samples at 0 and t
-    Simulation simulation(cut);
-    simulation.Run();
-    for (std::size_t i = 0; i < cut.scenario.cars.size(); ++i) {
+  return SnapshotsAt(scenario, {t}).front();
+}
+
+std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
+                                       const std::vector<Time>& times) {
+  // the trajectory's period: one instant's own time; several, their common divisor in ms
+  const Time ms = std::chrono::milliseconds(1);
+  std::int64_t step_ms = 0;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const Time t = times[k];
+    if (t < kZeroTime || t > scenario.scenario.duration ||
+        (times.size() > 1 && t % ms != Time{0}) || (k > 0 && t <= times[k - 1])) {
+      throw std::invalid_argument(
+          "the instants must ascend, be whole milliseconds and lie within the scenario's [0, " +
+          std::to_string(ToSeconds(scenario.scenario.duration)) + "] s; " +
+          std::to_string(ToSeconds(t)) + " s does not");
+    }
+    step_ms = std::gcd(step_ms, static_cast<std::int64_t>(t / ms));
+  }
+  std::vector<WorldSnapshot> out;
+  if (times.empty()) return out;
+  if (times.back() == kZeroTime) {
+    return {SnapshotWithPoses(scenario.scenario, scenario.start_poses, kZeroTime)};
+  }
+  LoadedScenario cut = scenario;
+  cut.scenario.duration = times.back();
+  // samples at 0, the period, ...: each instant's is taken before the (skipped) physics step of
+  // that instant, and nothing before it depends on the duration or the sampling period
+  cut.scenario.output.trajectory_period = times.size() == 1 ? times.back() : step_ms * ms;
+  Simulation simulation(cut);
+  simulation.Run();
+  for (const Time t : times) {
+    std::vector<world::Pose2> poses = scenario.start_poses;
+    for (std::size_t i = 0; i < cut.scenario.cars.size() && t > kZeroTime; ++i) {
       const int id = cut.scenario.cars[i].id;
-      const auto sample = std::find_if(
-          simulation.record().trajectory.rbegin(), simulation.record().trajectory.rend(),
-          [&](const TrajectorySample& s) { return s.car == id && s.t == t; });
-      if (sample == simulation.record().trajectory.rend()) {
-        throw std::logic_error("SnapshotAt: no trajectory sample of car " + std::to_string(id) +
-                               " at the instant");
+      const auto& samples = simulation.record().trajectory;
+      const auto sample = std::find_if(samples.begin(), samples.end(), [&](const TrajectorySample& s) {
+        return s.car == id && s.t == t;
+      });
+      if (sample == samples.end()) {
+        throw std::logic_error("SnapshotsAt: no trajectory sample of car " + std::to_string(id) +
+                               " at " + std::to_string(ToSeconds(t)) + " s");
       }
       poses[i] = world::Pose2{sample->x_m, sample->y_m, sample->yaw_rad};
     }
+    out.push_back(SnapshotWithPoses(scenario.scenario, poses, t));
   }
-  return SnapshotWithPoses(scenario.scenario, poses, t);
+  return out;
 }
 
 CameraBackend ParseCameraBackend(const std::string& name) {
@@ -92,6 +121,16 @@ CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& senso
   sensors_.Validate();
   appearance_.Validate();
   const auto floor = std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(track));
+  class_names_ = {"none", "floor"};
+  for (const auto& [name, rgb] : track.spec().colors_rgb) {
+    paint_classes_.emplace_back(
+        vehicle::Bgr{static_cast<std::uint8_t>(rgb[2]), static_cast<std::uint8_t>(rgb[1]),
+                     static_cast<std::uint8_t>(rgb[0])},
+        static_cast<std::uint8_t>(class_names_.size()));
+    class_names_.push_back("line:" + name);
+  }
+  class_names_.push_back("car");
+  class_names_.push_back("obstacle");
   std::shared_ptr<vehicle::GlScene> scene;
   if (backend == CameraBackend::kGl) {
     scene = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(), *floor,
@@ -107,8 +146,28 @@ CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& senso
   }
 }
 
+std::uint8_t CarCameras::ClassOf(const vehicle::Bgr& floor_colour) const {
+  for (const auto& [bgr, id] : paint_classes_) {
+    if (bgr == floor_colour) return id;
+  }
+  return 1;  // the bare floor
+}
+
+nlohmann::json CarCameras::InstancesJson(const WorldSnapshot& snapshot, int car_id) const {
+  nlohmann::json out = nlohmann::json::array();
+  for (const CarBody& car : snapshot.cars) {  // ScenePrisms' order: the other cars, the obstacles
+    if (car.id != car_id) {
+      out.push_back({{"id", out.size() + 1}, {"kind", "car"}, {"car", car.id}});
+    }
+  }
+  for (const vehicle::ObstacleBox& box : snapshot.obstacles) {
+    out.push_back({{"id", out.size() + 1}, {"kind", "obstacle"}, {"name", box.name}});
+  }
+  return out;
+}
+
 std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, int car_id,
-                                               const RngStreams& streams) const {
+                                               const RngStreams& streams, bool labels) const {
   const auto self = std::find_if(snapshot.cars.begin(), snapshot.cars.end(),
                                  [&](const CarBody& c) { return c.id == car_id; });
   if (self == snapshot.cars.end()) {
@@ -136,6 +195,31 @@ std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, in
         streams.Stream("car" + std::to_string(car_id) + "/" + camera.name + "/render_noise")
             .NextU64();
     vehicle::AddCameraNoise(c.stream->noise, c.stream->camera, seed, &camera.color, &camera.depth);
+    if (labels) {
+      if (prisms.size() > 255) {
+        throw std::invalid_argument("labels: more than 255 objects in view");
+      }
+      const int w = camera.params.width_px, h = camera.params.height_px;
+      const vehicle::RowSpans all{std::vector<std::pair<int, int>>(static_cast<std::size_t>(h),
+                                                                   std::pair{0, w})};
+      std::vector<std::uint8_t> prism_classes, prism_ids;
+      const std::uint8_t car_class = static_cast<std::uint8_t>(class_names_.size() - 2);
+      for (std::size_t k = 0; k < prisms.size(); ++k) {
+        const bool is_car = k + snapshot.obstacles.size() < prisms.size();
+        prism_classes.push_back(is_car ? car_class : static_cast<std::uint8_t>(car_class + 1));
+        prism_ids.push_back(static_cast<std::uint8_t>(k + 1));
+      }
+      const vehicle::Bgr surround = appearance_.surround();
+      camera.classes.resize(static_cast<std::size_t>(w) * h);
+      camera.instances.resize(camera.classes.size());
+      c.renderer->RenderLabels(
+          self->pose, prisms, all,
+          [&](const vehicle::Bgr& bgr) { return bgr == surround ? std::uint8_t{0} : ClassOf(bgr); },
+          {camera.classes.data(), w}, prism_classes);
+      c.renderer->RenderLabels(
+          self->pose, prisms, all, [](const vehicle::Bgr&) { return std::uint8_t{0}; },
+          {camera.instances.data(), w}, prism_ids);
+    }
     out.push_back(std::move(camera));
   }
   return out;
@@ -180,6 +264,10 @@ nlohmann::json CameraInfoJson(const RenderedCamera& camera, Time t, int car_id) 
   info["images"] = nlohmann::json::array();
   if (camera.has_color) info["images"].push_back("color.png");
   if (camera.has_depth) info["images"].push_back("depth.png");
+  if (!camera.classes.empty()) {
+    info["images"].push_back("labels.png");
+    info["images"].push_back("instances.png");
+  }
   return info;
 }
 
@@ -252,11 +340,25 @@ cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_
 
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
                        const fs::path& out_dir, bool force) {
+  WriteRenderFolder({RenderedInstant{t, cameras, nullptr}}, car_id, {}, out_dir, force);
+}
+
+std::string InstantFolderName(Time t) { return fmt::format("t_{:08.3f}", ToSeconds(t)); }
+
+void WriteRenderFolder(const std::vector<RenderedInstant>& instants, int car_id,
+                       const std::vector<std::string>& class_names, const fs::path& out_dir,
+                       bool force) {
   WriteFolderAtomically(
       out_dir,
       [&](const fs::path& partial) {
-        for (const RenderedCamera& camera : cameras) {
-          const fs::path dir = partial / camera.name;
+        for (const RenderedInstant& instant : instants) {
+        const fs::path root =
+            instants.size() == 1 ? partial : partial / InstantFolderName(instant.t);
+        fs::create_directories(root);
+        const Time t = instant.t;
+        bool labelled = false;
+        for (const RenderedCamera& camera : instant.cameras) {
+          const fs::path dir = root / camera.name;
           fs::create_directory(dir);
           // OpenCV only reads through the Mats: the const_casts lend it our buffers
           if (camera.has_color) {
@@ -272,7 +374,28 @@ void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int c
                      DepthPreviewWithColourBar(camera.depth, camera.params.clip_near_m,
                                                camera.params.clip_far_m));
           }
+          if (!camera.classes.empty()) {
+            labelled = true;
+            const int w = camera.params.width_px, h = camera.params.height_px;
+            WritePng(dir / "labels.png",
+                     cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.classes.data())));
+            WritePng(dir / "instances.png",
+                     cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.instances.data())));
+          }
           WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
+        }
+        if (labelled) {
+          const nlohmann::json legend = {
+              {"t_s", ToSeconds(t)},
+              {"car", car_id},
+              {"images",
+               "<camera>/labels.png: each pixel's class id (mono8); <camera>/instances.png: "
+               "each pixel's instance id, 0 for none (mono8); ground truth from the scene's "
+               "geometry"},
+              {"classes", class_names},
+              {"instances", instant.instances}};
+          WriteFile(root / "labels.json", legend.dump(2) + "\n");
+        }
         }
       },
       force);

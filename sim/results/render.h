@@ -38,6 +38,11 @@ struct WorldSnapshot {
 // trajectory sample at t: the sample is taken at t before the (skipped) physics step of t, and
 // nothing before t depends on the duration or the sampling period.
 WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t);
+// The world at each of `times` (ascending, each within the scenario's duration, all whole
+// milliseconds; std::invalid_argument otherwise), from one run up to the last: its trajectory is
+// sampled at the instants' greatest common divisor.
+std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
+                                       const std::vector<Time>& times);
 
 // The world at t with the cars (in scenario order) at `poses`: their bodies from the scenario, and
 // the obstacles present at t.
@@ -55,6 +60,12 @@ struct RenderedCamera {
   Eigen::Isometry3d X_map_camera{Eigen::Isometry3d::Identity()};  // optical frame
   vehicle::ColorImage color;
   vehicle::DepthImage depth;
+  // Ground-truth labels (render --labels), one byte per pixel, row-major, empty unless asked for:
+  // the class of the surface each pixel sees (CarCameras::ClassNames) and the object (0: none,
+  // k: the k-th of CarCameras::InstancesJson). From the ray caster's geometry whatever made the
+  // images: the GL backend's images agree with them except at edges (gl_camera.h).
+  std::vector<std::uint8_t> classes;
+  std::vector<std::uint8_t> instances;
 };
 
 // Which renderer makes the images: the ray caster (vehicle/ray_caster.h) or the rasteriser
@@ -75,9 +86,18 @@ class CarCameras {
   // each camera's noise params, seeded from the stream "car<id>/<camera name>/render_noise".
   // std::invalid_argument if the car is not in the snapshot.
   std::vector<RenderedCamera> Render(const WorldSnapshot& snapshot, int car_id,
-                                     const RngStreams& streams) const;
+                                     const RngStreams& streams, bool labels = false) const;
+  // The label classes by id: "none" (the surround, nothing within the far clip), "floor", then
+  // "line:<colour>" for each paint colour of the track (its colors_rgb, by name), "car",
+  // "obstacle".
+  const std::vector<std::string>& ClassNames() const { return class_names_; }
+  // The objects car `car_id`'s cameras can see in the snapshot, instance ids 1, 2, ...: [{id,
+  // kind: "car", car} or {id, kind: "obstacle", name}], in the order the renderer takes them.
+  nlohmann::json InstancesJson(const WorldSnapshot& snapshot, int car_id) const;
 
  private:
+  std::uint8_t ClassOf(const vehicle::Bgr& floor_colour) const;
+
   struct Camera {
     const CameraStreamParams* stream;
     std::unique_ptr<vehicle::CameraRenderer> renderer;
@@ -86,6 +106,8 @@ class CarCameras {
   SensorSuiteParams sensors_;
   vehicle::SceneAppearance appearance_;
   std::vector<Camera> cameras_;
+  std::vector<std::string> class_names_;
+  std::vector<std::pair<vehicle::Bgr, std::uint8_t>> paint_classes_;  // paint colour -> class
 };
 
 // CarCameras(track, sensors, appearance).Render(snapshot, car_id, streams).
@@ -113,5 +135,21 @@ inline constexpr int kColourBarPanelWidthPx = 110;  // the panel added to the ri
 // replaced). std::runtime_error if a file cannot be written.
 void WriteRenderFolder(const std::vector<RenderedCamera>& cameras, Time t, int car_id,
                        const std::filesystem::path& out_dir, bool force = false);
+
+// One instant's cameras, with their labels' legend where they carry labels.
+struct RenderedInstant {
+  Time t{};
+  std::vector<RenderedCamera> cameras;
+  nlohmann::json instances;  // CarCameras::InstancesJson; null without labels
+};
+// The same for several instants: one instant as above; several, one sub-folder each, named
+// t_<seconds, 4 digits . 3 digits> (t_0012.500). Cameras with labels add labels.png (class per
+// pixel) and instances.png (object per pixel), and the instant's folder labels.json: the class
+// names by id (`class_names`) and the instances.
+void WriteRenderFolder(const std::vector<RenderedInstant>& instants, int car_id,
+                       const std::vector<std::string>& class_names,
+                       const std::filesystem::path& out_dir, bool force = false);
+// The sub-folder WriteRenderFolder names an instant by, among several.
+std::string InstantFolderName(Time t);
 
 }  // namespace autonomsim::sim
