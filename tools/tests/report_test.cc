@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
 #include <string>
@@ -18,6 +20,7 @@
 #include "sim/results/report.h"
 #include "sim/scenario/run_record.h"
 #include "tools/tests/cli_testing.h"
+#include "vehicle/tests/gl_available.h"
 
 namespace autonomsim {
 namespace {
@@ -112,6 +115,16 @@ TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
   EXPECT_EQ(samples, run.record.trajectory.size());
   EXPECT_EQ(data["events"].size(), run.record.events.size());
   EXPECT_TRUE(data["boards"]["car0"].contains("e2e_max_ms"));
+  // the 3D views: at the snapshot and at the end, or the reason there are none
+  if (vehicle::testing::GlUnavailableReason().empty()) {
+    EXPECT_THAT(snapshot["chase"].get<std::string>(), ::testing::StartsWith("data:image/jpeg"));
+    EXPECT_THAT(snapshot["overview"].get<std::string>(), ::testing::StartsWith("data:image/jpeg"));
+    EXPECT_THAT(data["scene"]["overview"].get<std::string>(),
+                ::testing::StartsWith("data:image/jpeg"));
+    EXPECT_DOUBLE_EQ(data["scene"]["t"].get<double>(), 15.0);
+  } else {
+    EXPECT_THAT(data["scene"]["note"].get<std::string>(), HasSubstr("no OpenGL ES context"));
+  }
 }
 
 TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
@@ -158,6 +171,76 @@ TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
   EXPECT_EQ(no_board.exit_code, 2);
   EXPECT_THAT(no_board.output, HasSubstr("no car 7 with a board"));
   EXPECT_FALSE(fs::exists(*root_ / "x.mp4"));
+}
+
+TEST_F(ReportTest, TheVideoShowsTheRunIn3DFromBehindACarAndFromAbove) {
+  AUTONOMSIM_REQUIRE_GL();
+  const fs::path plain = *root_ / "plain.mp4", views = *root_ / "views.mp4";
+  ASSERT_EQ(Cli("video " + run_dir_->string() + " --out " + plain.string() + " --to 1 -q")
+                .exit_code,
+            0);
+  const Result r = Cli("video " + run_dir_->string() + " --out " + views.string() +
+                       " --to 1 --chase 1 --overview -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  cv::VideoCapture with(views.string()), without(plain.string());
+  cv::Mat frame, plain_frame;
+  ASSERT_TRUE(with.read(frame));
+  ASSERT_TRUE(without.read(plain_frame));
+  // a panel to the right of the top-down figure: the chase view above the overview
+  ASSERT_EQ(frame.cols, plain_frame.cols + 500);
+  const cv::Mat panel = frame(cv::Rect(plain_frame.cols, 0, 500, frame.rows));
+  const cv::Scalar mean = cv::mean(panel);
+  EXPECT_GT(mean[0] + mean[1] + mean[2], 30.0);  // drawn, not the background alone
+  int frames = 1;
+  while (with.read(frame)) ++frames;
+  EXPECT_EQ(frames, 21);  // 0, 0.05, ..., 1 s
+  const Result no_car = Cli("video " + run_dir_->string() + " --out " +
+                            (*root_ / "y.mp4").string() + " --chase 7 -q");
+  EXPECT_EQ(no_car.exit_code, 2);
+  EXPECT_THAT(no_car.output, HasSubstr("--chase 7: the run has no car 7"));
+  EXPECT_FALSE(fs::exists(*root_ / "y.mp4"));
+}
+
+TEST_F(ReportTest, RenderWritesACameraDatasetWithLabelsFromEitherBackend) {
+  AUTONOMSIM_REQUIRE_GL();
+  const fs::path ray_cast = *root_ / "render_raycast", gl = *root_ / "render_gl";
+  const std::string common = "render scenarios/lab_two_cars.yaml --car 0 --at 4,8.5 --labels ";
+  ASSERT_EQ(Cli(common + "--out " + ray_cast.string()).exit_code, 0);
+  const Result r = Cli(common + "--backend gl --out " + gl.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("rendered (gl, with labels)"));
+  for (const char* instant : {"t_0004.000", "t_0008.500"}) {
+    const nlohmann::json legend = nlohmann::json::parse(Read(gl / instant / "labels.json"));
+    EXPECT_EQ(legend["classes"][1], "floor");
+    EXPECT_EQ(legend["instances"][0]["car"], 1);
+    for (const char* file : {"color_camera/color.png", "color_camera/labels.png",
+                             "color_camera/instances.png", "color_camera/camera_info.json",
+                             "depth_camera/depth.png", "depth_camera/depth_preview.png",
+                             "depth_camera/labels.png"}) {
+      EXPECT_TRUE(fs::exists(gl / instant / file)) << instant << "/" << file;
+      EXPECT_TRUE(fs::exists(ray_cast / instant / file)) << instant << "/" << file;
+    }
+    // the same files; the images agree but for edges, the labels are the same ground truth
+    const cv::Mat a = cv::imread((gl / instant / "color_camera/color.png").string());
+    const cv::Mat b = cv::imread((ray_cast / instant / "color_camera/color.png").string());
+    cv::Mat differ;
+    cv::compare(a.reshape(1), b.reshape(1), differ, cv::CMP_NE);
+    EXPECT_LT(cv::countNonZero(differ), a.total() / 100) << instant;
+    const cv::Mat la = cv::imread((gl / instant / "color_camera/labels.png").string(),
+                                  cv::IMREAD_UNCHANGED);
+    const cv::Mat lb = cv::imread((ray_cast / instant / "color_camera/labels.png").string(),
+                                  cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(cv::norm(la, lb, cv::NORM_INF), 0.0) << instant;
+    const cv::Mat da = cv::imread((gl / instant / "depth_camera/depth.png").string(),
+                                  cv::IMREAD_UNCHANGED);
+    const cv::Mat db = cv::imread((ray_cast / instant / "depth_camera/depth.png").string(),
+                                  cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(da.type(), CV_16UC1);
+    EXPECT_LE(cv::norm(da, db, cv::NORM_INF), 1.0) << instant;
+  }
+  const Result bad = Cli("render scenarios/lab_two_cars.yaml --car 0 --at 1 --backend vulkan --out " +
+                         (*root_ / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2);
 }
 
 TEST_F(ReportTest, ALongRunsTrajectoryIsThinnedToKeepThePageSmall) {

@@ -647,6 +647,40 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
                std::invalid_argument);
 }
 
+TEST(RayCasterTest, PrismLabelsNameTheObjectEachPixelSeesWhateverItsColour) {
+  // two boxes of one colour, the nearer hiding part of the farther: told apart by their labels
+  const CameraParams params = DepthCameraParams();
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  const world::Pose2 car{};
+  const std::vector<Prism> prisms{Box(1.5, 0.1, 0.0, 0.3, 0.6, 0.3), Box(1.0, -0.1, 0.4, 0.2, 0.2, 0.2)};
+  ColorImage colour;
+  DepthImage depth;
+  renderer.Render(car, prisms, &colour, &depth);
+  RowSpans all;
+  all.columns.assign(static_cast<std::size_t>(params.height_px), {0, params.width_px});
+  std::vector<std::uint8_t> ids(static_cast<std::size_t>(params.width_px) * params.height_px, 99);
+  const std::vector<std::uint8_t> prism_ids{1, 2};
+  renderer.RenderLabels(car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
+                        LabelView{ids.data(), params.width_px}, prism_ids);
+  std::array<DepthImage, 2> alone;
+  for (std::size_t k = 0; k < 2; ++k) renderer.Render(car, std::span(&prisms[k], 1), nullptr, &alone[k]);
+  std::array<int, 3> count{};
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    ASSERT_LE(ids[i], 2) << i;
+    ++count[ids[i]];
+    // the object a pixel is labelled with is the one at its depth
+    if (ids[i] != 0) {
+      ASSERT_EQ(alone[ids[i] - 1u].mm[i], depth.mm[i]) << i;
+    }
+  }
+  EXPECT_GT(count[1], 1000);
+  EXPECT_GT(count[2], 1000);
+  EXPECT_THROW(renderer.RenderLabels(car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
+                                     LabelView{ids.data(), params.width_px},
+                                     std::vector<std::uint8_t>{1}),
+               std::invalid_argument);
+}
+
 TEST(RayCasterTest, OutsideTheRasterIsBareFloorAndAboveTheHorizonTheSurround) {
   world::FloorRaster raster = BlackFloor(1.0);
   raster.floor_bgr = {10, 20, 30};

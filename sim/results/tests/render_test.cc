@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstring>
+#include <map>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
@@ -46,6 +47,67 @@ TEST(RenderTest, TheSnapshotIsTheFullRunsWorldAtThatInstant) {
   EXPECT_EQ(start.cars[0].pose.x_m, scenario.start_poses[0].x_m);
   EXPECT_THROW(SnapshotAt(scenario, FromSeconds(91.0)), std::invalid_argument);
   EXPECT_THROW(SnapshotAt(scenario, FromSeconds(-1.0)), std::invalid_argument);
+}
+
+TEST(RenderTest, SeveralSnapshotsFromOneRunAreEachInstantsOwn) {
+  const LoadedScenario scenario = LoadScenario(kObstacleScenario);
+  const std::vector<Time> times{kZeroTime, FromSeconds(3.0), FromSeconds(12.0),
+                                FromSeconds(13.35)};
+  const std::vector<WorldSnapshot> snapshots = SnapshotsAt(scenario, times);
+  ASSERT_EQ(snapshots.size(), times.size());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const WorldSnapshot one = SnapshotAt(scenario, times[k]);
+    EXPECT_EQ(snapshots[k].t, times[k]);
+    EXPECT_EQ(snapshots[k].obstacles.size(), one.obstacles.size());
+    for (std::size_t c = 0; c < one.cars.size(); ++c) {
+      EXPECT_TRUE(BitIdentical(snapshots[k].cars[c].pose.x_m, one.cars[c].pose.x_m)) << k;
+      EXPECT_TRUE(BitIdentical(snapshots[k].cars[c].pose.yaw_rad, one.cars[c].pose.yaw_rad)) << k;
+    }
+  }
+  EXPECT_THROW(SnapshotsAt(scenario, {FromSeconds(2.0), FromSeconds(1.0)}), std::invalid_argument);
+  EXPECT_THROW(SnapshotsAt(scenario, {FromSeconds(1.0), FromSeconds(1.0005)}),
+               std::invalid_argument);  // several instants are whole milliseconds
+}
+
+TEST(RenderTest, LabelsNameEachPixelsSurfaceAndObject) {
+  const LoadedScenario scenario = LoadScenario(kObstacleScenario);
+  const WorldSnapshot snapshot = SnapshotAt(scenario, FromSeconds(13.0));
+  const CarCameras cameras(scenario.track, SensorSuiteParams{}, scenario.scenario.appearance);
+  const std::vector<RenderedCamera> rendered =
+      cameras.Render(snapshot, 1, RngStreams(scenario.scenario.seed), true);
+  const std::vector<std::string>& classes = cameras.ClassNames();
+  EXPECT_THAT(classes, ::testing::ElementsAre("none", "floor", "line:white", "line:yellow", "car",
+                                              "obstacle"));
+  const nlohmann::json instances = cameras.InstancesJson(snapshot, 1);
+  ASSERT_EQ(instances.size(), 2u);  // car 0, then the box
+  EXPECT_EQ(instances[0]["car"], 0);
+  EXPECT_EQ(instances[1]["kind"], "obstacle");
+  for (const RenderedCamera& camera : rendered) {
+    ASSERT_EQ(camera.classes.size(), camera.instances.size());
+    std::map<std::string, int> seen;
+    for (std::size_t i = 0; i < camera.classes.size(); ++i) {
+      const std::string& name = classes.at(camera.classes[i]);
+      ++seen[name];
+      // an object's pixels are of its class, and only objects' pixels carry an instance
+      const char* expected = camera.instances[i] == 2   ? "obstacle"
+                             : camera.instances[i] == 1 ? "car"
+                                                        : nullptr;
+      if (expected != nullptr) {
+        ASSERT_EQ(name, expected) << camera.name << " " << i;
+      } else {
+        ASSERT_TRUE(name != "obstacle" && name != "car") << camera.name << " " << i;
+      }
+      // a painted line's pixels are that paint in the colour image (no noise by default)
+      if (camera.has_color && name == "line:yellow") {
+        ASSERT_GT(camera.color.bgr[3 * i + 2], 200) << i;  // red
+        ASSERT_LT(camera.color.bgr[3 * i], 100) << i;      // blue
+      }
+    }
+    EXPECT_GT(seen["obstacle"], 500) << camera.name;
+    EXPECT_GT(seen["floor"], 10000) << camera.name;
+    EXPECT_GT(seen["none"], 10000) << camera.name;
+    EXPECT_GT(seen["line:white"] + seen["line:yellow"], 1000) << camera.name;
+  }
 }
 
 TEST(RenderTest, TheObstacleAheadShowsInBothCameras) {

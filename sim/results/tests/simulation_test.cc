@@ -16,6 +16,7 @@
 #include "sim/results/expectations.h"
 #include "sim/mqtt/mqtt_process.h"  // TempDir
 #include "sim/results/outputs.h"
+#include "vehicle/tests/gl_available.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -51,6 +52,35 @@ TEST(SimulationTest, RunsOnTwoThreadsAtOnceMatchASequentialRun) {
   t2.join();
   EXPECT_EQ(first, sequential);
   EXPECT_EQ(second, sequential);
+}
+
+// The GL camera backend in the loop: deterministic like the ray caster, also with two runs on two
+// threads at once (a context each); its frames are the cameras' (the stack drives on them).
+TEST(SimulationTest, TheGlCameraBackendGivesTheSameResultTwiceAndOnTwoThreads) {
+  AUTONOMSIM_REQUIRE_GL();
+  const std::vector<std::string> gl{"camera_backend=gl", "duration_s=2.5", "expect=[]"};
+  const LoadedScenario scenario = LoadScenario("scenarios/lab_two_cars.yaml", gl);
+  const RunRecord a = RunScenario(scenario);
+  ASSERT_GT(a.trajectory.size(), 100u);
+  const std::string sequential = ResultSha256(a);
+  EXPECT_EQ(ResultSha256(RunScenario(scenario)), sequential);
+  std::string first, second;
+  std::thread t1([&] { first = ResultSha256(RunScenario(scenario)); });
+  std::thread t2([&] { second = ResultSha256(RunScenario(scenario)); });
+  t1.join();
+  t2.join();
+  EXPECT_EQ(first, sequential);
+  EXPECT_EQ(second, sequential);
+  // the cars drove: the stack read the GL frames
+  double fastest_mps = 0.0;
+  for (const TrajectorySample& s : a.trajectory) fastest_mps = std::max(fastest_mps, s.speed_mps);
+  EXPECT_GT(fastest_mps, 0.2);
+  try {
+    LoadScenario("scenarios/lab_two_cars.yaml", {"camera_backend=vulkan"});
+    ADD_FAILURE() << "an unknown camera backend was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("camera_backend must be 'raycast'"));
+  }
 }
 
 // A run streamed into its folder (RunFolder, what `run`, `check --out` and sweeps do) gives the
