@@ -52,8 +52,9 @@ cv::Mat SceneViews::Chase(const WorldSnapshot& snapshot, int car_id, cv::Size si
 cv::Mat SceneViews::Overview(const WorldSnapshot& snapshot, cv::Size size) {
   const Eigen::Vector3d eye(centre_m_.x(), centre_m_.y() - params_.overview_back * size_m_,
                             params_.overview_height * size_m_);
-  return Draw(eye, {centre_m_.x(), centre_m_.y(), 0.0}, params_.overview_hfov_deg, size, snapshot,
-              "overview");
+  const Eigen::Vector3d target(centre_m_.x(),
+                               centre_m_.y() - params_.overview_look_south * size_m_, 0.0);
+  return Draw(eye, target, params_.overview_hfov_deg, size, snapshot, "overview from the south");
 }
 
 cv::Mat SceneViews::Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
