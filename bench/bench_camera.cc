@@ -114,18 +114,10 @@ RgbdRig Rig(int width, int height, int cameras) {
   return rig;
 }
 
-void SetRgbdCounters(benchmark::State& state, int width, int height, int cameras) {
-  state.SetItemsProcessed(state.iterations() * cameras);  // RGB-D frames
-  state.counters["Mpx_per_s"] = benchmark::Counter(
-      2.0 * width * height * cameras * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
-}
-
-void BM_RenderRgbdCameras(benchmark::State& state) {
-  const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
-  const int cameras = static_cast<int>(state.range(2));
-  const RgbdRig rig = Rig(width, height, cameras);
-  vehicle::CameraRenderer color_camera = Renderer(rig.color[0]);
-  vehicle::CameraRenderer depth_camera = Renderer(rig.depth[0]);
+// The benchmark's loop: each camera's colour and depth frame, with either backend's renderers.
+template <class Renderer>
+void RenderRigFrames(benchmark::State& state, const RgbdRig& rig, Renderer& color_camera,
+                     Renderer& depth_camera) {
   vehicle::ColorImage color;
   vehicle::DepthImage depth;
   for (auto _ : state) {
@@ -137,7 +129,20 @@ void BM_RenderRgbdCameras(benchmark::State& state) {
     }
     benchmark::ClobberMemory();
   }
-  SetRgbdCounters(state, width, height, cameras);
+  const auto cameras = static_cast<std::int64_t>(rig.poses.size());
+  state.SetItemsProcessed(state.iterations() * cameras);  // RGB-D frames
+  state.counters["Mpx_per_s"] =
+      benchmark::Counter(2.0 * color.width * color.height * static_cast<double>(cameras) * 1e-6,
+                         benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_RenderRgbdCameras(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
+  const int cameras = static_cast<int>(state.range(2));
+  const RgbdRig rig = Rig(width, height, cameras);
+  vehicle::CameraRenderer color_camera = Renderer(rig.color[0]);
+  vehicle::CameraRenderer depth_camera = Renderer(rig.depth[0]);
+  RenderRigFrames(state, rig, color_camera, depth_camera);
 }
 
 // The same frames from the GL backend (vehicle/gl_camera.h), read back to the CPU. Its label
@@ -157,18 +162,7 @@ void BM_RenderRgbdGl(benchmark::State& state) {
   const RgbdRig rig = Rig(width, height, cameras);
   vehicle::GlCameraRenderer color_camera(scene, rig.color[0]);
   vehicle::GlCameraRenderer depth_camera(scene, rig.depth[0]);
-  vehicle::ColorImage color;
-  vehicle::DepthImage depth;
-  for (auto _ : state) {
-    for (const world::Pose2& pose : rig.poses) {
-      color_camera.Render(pose, TheScene().prisms, &color, nullptr);
-      depth_camera.Render(pose, TheScene().prisms, nullptr, &depth);
-      benchmark::DoNotOptimize(color.bgr.data());
-      benchmark::DoNotOptimize(depth.mm.data());
-    }
-    benchmark::ClobberMemory();
-  }
-  SetRgbdCounters(state, width, height, cameras);
+  RenderRigFrames(state, rig, color_camera, depth_camera);
   state.SetLabel(scene->context().renderer());
 }
 

@@ -192,16 +192,19 @@ double Share(std::size_t part, std::size_t whole) {
   return static_cast<double>(part) / static_cast<double>(whole);
 }
 
+// The figures README "Two renderers" quotes, printed with the test's output.
+void Print(const char* camera, const Agreement& a) {
+  std::printf("%s, %zu pixels away from edges: depth within 1 mm %.4f %%, colour equal %.4f %%, "
+              "largest depth difference %d mm; %zu edge pixels, colour equal %.2f %%\n",
+              camera, a.pixels, 100.0 * Share(a.depth_within_1mm, a.pixels),
+              100.0 * Share(a.colour_equal, a.pixels), a.max_depth_error_mm, a.edge_pixels,
+              100.0 * Share(a.edge_colour_equal, a.edge_pixels));
+}
+
 TEST(GlCameraTest, TheDepthCameraAgreesWithTheRayCasterOnTwentyFourPoses) {
   AUTONOMSIM_REQUIRE_GL();
   const Agreement a = Compare(DepthCameraParams(), Scenes(Shared().track));
-  RecordProperty("depth_within_1mm", std::to_string(Share(a.depth_within_1mm, a.pixels)));
-  RecordProperty("colour_equal", std::to_string(Share(a.colour_equal, a.pixels)));
-  std::printf("depth camera, %zu pixels away from edges: depth within 1 mm %.4f %%, colour equal "
-              "%.4f %%, largest depth difference %d mm; %zu edge pixels, colour equal %.2f %%\n",
-              a.pixels, 100.0 * Share(a.depth_within_1mm, a.pixels),
-              100.0 * Share(a.colour_equal, a.pixels), a.max_depth_error_mm, a.edge_pixels,
-              100.0 * Share(a.edge_colour_equal, a.edge_pixels));
+  Print("depth camera", a);
   EXPECT_GE(Share(a.depth_within_1mm, a.pixels), 0.99);
   // no lens distortion: both sample each pixel's own ray, and differ only where float rounding
   // puts a ray on the other side of a texel's border
@@ -211,12 +214,7 @@ TEST(GlCameraTest, TheDepthCameraAgreesWithTheRayCasterOnTwentyFourPoses) {
 TEST(GlCameraTest, TheDistortedColourCameraAgreesWithTheRayCasterOnTwentyFourPoses) {
   AUTONOMSIM_REQUIRE_GL();
   const Agreement a = Compare(ColorCameraParams(), Scenes(Shared().track));
-  std::printf("colour camera, %zu pixels away from edges: depth within 1 mm %.4f %%, colour "
-              "equal %.4f %%, largest depth difference %d mm; %zu edge pixels, colour equal "
-              "%.2f %%\n",
-              a.pixels, 100.0 * Share(a.depth_within_1mm, a.pixels),
-              100.0 * Share(a.colour_equal, a.pixels), a.max_depth_error_mm, a.edge_pixels,
-              100.0 * Share(a.edge_colour_equal, a.edge_pixels));
+  Print("colour camera", a);
   // the raw image is resampled from a pinhole image twice as fine: a pixel takes the colour of
   // a ray up to a quarter of a pixel from its own, which differs beside a painted line's edge
   EXPECT_GE(Share(a.depth_within_1mm, a.pixels), 0.99);

@@ -9,6 +9,7 @@
 #include <set>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -42,16 +43,20 @@ TEST(SimulationTest, SameScenarioAndSeedGiveBitIdenticalResults) {
   EXPECT_EQ(a.kernel_events, b.kernel_events);
 }
 
+// The result hashes of two runs of `scenario` on two threads at once.
+std::array<std::string, 2> ShasOnTwoThreads(const LoadedScenario& scenario) {
+  std::array<std::string, 2> sha;
+  std::thread t1([&] { sha[0] = ResultSha256(RunScenario(scenario)); });
+  std::thread t2([&] { sha[1] = ResultSha256(RunScenario(scenario)); });
+  t1.join();
+  t2.join();
+  return sha;
+}
+
 TEST(SimulationTest, RunsOnTwoThreadsAtOnceMatchASequentialRun) {
   const LoadedScenario scenario = LoadScenario(kDefault);
   const std::string sequential = ResultSha256(RunScenario(scenario));
-  std::string first, second;
-  std::thread t1([&] { first = ResultSha256(RunScenario(scenario)); });
-  std::thread t2([&] { second = ResultSha256(RunScenario(scenario)); });
-  t1.join();
-  t2.join();
-  EXPECT_EQ(first, sequential);
-  EXPECT_EQ(second, sequential);
+  EXPECT_THAT(ShasOnTwoThreads(scenario), ::testing::Each(sequential));
 }
 
 // The GL camera backend in the loop: deterministic like the ray caster, also with two runs on two
@@ -64,13 +69,7 @@ TEST(SimulationTest, TheGlCameraBackendGivesTheSameResultTwiceAndOnTwoThreads) {
   ASSERT_GT(a.trajectory.size(), 100u);
   const std::string sequential = ResultSha256(a);
   EXPECT_EQ(ResultSha256(RunScenario(scenario)), sequential);
-  std::string first, second;
-  std::thread t1([&] { first = ResultSha256(RunScenario(scenario)); });
-  std::thread t2([&] { second = ResultSha256(RunScenario(scenario)); });
-  t1.join();
-  t2.join();
-  EXPECT_EQ(first, sequential);
-  EXPECT_EQ(second, sequential);
+  EXPECT_THAT(ShasOnTwoThreads(scenario), ::testing::Each(sequential));
   // the cars drove: the stack read the GL frames
   double fastest_mps = 0.0;
   for (const TrajectorySample& s : a.trajectory) fastest_mps = std::max(fastest_mps, s.speed_mps);
