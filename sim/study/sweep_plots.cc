@@ -30,6 +30,9 @@ constexpr const char* kEachRunColour = "#b8b8b8";
 constexpr std::size_t kMostRunsNamed = 10;
 // Legends with a longer label go below the plot; a longer title takes two lines.
 constexpr std::size_t kLongestLabelBeside = 28;
+// Category names on the x axis are written slanted when, together, they hold more characters
+// than fit side by side under the plot (about 80 at the plots' width and tic font).
+constexpr std::size_t kCategoryCharsLevel = 80;
 constexpr std::size_t kLongestTitleLine = 70;
 
 // A string in gnuplot's single quotes ('' is a quote).
@@ -343,15 +346,28 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
   }
   gp += "set xlabel " + Quoted(spec.x_label) + "\nset ylabel " + Quoted(spec.y_label) + "\n";
   gp += "set grid lc rgb '#e0e0e0'\nset border 3\nset tics nomirror\nset yrange [0:*]\n";
-  gp += longest > kLongestLabelBeside ? "set key bmargin left horizontal Left reverse\nset bmargin 7\n"
-                                      : "set key outside right top Left reverse\n";
+  std::size_t category_chars = 0, longest_category = 0;
+  for (const std::string& c : spec.categories) {
+    category_chars += c.size() + 2;
+    longest_category = std::max(longest_category, c.size());
+  }
+  const bool slanted = category_chars > kCategoryCharsLevel;
+  // below the plot: the slanted names (a character at 30° rises 0.3 of a line), then the key
+  // when it is too wide for the right
+  const std::size_t names_margin = slanted ? longest_category * 3 / 10 : 0;
+  gp += longest > kLongestLabelBeside
+            ? fmt::format("set key bmargin left horizontal Left reverse\nset bmargin {}\n",
+                          7 + names_margin)
+            : "set key outside right top Left reverse\n" +
+                  (slanted ? fmt::format("set bmargin {}\n", 2 + names_margin) : std::string());
   if (spec.log_x) gp += "set logscale x 10\n";
   if (!spec.categories.empty()) {
     std::vector<std::string> tics;
     for (std::size_t i = 0; i < spec.categories.size(); ++i) {
       tics.push_back(Quoted(spec.categories[i]) + " " + std::to_string(i));
     }
-    gp += fmt::format("set xtics ({})\nset xrange [-0.5:{}]\n", fmt::join(tics, ", "),
+    gp += fmt::format("set xtics ({}){}\nset xrange [-0.5:{}]\n", fmt::join(tics, ", "),
+                      slanted ? " rotate by 30 right" : "",
                       static_cast<double>(spec.categories.size()) - 0.5);
   } else {
     gp += "set autoscale xfix\nset offsets graph 0.03, graph 0.03, graph 0.05, 0\n";

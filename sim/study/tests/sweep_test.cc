@@ -253,6 +253,20 @@ TEST(SweepPlots, TheScriptDrawsEachSeriesFromItsBlockWithItsColourAndName) {
   EXPECT_THAT(gp, HasSubstr("title 'car1''s runs'"));  // gnuplot's quote in quotes
 }
 
+TEST(SweepPlots, ManyLongCategoryNamesAreSlantedAndGivenRoomBelow) {
+  PlotSpec spec{.title = "Collisions, against faults", .x_label = "faults", .y_label = "collisions"};
+  spec.series = {PlotSeries{.label = "all cars", .x = {0, 1}, .y = {0, 1}}};
+  spec.categories = {"lab", "safe"};
+  EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"), ::testing::Not(HasSubstr("rotate")));
+  // the faults study's twelve kinds do not fit side by side
+  spec.categories = {"none",        "v2i_partition", "v2i_loss_burst", "server_restart",
+                     "broker_outage", "car_stall",   "node_crash",     "node_hang",
+                     "camera_freeze", "camera_blackout", "imu_bias_step", "localization_jump"};
+  const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
+  EXPECT_THAT(gp, HasSubstr("'localization_jump' 11) rotate by 30 right"));
+  EXPECT_THAT(gp, HasSubstr("set bmargin 7"));  // 2 lines + 0.3 of a line per character
+}
+
 // ---- Real sweeps on the oracle scenario (no board: fast) ----
 
 SweepSpec TinySweep() {
