@@ -327,6 +327,13 @@ GlScene::Target& GlScene::TargetOfSize(int width, int height) {
   for (const auto& target : targets_) {
     if (target->width == width && target->height == height) return *target;
   }
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+  if (width > max_size || height > max_size) {
+    throw GlUnavailable("OpenGL ES: a " + std::to_string(width) + " x " + std::to_string(height) +
+                        " image exceeds the largest renderbuffer " + std::to_string(max_size) +
+                        " of " + context_->renderer());
+  }
   auto target = std::make_unique<Target>();
   target->width = width;
   target->height = height;
@@ -510,8 +517,16 @@ GlCameraRenderer::GlCameraRenderer(std::shared_ptr<GlScene> scene,
   const double fx = kDistortedSupersampling * params.K[0];
   const double fy = kDistortedSupersampling * params.K[4];
   const double cx = -fx * *x_lo + 1.0, cy = -fy * *y_lo + 1.0;
-  pinhole_.width_px = static_cast<int>(std::ceil(fx * (*x_hi - *x_lo))) + 3;
-  pinhole_.height_px = static_cast<int>(std::ceil(fy * (*y_hi - *y_lo))) + 3;
+  const double width = std::ceil(fx * (*x_hi - *x_lo)) + 3.0;
+  const double height = std::ceil(fy * (*y_hi - *y_lo)) + 3.0;
+  if (!(width <= kMaxPinholePx && height <= kMaxPinholePx)) {
+    throw GlUnavailable("the GL backend would render camera '" + params.name + "' through a " +
+                        std::to_string(width) + " x " + std::to_string(height) +
+                        " px pinhole image (its lens distortion sees too wide a field); at most " +
+                        std::to_string(kMaxPinholePx) + " px a side");
+  }
+  pinhole_.width_px = static_cast<int>(width);
+  pinhole_.height_px = static_cast<int>(height);
   pinhole_.K = {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0};
   // each raw pixel: where its ray is in the pinhole image, and the pinhole pixel nearest to it
   map_xy_.resize(2 * rx.size());

@@ -143,6 +143,9 @@ class GlCameraRenderer {
  public:
   // Rendered pinhole pixels per raw pixel, along each axis, under lens distortion.
   static constexpr int kDistortedSupersampling = 2;
+  // The largest side of that pinhole image (OpenGL ES 3.0 guarantees renderbuffers of 2048;
+  // desktop drivers and llvmpipe take 8192 or more); a wider field is GlUnavailable.
+  static constexpr int kMaxPinholePx = 8192;
 
   GlCameraRenderer(std::shared_ptr<GlScene> scene, std::shared_ptr<const CameraRays> rays);
 
