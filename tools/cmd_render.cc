@@ -78,7 +78,7 @@ int RenderCommand(const RenderArgs& a) {
   try {
     cameras.emplace(loaded->track, car->sensors, scenario.appearance, camera_backend);
   } catch (const vehicle::GlUnavailable& e) {
-    fmt::print(stderr, "error: --backend gl: no OpenGL ES context can be made here: {}\n",
+    fmt::print(stderr, "error: --backend gl: {}\n",
                e.what());
     return kExitUnusableInput;
   }
@@ -98,7 +98,7 @@ int RenderCommand(const RenderArgs& a) {
   }
   fmt::print("car {} at {} instant(s) of {} rendered ({}{}) in {:.2f} s wall\n", a.car,
              rendered.size(), scenario.name,
-             camera_backend == sim::CameraBackend::kGl ? "gl" : "raycast",
+             sim::CameraBackendName(camera_backend),
              a.labels ? ", with labels" : "", WallSecondsSince(start));
   return kExitOk;
 }

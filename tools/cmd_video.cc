@@ -70,7 +70,7 @@ int VideoCommand(const VideoArgs& a) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   } catch (const vehicle::GlUnavailable& e) {
-    fmt::print(stderr, "error: --chase/--overview: no OpenGL ES context can be made here: {}\n",
+    fmt::print(stderr, "error: --chase/--overview: {}\n",
                e.what());
     return kExitUnusableInput;
   }

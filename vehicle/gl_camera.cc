@@ -130,12 +130,9 @@ std::array<float, 4> Normalized(const Bgr& bgr) {
   return {bgr[0] / 255.0f, bgr[1] / 255.0f, bgr[2] / 255.0f, 1.0f};
 }
 
-// The ray caster's rule (ray_caster.cc, DepthMillimetres): rounded half up, 0 outside the clip.
-std::uint16_t Millimetres(float z_m, double near_m, double far_m) {
-  const double z = z_m;
-  if (!(z >= near_m && z <= far_m)) return 0;
-  return static_cast<std::uint16_t>(z * 1000.0 + 0.5);
-}
+// Under lens distortion, the depth interpolated at a ray's exact position is taken where it is
+// within this fraction of the nearest pixel's (the four pixels around it see one surface).
+constexpr float kOneSurfaceTolerance = 0.1f;
 
 }  // namespace
 
@@ -295,6 +292,9 @@ GlScene::GlScene(std::shared_ptr<GlContext> context, const FloorTexture& floor, 
               static_cast<float>(1.0 / floor.m_per_px()));
   const std::array<float, 4> outside_colour = Normalized(outside_bgr);
   glUniform4fv(glGetUniformLocation(program_, "u_outside"), 1, outside_colour.data());
+  clip_from_map_at_ = glGetUniformLocation(program_, "u_clip_from_map");
+  optical_z_row_at_ = glGetUniformLocation(program_, "u_optical_z_row");
+  far_at_ = glGetUniformLocation(program_, "u_far_m");
   // the vertices: x, y, z (map frame, metres) and a packed B, G, R, A colour
   glGenVertexArrays(1, &vertex_array_);
   glBindVertexArray(vertex_array_);
@@ -450,10 +450,9 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
   }
 
   glUseProgram(program_);
-  glUniformMatrix4fv(glGetUniformLocation(program_, "u_clip_from_map"), 1, GL_FALSE,
-                     clip_from_map.data());
-  glUniform4fv(glGetUniformLocation(program_, "u_optical_z_row"), 1, z_row.data());
-  glUniform1f(glGetUniformLocation(program_, "u_far_m"), static_cast<float>(f));
+  glUniformMatrix4fv(clip_from_map_at_, 1, GL_FALSE, clip_from_map.data());
+  glUniform4fv(optical_z_row_at_, 1, z_row.data());
+  glUniform1f(far_at_, static_cast<float>(f));
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, floor_texture_);
   glBindVertexArray(vertex_array_);
@@ -500,7 +499,7 @@ GlCameraRenderer::GlCameraRenderer(std::shared_ptr<GlScene> scene,
     throw std::invalid_argument("GlCameraRenderer needs a scene and the camera's rays");
   }
   const CameraParams& params = camera().params();
-  pinhole_.near_m = 1e-3;  // as the ray caster clips prisms (kProjectionNearZ_m)
+  pinhole_.near_m = kProjectionNearZ_m;
   pinhole_.far_m = params.clip_far_m;
   resample_ = params.lens_distortion;
   if (!resample_) {
@@ -588,7 +587,7 @@ void GlCameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Pri
   if (depth == nullptr) return;
   if (!resample_) {
     for (std::size_t i = 0; i < pixels; ++i) {
-      depth->mm[i] = Millimetres(frame_.z_m[i], params.clip_near_m, params.clip_far_m);
+      depth->mm[i] = DepthMillimetres(frame_.z_m[i], params.clip_near_m, params.clip_far_m);
     }
     return;
   }
@@ -611,10 +610,10 @@ void GlCameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Pri
   for (std::size_t i = 0; i < pixels; ++i) {
     float z = nearest_z_[i];
     const float inverse = interpolated_inverse_z_[i];
-    if (z > 0.0f && inverse > 0.0f && std::abs(1.0f / inverse - z) <= 0.1f * z) {
+    if (z > 0.0f && inverse > 0.0f && std::abs(1.0f / inverse - z) <= kOneSurfaceTolerance * z) {
       z = 1.0f / inverse;
     }
-    depth->mm[i] = Millimetres(z, params.clip_near_m, params.clip_far_m);
+    depth->mm[i] = DepthMillimetres(z, params.clip_near_m, params.clip_far_m);
   }
 }
 

@@ -129,6 +129,7 @@ class GlScene {
   std::shared_ptr<GlContext> context_;
   Bgr surround_;
   unsigned program_{0}, floor_texture_{0}, vertex_array_{0}, vertex_buffer_{0};
+  int clip_from_map_at_{-1}, optical_z_row_at_{-1}, far_at_{-1};  // the per-view uniforms
   int floor_texels_[2]{0, 0};
   std::vector<std::unique_ptr<Target>> targets_;
   std::vector<float> vertices_;  // scratch: x, y, z and a packed colour per vertex

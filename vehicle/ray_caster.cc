@@ -39,9 +39,6 @@ I4 FirstLanes(int n) { return I4{0, 1, 2, 3} < SplatInt(n); }
 F4 Min(F4 a, F4 b) { return a < b ? a : b; }
 F4 Max(F4 a, F4 b) { return a > b ? a : b; }
 bool Any(I4 mask) { return (mask[0] | mask[1] | mask[2] | mask[3]) != 0; }
-// Prism corners nearer to the image plane than this (optical z, m) are clipped before projection
-// (a surface within 1 mm of a lens is not drawn).
-constexpr double kProjectionNearZ_m = 1e-3;
 // Face shading, so that a box's faces are told apart: ambient + diffuse · max(0, n · light), one
 // fixed light from above (map frame; the lab's ceiling lights are not described).
 constexpr double kAmbient = 0.6;
@@ -59,11 +56,6 @@ void RequireRgb(const std::array<int, 3>& rgb, const std::string& key) {
   }
 }
 
-// Rounded half up; t_m within the clip range is positive.
-std::uint16_t DepthMillimetres(double t_m, double near_m, double far_m) {
-  if (!(t_m >= near_m && t_m <= far_m)) return 0;
-  return static_cast<std::uint16_t>(t_m * 1000.0 + 0.5);
-}
 
 // SplitMix64's output function (Steele, Lea & Flood 2014): a bijection with full avalanche, used
 // as a counter-based generator (its input a seed plus the draw's index).

@@ -33,6 +33,17 @@ namespace autonomsim::vehicle {
 
 using Bgr = std::array<std::uint8_t, 3>;
 
+// Surfaces nearer to the image plane than this (optical z, m) are not drawn: a prism's corners
+// are clipped there before projection (the GL backend's near plane is the same).
+inline constexpr double kProjectionNearZ_m = 1e-3;
+
+// A depth image's value for a surface at optical depth t_m: millimetres rounded half up, 0 (no
+// return) outside [near_m, far_m]. Both renderers' rule.
+inline std::uint16_t DepthMillimetres(double t_m, double near_m, double far_m) {
+  if (!(t_m >= near_m && t_m <= far_m)) return 0;
+  return static_cast<std::uint16_t>(t_m * 1000.0 + 0.5);
+}
+
 // A vertical prism standing on the floor (z from 0 to height_m): an obstacle box or a car body.
 struct Prism {
   world::OrientedBox footprint;  // map frame

@@ -4,6 +4,7 @@
 // simulator's machinery, as Drake keeps a camera's config apart from the camera system.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "vehicle/camera_model.h"
@@ -103,5 +104,15 @@ struct SensorSuiteParams {
   }
   void Validate() const;  // each part, and the two cameras' names differ
 };
+
+// Which renderer makes the cameras' images: the ray caster (vehicle/ray_caster.h) or the
+// rasteriser in an offscreen OpenGL ES context (vehicle/gl_camera.h). A scenario names it
+// `camera_backend: raycast | gl`.
+enum class CameraBackend { kRayCast, kGl };
+// The backend a name means ("raycast", "gl"); nullopt for any other.
+std::optional<CameraBackend> CameraBackendNamed(const std::string& name);
+// The same, std::invalid_argument naming the choices for any other.
+CameraBackend ParseCameraBackend(const std::string& name);
+const char* CameraBackendName(CameraBackend backend);
 
 }  // namespace autonomsim::sim

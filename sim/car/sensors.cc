@@ -52,13 +52,14 @@ SensorMessageType RangeType() { return {"sensor_msgs/Range", 8 + 1 + 16}; }
 
 SensorEnvironment::SensorEnvironment(const vehicle::PhysicsWorld* physics,
                                      const world::FloorRaster& floor,
-                                     const vehicle::SceneAppearance& appearance, bool gl)
+                                     const vehicle::SceneAppearance& appearance,
+                                     CameraBackend backend)
     : physics_(physics),
       appearance_(appearance),
       floor_(std::make_shared<const vehicle::FloorTexture>(floor)) {
   Require(physics_ != nullptr, "SensorEnvironment needs a physics world");
   appearance_.Validate();
-  if (gl) {
+  if (backend == CameraBackend::kGl) {
     gl_scene_ = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(), *floor_,
                                                    appearance_.surround());
   }

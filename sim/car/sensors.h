@@ -59,10 +59,11 @@ SensorMessageType RangeType();       // sensor_msgs/Range, 25 B
 class SensorEnvironment {
  public:
   // `physics` is not owned and must outlive the environment and every suite and frame using it.
-  // `gl`: the cameras render with the rasteriser (vehicle/gl_camera.h) instead of the ray caster;
-  // vehicle::GlUnavailable if no OpenGL ES context can be made here.
+  // `backend`: kGl, the cameras render with the rasteriser (vehicle/gl_camera.h) instead of the
+  // ray caster; vehicle::GlUnavailable if no OpenGL ES context can be made here.
   SensorEnvironment(const vehicle::PhysicsWorld* physics, const world::FloorRaster& floor,
-                    const vehicle::SceneAppearance& appearance, bool gl = false);
+                    const vehicle::SceneAppearance& appearance,
+                    CameraBackend backend = CameraBackend::kRayCast);
 
   const vehicle::PhysicsWorld& physics() const { return *physics_; }
   const vehicle::SceneAppearance& appearance() const { return appearance_; }

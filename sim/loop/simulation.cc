@@ -92,21 +92,23 @@ void Simulation::Impl::AddCars() {
 
 void Simulation::Impl::AddSensorsAndBoards() {
   floor = world::RasterizeFloor(loaded.track);
-  try {
-    sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance,
-                                                       scenario.camera_backend == "gl");
+  try {  // the GL backend's context and each camera's renderer
+    sensor_world = std::make_unique<SensorEnvironment>(
+        &physics, floor, scenario.appearance, ParseCameraBackend(scenario.camera_backend));
+    for (const CarAgent& agent : agents) {
+      const CarConfig& config = *agent.config;
+      // On a board the cameras are the graph's source nodes, which capture the frames.
+      const SensorSuiteOptions options{.camera_timers = !config.has_board()};
+      sensors.push_back(std::make_unique<SensorSuite>(&kernel, sensor_world.get(), config.id,
+                                                      config.sensors, streams, physics.step(),
+                                                      options));
+    }
   } catch (const vehicle::GlUnavailable& e) {
-    throw ConfigError("camera_backend: gl: no OpenGL ES context can be made here: " +
-                      std::string(e.what()));
+    throw ConfigError("camera_backend: gl: " + std::string(e.what()));
   }
   for (std::size_t i = 0; i < agents.size(); ++i) {
-    const CarConfig& config = *agents[i].config;
-    // On a board the cameras are the graph's source nodes, which capture the frames.
-    const SensorSuiteOptions options{.camera_timers = !config.has_board()};
-    sensors.push_back(std::make_unique<SensorSuite>(
-        &kernel, sensor_world.get(), config.id, config.sensors, streams, physics.step(), options));
-    boards.push_back(config.has_board()
-                         ? MakeBoard(&agents[i], *loaded.profiles[i], sensors.back().get())
+    boards.push_back(agents[i].config->has_board()
+                         ? MakeBoard(&agents[i], *loaded.profiles[i], sensors[i].get())
                          : nullptr);
   }
 }

@@ -109,12 +109,6 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
   return out;
 }
 
-CameraBackend ParseCameraBackend(const std::string& name) {
-  if (name == "raycast") return CameraBackend::kRayCast;
-  if (name == "gl") return CameraBackend::kGl;
-  throw std::invalid_argument("a camera backend is 'raycast' or 'gl', not '" + name + "'");
-}
-
 CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& sensors,
                        const vehicle::SceneAppearance& appearance, CameraBackend backend)
     : sensors_(sensors), appearance_(appearance) {

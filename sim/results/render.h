@@ -68,12 +68,6 @@ struct RenderedCamera {
   std::vector<std::uint8_t> instances;
 };
 
-// Which renderer makes the images: the ray caster (vehicle/ray_caster.h) or the rasteriser
-// (vehicle/gl_camera.h); a scenario's camera_backend, "raycast" or "gl".
-enum class CameraBackend { kRayCast, kGl };
-// "raycast" or "gl"; std::invalid_argument otherwise.
-CameraBackend ParseCameraBackend(const std::string& name);
-
 // One car's cameras (the colour and the depth camera of `sensors`) over a track, made once and
 // rendered at any number of snapshots (a video's frames).
 class CarCameras {

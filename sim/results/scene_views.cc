@@ -25,14 +25,23 @@ void ViewText(cv::Mat& image, const std::string& text, cv::Point at, double scal
 }  // namespace
 
 SceneViews::SceneViews(const world::Track& track, const Scenario& scenario, SceneViewParams params)
-    : scenario_(&scenario), params_(params) {
+    : params_(params), appearance_(scenario.appearance) {
+  // the cars in their colours of the run's other figures (car_body_rgb is by id)
+  int last_id = 0;
+  for (const CarConfig& car : scenario.cars) last_id = std::max(last_id, car.id);
+  appearance_.car_body_rgb.assign(static_cast<std::size_t>(last_id) + 1, {0, 0, 0});
+  for (const CarConfig& car : scenario.cars) {
+    const cv::Scalar bgr = CarColourBgr(scenario, car.id);
+    appearance_.car_body_rgb[static_cast<std::size_t>(car.id)] = {
+        static_cast<int>(bgr[2]), static_cast<int>(bgr[1]), static_cast<int>(bgr[0])};
+  }
   const world::FloorRaster floor = world::RasterizeFloor(track);
   size_m_ = std::max(floor.width_px, floor.height_px) * floor.m_per_px;
   centre_m_ = Eigen::Vector2d(floor.origin_m.x() + 0.5 * floor.width_px * floor.m_per_px,
                               floor.origin_m.y() - 0.5 * floor.height_px * floor.m_per_px);
   scene_ = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(),
                                               vehicle::FloorTexture(floor),
-                                              scenario.appearance.surround());
+                                              appearance_.surround());
 }
 
 cv::Mat SceneViews::Chase(const WorldSnapshot& snapshot, int car_id, cv::Size size) {
@@ -71,22 +80,11 @@ cv::Mat SceneViews::Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
   view.K = {f, 0.0, 0.5 * (size.width - 1), 0.0, f, 0.5 * (size.height - 1), 0.0, 0.0, 1.0};
   view.X_map_optical.linear() << x, y, z;
   view.X_map_optical.translation() = eye;
-  view.near_m = 0.02;
+  view.near_m = params_.near_m;
   view.far_m = params_.far_m;
 
-  std::vector<vehicle::Prism> prisms;
-  for (const CarBody& car : snapshot.cars) {
-    const cv::Scalar c = CarColourBgr(*scenario_, car.id);
-    prisms.push_back(vehicle::Prism{world::OrientedBox{car.pose, car.length_m, car.width_m},
-                                    car.height_m,
-                                    vehicle::Bgr{static_cast<std::uint8_t>(c[0]),
-                                                 static_cast<std::uint8_t>(c[1]),
-                                                 static_cast<std::uint8_t>(c[2])}});
-  }
-  for (const vehicle::ObstacleBox& box : snapshot.obstacles) {
-    prisms.push_back(vehicle::Prism{world::OrientedBox{box.pose, box.length_m, box.width_m},
-                                    box.height_m, scenario_->appearance.obstacle()});
-  }
+  const std::vector<vehicle::Prism> prisms =
+      ScenePrisms(snapshot.cars, snapshot.obstacles, appearance_, /*exclude_car_id=*/-1);
   scene_->Render(view, prisms, &frame_, vehicle::GlImages{.colour = true, .z = false});
   cv::Mat image = cv::Mat(size, CV_8UC3, frame_.bgr.data()).clone();
 

@@ -27,7 +27,8 @@ struct SceneViewParams {
   double overview_height{1.05};  // in track sizes,
   double overview_look_south{0.12};  // looking at the floor this far south of the centre
   double overview_hfov_deg{68.0};
-  double far_m{40.0};  // nothing farther is drawn
+  double near_m{0.02};  // nothing nearer to the camera (optical z) is drawn,
+  double far_m{40.0};   // nothing farther
 };
 
 class SceneViews {
@@ -45,8 +46,8 @@ class SceneViews {
   cv::Mat Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double hfov_deg,
                cv::Size size, const WorldSnapshot& snapshot, const std::string& title);
 
-  const Scenario* scenario_;
   SceneViewParams params_;
+  vehicle::SceneAppearance appearance_;  // the scenario's, with the cars' figure colours
   Eigen::Vector2d centre_m_;
   double size_m_;
   std::shared_ptr<vehicle::GlScene> scene_;

@@ -276,9 +276,7 @@ void Scenario::Validate() const {
   for (const CarConfig& car : cars) {
     Require(ids.insert(car.id).second, "duplicate car id " + std::to_string(car.id));
   }
-  Require(camera_backend == "raycast" || camera_backend == "gl",
-          "camera_backend must be 'raycast' (the ray caster) or 'gl' (OpenGL ES through EGL), "
-          "got '" + camera_backend + "'");
+  ParseCameraBackend(camera_backend);
   std::set<std::string> names;
   for (const ObstacleConfig& obstacle : obstacles) {
     Require(names.insert(obstacle.name).second, "duplicate obstacle name '" + obstacle.name + "'");
