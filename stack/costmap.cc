@@ -17,10 +17,12 @@ int CellsIn(double length_m, double resolution_m) {
 }
 
 void RequireSameGeometry(const Costmap2D& a, const Costmap2D& b) {
-  Require(a.SameGeometry(b), "costmap layers differ in geometry: " + Num(a.size_x_cells()) + " x " +
-                                 Num(a.size_y_cells()) + " at " + Num(a.resolution_m()) + " m vs " +
-                                 Num(b.size_x_cells()) + " x " + Num(b.size_y_cells()) + " at " +
-                                 Num(b.resolution_m()) + " m");
+  Require(a.SameGeometry(b), [&] {
+    return "costmap layers differ in geometry: " + Num(a.size_x_cells()) + " x " +
+           Num(a.size_y_cells()) + " at " + Num(a.resolution_m()) + " m vs " +
+           Num(b.size_x_cells()) + " x " + Num(b.size_y_cells()) + " at " + Num(b.resolution_m()) +
+           " m";
+  });
 }
 
 }  // namespace
@@ -33,10 +35,11 @@ Costmap2D::Costmap2D(int size_x_cells, int size_y_cells, double resolution_m,
       size_y_(size_y_cells),
       resolution_m_(resolution_m),
       anchor_m_(origin_m) {
-  Require(size_x_cells > 0 && size_y_cells > 0,
-          "costmap size must be > 0 cells, got " + Num(size_x_cells) + " x " + Num(size_y_cells));
+  Require(size_x_cells > 0 && size_y_cells > 0, [&] {
+    return "costmap size must be > 0 cells, got " + Num(size_x_cells) + " x " + Num(size_y_cells);
+  });
   Require(std::isfinite(resolution_m) && resolution_m > 0.0,
-          "costmap resolution_m must be > 0, got " + Num(resolution_m));
+          [&] { return "costmap resolution_m must be > 0, got " + Num(resolution_m); });
   Require(origin_m.allFinite(), "costmap origin must be finite");
   costs_.assign(static_cast<std::size_t>(size_x_cells) * size_y_cells, fill);
 }
@@ -90,9 +93,9 @@ std::optional<std::uint8_t> Costmap2D::CostAt(const world::Vec2& p) const {
 
 void FootprintParams::Validate() const {
   Require(std::isfinite(half_length_m) && half_length_m > 0.0,
-          "half_length_m must be > 0, got " + Num(half_length_m));
+          [&] { return "half_length_m must be > 0, got " + Num(half_length_m); });
   Require(std::isfinite(half_width_m) && half_width_m > 0.0,
-          "half_width_m must be > 0, got " + Num(half_width_m));
+          [&] { return "half_width_m must be > 0, got " + Num(half_width_m); });
 }
 
 std::vector<world::Vec2> FootprintParams::Polygon() const {
@@ -104,7 +107,7 @@ std::vector<world::Vec2> FootprintParams::Polygon() const {
 
 double InscribedRadius_m(const std::vector<world::Vec2>& footprint) {
   Require(footprint.size() >= 3,
-          "a footprint needs at least 3 points, got " + Num(footprint.size()));
+          [&] { return "a footprint needs at least 3 points, got " + Num(footprint.size()); });
   double radius = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < footprint.size(); ++i) {
     const world::Vec2& a = footprint[i];
@@ -119,9 +122,9 @@ double InscribedRadius_m(const std::vector<world::Vec2>& footprint) {
 
 void InflationParams::Validate() const {
   Require(std::isfinite(inflation_radius_m) && inflation_radius_m >= 0.0,
-          "inflation_radius_m must be >= 0, got " + Num(inflation_radius_m));
+          [&] { return "inflation_radius_m must be >= 0, got " + Num(inflation_radius_m); });
   Require(std::isfinite(cost_scaling_factor) && cost_scaling_factor >= 0.0,
-          "cost_scaling_factor must be >= 0, got " + Num(cost_scaling_factor));
+          [&] { return "cost_scaling_factor must be >= 0, got " + Num(cost_scaling_factor); });
 }
 
 Inflation::Inflation(const InflationParams& params, double inscribed_radius_m, double resolution_m)
@@ -130,9 +133,9 @@ Inflation::Inflation(const InflationParams& params, double inscribed_radius_m, d
       cost_scaling_factor_(params.cost_scaling_factor) {
   params.Validate();
   Require(std::isfinite(inscribed_radius_m) && inscribed_radius_m >= 0.0,
-          "inscribed radius must be >= 0 m, got " + Num(inscribed_radius_m));
+          [&] { return "inscribed radius must be >= 0 m, got " + Num(inscribed_radius_m); });
   Require(std::isfinite(resolution_m) && resolution_m > 0.0,
-          "resolution_m must be > 0, got " + Num(resolution_m));
+          [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
   // Nav2 Costmap2D::cellDistance: ceil, without a tolerance (0.4 / 0.05 -> 8, 0.3 / 0.05 -> 6).
   cell_radius_ = static_cast<int>(std::ceil(params.inflation_radius_m / resolution_m));
   cost_by_distance_sq_.resize(static_cast<std::size_t>(cell_radius_) * cell_radius_ + 1);
@@ -211,8 +214,10 @@ void Inflation::Apply(Costmap2D* grid) const {
 Costmap2D StaticLayer(const world::OccupancyMap& map) {
   Require(map.width_cells > 0 && map.height_cells > 0 &&
               map.cells.size() == static_cast<std::size_t>(map.width_cells) * map.height_cells,
-          "static map: " + Num(map.cells.size()) + " cells for " + Num(map.width_cells) + " x " +
-              Num(map.height_cells));
+          [&] {
+            return "static map: " + Num(map.cells.size()) + " cells for " + Num(map.width_cells) +
+                   " x " + Num(map.height_cells);
+          });
   Costmap2D layer(map.width_cells, map.height_cells, map.resolution_m, map.origin_m);
   std::vector<std::uint8_t>& costs = layer.mutable_costs();
   for (std::size_t i = 0; i < map.cells.size(); ++i) {
@@ -250,7 +255,7 @@ void CombineMax(const Costmap2D& layer, Costmap2D* master) {
 
 void GlobalCostmapParams::Validate() const {
   Require(std::isfinite(resolution_m) && resolution_m > 0.0,
-          "resolution_m must be > 0, got " + Num(resolution_m));
+          [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
   inflation.Validate();
   footprint.Validate();
 }
@@ -273,9 +278,10 @@ GlobalCostmap::GlobalCostmap(const GlobalCostmapParams& params, const world::Occ
     : inflation_(Validated(params).inflation, InscribedRadius_m(params.footprint.Polygon()),
                  params.resolution_m),
       static_(StaticLayer(map)) {
-  Require(map.resolution_m == params.resolution_m,
-          "resolution_m: the static map is at " + Num(map.resolution_m) +
-              " m, the global costmap at " + Num(params.resolution_m) + " m");
+  Require(map.resolution_m == params.resolution_m, [&] {
+    return "resolution_m: the static map is at " + Num(map.resolution_m) +
+           " m, the global costmap at " + Num(params.resolution_m) + " m";
+  });
   obstacles_ = Costmap2D(static_.size_x_cells(), static_.size_y_cells(), static_.resolution_m(),
                          static_.origin_m(), kFreeSpace);
   Update();
@@ -325,13 +331,13 @@ void RollingWindow::Recentre(const world::Vec2& p) {
 
 void LocalCostmapParams::Validate() const {
   Require(std::isfinite(resolution_m) && resolution_m > 0.0,
-          "resolution_m must be > 0, got " + Num(resolution_m));
+          [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
   Require(std::isfinite(width_m) && width_m >= resolution_m,
-          "width_m must be >= resolution_m, got " + Num(width_m));
+          [&] { return "width_m must be >= resolution_m, got " + Num(width_m); });
   Require(std::isfinite(height_m) && height_m >= resolution_m,
-          "height_m must be >= resolution_m, got " + Num(height_m));
+          [&] { return "height_m must be >= resolution_m, got " + Num(height_m); });
   Require(std::isfinite(update_rate_hz) && update_rate_hz > 0.0,
-          "update_rate_hz must be > 0, got " + Num(update_rate_hz));
+          [&] { return "update_rate_hz must be > 0, got " + Num(update_rate_hz); });
   inflation.Validate();
   footprint.Validate();
 }

@@ -10,8 +10,9 @@ namespace autonomsim::stack {
 namespace {
 
 void RequireFinite(double x, const char* what) {
-  Require(std::isfinite(x),
-          std::string("cruise control: ") + what + " must be finite, got " + Num(x));
+  Require(std::isfinite(x), [&] {
+    return std::string("cruise control: ") + what + " must be finite, got " + Num(x);
+  });
 }
 
 // The real node's test: strictly older than the timeout.
@@ -22,23 +23,29 @@ bool Stale(const CruiseControlParams& params, Time now, Time received) {
 }  // namespace
 
 void CruiseControlParams::Validate() const {
-  Require(std::isfinite(p_gain) && p_gain >= 0.0, "p_gain must be >= 0, got " + Num(p_gain));
+  Require(std::isfinite(p_gain) && p_gain >= 0.0,
+          [&] { return "p_gain must be >= 0, got " + Num(p_gain); });
   Require(std::isfinite(i_gain_per_s) && i_gain_per_s >= 0.0,
-          "i_gain_per_s must be >= 0, got " + Num(i_gain_per_s));
+          [&] { return "i_gain_per_s must be >= 0, got " + Num(i_gain_per_s); });
   Require(std::isfinite(d_gain_s) && d_gain_s >= 0.0,
-          "d_gain_s must be >= 0, got " + Num(d_gain_s));
-  Require(
-      std::isfinite(i_clamp_min) && std::isfinite(i_clamp_max) && i_clamp_min <= i_clamp_max,
-      "i_clamp_min must be <= i_clamp_max, got " + Num(i_clamp_min) + " and " + Num(i_clamp_max));
+          [&] { return "d_gain_s must be >= 0, got " + Num(d_gain_s); });
+  Require(std::isfinite(i_clamp_min) && std::isfinite(i_clamp_max) && i_clamp_min <= i_clamp_max,
+          [&] {
+            return "i_clamp_min must be <= i_clamp_max, got " + Num(i_clamp_min) + " and " +
+                   Num(i_clamp_max);
+          });
   Require(std::isfinite(throttle_limit) && throttle_limit > 0.0 && throttle_limit <= 1.0,
-          "throttle_limit must be in (0, 1], got " + Num(throttle_limit));
-  Require(watchdog_timeout > Duration::zero(),
-          "watchdog_timeout_s must be > 0, got " + Num(ToSeconds(watchdog_timeout)));
-  Require(period > Duration::zero(), "period_s must be > 0, got " + Num(ToSeconds(period)));
+          [&] { return "throttle_limit must be in (0, 1], got " + Num(throttle_limit); });
+  Require(watchdog_timeout > Duration::zero(), [&] {
+    return "watchdog_timeout_s must be > 0, got " + Num(ToSeconds(watchdog_timeout));
+  });
+  Require(period > Duration::zero(),
+          [&] { return "period_s must be > 0, got " + Num(ToSeconds(period)); });
   Require(std::isfinite(max_curvature_per_m) && max_curvature_per_m > 0.0,
-          "max_curvature_per_m must be > 0, got " + Num(max_curvature_per_m));
-  Require(std::isfinite(min_speed_for_curvature_mps) && min_speed_for_curvature_mps > 0.0,
-          "min_speed_for_curvature_mps must be > 0, got " + Num(min_speed_for_curvature_mps));
+          [&] { return "max_curvature_per_m must be > 0, got " + Num(max_curvature_per_m); });
+  Require(std::isfinite(min_speed_for_curvature_mps) && min_speed_for_curvature_mps > 0.0, [&] {
+    return "min_speed_for_curvature_mps must be > 0, got " + Num(min_speed_for_curvature_mps);
+  });
 }
 
 double CommandCurvature(const CruiseControlParams& params, double speed_mps,
@@ -54,9 +61,10 @@ double CommandCurvature(const CruiseControlParams& params, double speed_mps,
 CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
                                       const CruiseControlInput& input, CruiseControlState* state) {
   CruiseControlState& s = *state;
-  Require(input.now >= s.last_step, "cruise control: now (" + Num(ToSeconds(input.now)) +
-                                        " s) is before the previous step (" +
-                                        Num(ToSeconds(s.last_step)) + " s)");
+  Require(input.now >= s.last_step, [&] {
+    return "cruise control: now (" + Num(ToSeconds(input.now)) +
+           " s) is before the previous step (" + Num(ToSeconds(s.last_step)) + " s)";
+  });
   s.last_step = input.now;
 
   // messages

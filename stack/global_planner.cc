@@ -48,12 +48,14 @@ double Length_m(const std::vector<world::Vec2>& path) {
 
 void GlobalPlannerParams::Validate() const {
   Require(std::isfinite(tolerance_m) && tolerance_m >= 0.0,
-          "tolerance_m must be >= 0, got " + Num(tolerance_m));
-  Require(std::isfinite(cost_travel_multiplier) && cost_travel_multiplier >= 0.0,
-          "cost_travel_multiplier must be >= 0, got " + Num(cost_travel_multiplier));
-  Require(max_expansions > 0, "max_expansions must be > 0, got " + Num(max_expansions));
+          [&] { return "tolerance_m must be >= 0, got " + Num(tolerance_m); });
+  Require(std::isfinite(cost_travel_multiplier) && cost_travel_multiplier >= 0.0, [&] {
+    return "cost_travel_multiplier must be >= 0, got " + Num(cost_travel_multiplier);
+  });
+  Require(max_expansions > 0,
+          [&] { return "max_expansions must be > 0, got " + Num(max_expansions); });
   Require(start_escape_m >= 0.0 && start_escape_m <= 2.0,
-          "start_escape_m must be in [0, 2] m, got " + Num(start_escape_m));
+          [&] { return "start_escape_m must be in [0, 2] m, got " + Num(start_escape_m); });
 }
 
 std::string ToString(PlanStatus status) {

@@ -15,7 +15,7 @@ void LaneControllerParams::Validate() const {
 LaneControllerOutput StepLaneController(const LaneControllerParams& params,
                                         const LaneControllerInput& input) {
   Require(std::isfinite(input.speed_mps),
-          "lane controller: speed_mps must be finite, got " + Num(input.speed_mps));
+          [&] { return "lane controller: speed_mps must be finite, got " + Num(input.speed_mps); });
   Require(std::isfinite(input.X_F_base.x_m) && std::isfinite(input.X_F_base.y_m) &&
               std::isfinite(input.X_F_base.yaw_rad),
           "lane controller: the pose must be finite");
@@ -27,8 +27,9 @@ LaneControllerOutput StepLaneController(const LaneControllerParams& params,
     double best_m = 0.0;
     for (std::size_t i = 0; i < input.lane_points_base.size(); ++i) {
       const world::Vec2& p = input.lane_points_base[i];
-      Require(std::isfinite(p.x()) && std::isfinite(p.y()),
-              "lane controller: lane point " + std::to_string(i) + " is not finite");
+      Require(std::isfinite(p.x()) && std::isfinite(p.y()), [&] {
+        return "lane controller: lane point " + std::to_string(i) + " is not finite";
+      });
       const double range_m = p.norm();
       if (range_m >= lookahead_m && (!out.carrot_base || range_m < best_m)) {
         out.carrot_base = p;

@@ -41,7 +41,7 @@ double Cross(const Point& o, const Point& a, const Point& b) {
 // Near left, near right, far left, far right → a convex quadrilateral (walked NL, NR, FR, FL).
 void RequireQuadrilateral(const std::array<Point, 4>& q, const std::string& key) {
   for (const Point& p : q) {
-    Require(std::isfinite(p[0]) && std::isfinite(p[1]), key + " must be finite");
+    Require(std::isfinite(p[0]) && std::isfinite(p[1]), [&] { return key + " must be finite"; });
   }
   const std::array<Point, 4> ring{q[0], q[1], q[3], q[2]};
   int positive = 0;
@@ -51,8 +51,9 @@ void RequireQuadrilateral(const std::array<Point, 4>& q, const std::string& key)
     positive += c > 0.0;
     negative += c < 0.0;
   }
-  Require(positive == 4 || negative == 4,
-          key + " must be a convex quadrilateral: near left, near right, far left, far right");
+  Require(positive == 4 || negative == 4, [&] {
+    return key + " must be a convex quadrilateral: near left, near right, far left, far right";
+  });
 }
 
 void RequireHsv(const HsvRange& range, const std::string& key) {
@@ -60,9 +61,11 @@ void RequireHsv(const HsvRange& range, const std::string& key) {
   for (int i = 0; i < 3; ++i) {
     Require(range.lower_hsv[i] >= 0 && range.upper_hsv[i] <= max[i] &&
                 range.lower_hsv[i] <= range.upper_hsv[i],
-            key + ": channel " + std::to_string(i) + " range [" + Num(range.lower_hsv[i]) + ", " +
-                Num(range.upper_hsv[i]) + "] must lie in [0, " + Num(max[i]) +
-                "] with lower <= upper");
+            [&] {
+              return key + ": channel " + std::to_string(i) + " range [" + Num(range.lower_hsv[i]) +
+                     ", " + Num(range.upper_hsv[i]) + "] must lie in [0, " + Num(max[i]) +
+                     "] with lower <= upper";
+            });
   }
 }
 
@@ -83,8 +86,10 @@ std::vector<cv::Point2f> ToCv(const std::array<Point, 4>& points) {
 
 void RequireImage(const cv::Mat& bgr) {
   Require(bgr.type() == CV_8UC3 && bgr.cols == kLaneImageWidth && bgr.rows == kLaneImageHeight,
-          "lane detection needs a 640x480 bgr8 image, got " + Num(bgr.cols) + "x" + Num(bgr.rows) +
-              " of type " + Num(bgr.type()));
+          [&] {
+            return "lane detection needs a 640x480 bgr8 image, got " + Num(bgr.cols) + "x" +
+                   Num(bgr.rows) + " of type " + Num(bgr.type());
+          });
 }
 
 // Per bird's-eye row: how many pixels are non-zero, and the sum of their columns.
@@ -130,10 +135,12 @@ void RowMeans(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums,
 BirdsEyeRowSums RowSumsOfMasks(const BirdsEyeMasks& masks) {
   BirdsEyeRowSums sums;
   for (const cv::Mat* mask : {&masks.yellow, &masks.white}) {
-    Require(mask->type() == CV_8UC1 && mask->cols == kLaneImageWidth &&
-                mask->rows == kLaneImageHeight,
-            "bird's-eye masks must be 640x480 mono8, got " + Num(mask->cols) + "x" +
-                Num(mask->rows) + " of type " + Num(mask->type()));
+    Require(
+        mask->type() == CV_8UC1 && mask->cols == kLaneImageWidth && mask->rows == kLaneImageHeight,
+        [&] {
+          return "bird's-eye masks must be 640x480 mono8, got " + Num(mask->cols) + "x" +
+                 Num(mask->rows) + " of type " + Num(mask->type());
+        });
   }
   SumRows(masks.yellow, &sums.yellow);
   SumRows(masks.white, &sums.white);
@@ -158,29 +165,32 @@ void LaneCameraCalibration::Validate() const {
   for (double k : K) Require(std::isfinite(k), "camera K must be finite");
   for (double d : D) Require(std::isfinite(d), "camera D must be finite");
   Require(K[0] > 0.0 && K[4] > 0.0,
-          "camera K: fx and fy must be > 0, got " + Num(K[0]) + ", " + Num(K[4]));
+          [&] { return "camera K: fx and fy must be > 0, got " + Num(K[0]) + ", " + Num(K[4]); });
   Require(X_base_camera.matrix().allFinite(), "camera X_base_camera must be finite");
-  Require(X_base_camera.translation().z() > 0.0,
-          "camera must be above the floor, got z = " + Num(X_base_camera.translation().z()));
+  Require(X_base_camera.translation().z() > 0.0, [&] {
+    return "camera must be above the floor, got z = " + Num(X_base_camera.translation().z());
+  });
 }
 
 void LaneDetectionParams::Validate() const {
   (void)LaneThresholdsByName(thresholds);
   RequireQuadrilateral(warp_source_px, "warp_source_px");
   RequireQuadrilateral(warp_destination_px, "warp_destination_px");
-  Require(yellow_min_px >= 0, "yellow_min_px must be >= 0, got " + Num(yellow_min_px));
+  Require(yellow_min_px >= 0,
+          [&] { return "yellow_min_px must be >= 0, got " + Num(yellow_min_px); });
   Require(line_min_px >= 0 && line_min_px <= yellow_min_px,
-          "line_min_px must be in [0, yellow_min_px], got " + Num(line_min_px));
+          [&] { return "line_min_px must be in [0, yellow_min_px], got " + Num(line_min_px); });
   Require(std::isfinite(sample_row_step_px) && sample_row_step_px > 0.0,
-          "sample_row_step_px must be > 0, got " + Num(sample_row_step_px));
+          [&] { return "sample_row_step_px must be > 0, got " + Num(sample_row_step_px); });
   Require(std::isfinite(normal_shift_px) && normal_shift_px >= 0.0,
-          "normal_shift_px must be >= 0, got " + Num(normal_shift_px));
+          [&] { return "normal_shift_px must be >= 0, got " + Num(normal_shift_px); });
   Require(!anchor_rows_px.empty(), "anchor_rows_px must not be empty");
   for (double row : anchor_rows_px) {
-    Require(std::isfinite(row), "anchor_rows_px must be finite, got " + Num(row));
+    Require(std::isfinite(row), [&] { return "anchor_rows_px must be finite, got " + Num(row); });
   }
   Require(std::isfinite(anchor_col_px), "anchor_col_px must be finite");
-  Require(anchor_repeats >= 1, "anchor_repeats must be >= 1, got " + Num(anchor_repeats));
+  Require(anchor_repeats >= 1,
+          [&] { return "anchor_repeats must be >= 1, got " + Num(anchor_repeats); });
 }
 
 void LaneMasksReference(const cv::Mat& bgr, const LaneThresholds& thresholds,

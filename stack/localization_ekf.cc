@@ -14,13 +14,14 @@ namespace {
 constexpr double kSmallHalfAngle_rad = 1e-4;
 
 void RequirePositive(double x, const std::string& key) {
-  Require(std::isfinite(x) && x > 0.0, key + " must be > 0, got " + Num(x));
+  Require(std::isfinite(x) && x > 0.0, [&] { return key + " must be > 0, got " + Num(x); });
 }
 
 std::string Seconds(Time t) { return Num(ToSeconds(t)) + " s"; }
 
 void RequireFinite(double x, const std::string& what) {
-  Require(std::isfinite(x), "localization: " + what + " must be finite, got " + Num(x));
+  Require(std::isfinite(x),
+          [&] { return "localization: " + what + " must be finite, got " + Num(x); });
 }
 
 // sin(h)/h and its derivative.
@@ -103,12 +104,16 @@ void CheckStamps(const std::vector<Measurement>& list, const std::optional<Time>
   std::optional<Time> previous = last;
   for (const Measurement& m : list) {
     if (previous && m.stamp < *previous) {
-      Require(false, std::string("localization: ") + sensor + " reading stamped " +
-                         Seconds(m.stamp) + " is out of order: older than the previous " + sensor +
-                         " reading at " + Seconds(*previous));
+      Require(false, [&] {
+        return std::string("localization: ") + sensor + " reading stamped " + Seconds(m.stamp) +
+               " is out of order: older than the previous " + sensor + " reading at " +
+               Seconds(*previous);
+      });
     }
-    Require(m.stamp <= now, std::string("localization: ") + sensor + " reading stamped " +
-                                Seconds(m.stamp) + " is after now (" + Seconds(now) + ")");
+    Require(m.stamp <= now, [&] {
+      return std::string("localization: ") + sensor + " reading stamped " + Seconds(m.stamp) +
+             " is after now (" + Seconds(now) + ")";
+    });
     previous = m.stamp;
   }
 }
@@ -116,9 +121,10 @@ void CheckStamps(const std::vector<Measurement>& list, const std::optional<Time>
 }  // namespace
 
 void LocalizationEkfParams::Validate() const {
-  Require(period > Duration::zero(), "period_s must be > 0, got " + Num(ToSeconds(period)));
+  Require(period > Duration::zero(),
+          [&] { return "period_s must be > 0, got " + Num(ToSeconds(period)); });
   Require(sensor_timeout > Duration::zero(),
-          "sensor_timeout_s must be > 0, got " + Num(ToSeconds(sensor_timeout)));
+          [&] { return "sensor_timeout_s must be > 0, got " + Num(ToSeconds(sensor_timeout)); });
   RequirePositive(q_position_m2_per_s, "q_position_m2_per_s");
   RequirePositive(q_yaw_rad2_per_s, "q_yaw_rad2_per_s");
   RequirePositive(q_speed_m2_per_s3, "q_speed_m2_per_s3");
@@ -164,8 +170,10 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
                                           const LocalizationEkfInput& input,
                                           LocalizationEkfState* state) {
   LocalizationEkfState& s = *state;
-  Require(input.now >= s.time, "localization: now (" + Seconds(input.now) +
-                                   ") is before the filter's time (" + Seconds(s.time) + ")");
+  Require(input.now >= s.time, [&] {
+    return "localization: now (" + Seconds(input.now) + ") is before the filter's time (" +
+           Seconds(s.time) + ")";
+  });
   Require(params.use_pose_fix || input.pose_fixes.empty(),
           "localization: a pose fix was given but use_pose_fix is off");
   for (const ImuMeasurement& m : input.imu) {

@@ -114,7 +114,7 @@ namespace detail {
 CellEdges::CellEdges(double cell_m, int cells)
     : cells_(cells), per_cell_(static_cast<float>(1.0 / cell_m)) {
   Require(cell_m > 0.0 && std::isfinite(cell_m) && cells >= 1 && cells <= kMaxCells,
-          "CellEdges: bad cell size " + Num(cell_m) + " or count " + Num(cells));
+          [&] { return "CellEdges: bad cell size " + Num(cell_m) + " or count " + Num(cells); });
   const auto index_at_least = [cell_m](float d, int k) {
     return static_cast<double>(d) / cell_m >= k;
   };
@@ -132,34 +132,39 @@ CellEdges::CellEdges(double cell_m, int cells)
 
 void ObstacleGridParams::Validate() const {
   for (int i = 0; i < 12; ++i) {
-    Require(std::isfinite(X_base_camera[i]),
-            "X_base_camera: entry " + std::to_string(i) + " is " + Num(X_base_camera[i]));
+    Require(std::isfinite(X_base_camera[i]), [&] {
+      return "X_base_camera: entry " + std::to_string(i) + " is " + Num(X_base_camera[i]);
+    });
   }
   const auto check_range = [](const char* lo_key, double lo, const char* hi_key, double hi) {
-    Require(std::isfinite(lo) && std::isfinite(hi) && lo < hi,
-            std::string(lo_key) + " must be < " + hi_key + ", got " + Num(lo) + " and " + Num(hi));
+    Require(std::isfinite(lo) && std::isfinite(hi) && lo < hi, [&] {
+      return std::string(lo_key) + " must be < " + hi_key + ", got " + Num(lo) + " and " + Num(hi);
+    });
   };
   check_range("x_min_m", x_min_m, "x_max_m", x_max_m);
   check_range("y_min_m", y_min_m, "y_max_m", y_max_m);
   check_range("z_min_m", z_min_m, "z_max_m", z_max_m);
   Require(std::isfinite(cell_size_m) && cell_size_m > 0.0,
-          "cell_size_m must be > 0, got " + Num(cell_size_m));
+          [&] { return "cell_size_m must be > 0, got " + Num(cell_size_m); });
   // Grid234 has a fixed shape; a box of another size would need another message.
   const auto spans = [this](double lo, double hi, int cells) {
     return std::abs((hi - lo) / cell_size_m - cells) < 1e-6;
   };
-  Require(spans(x_min_m, x_max_m, Grid234::kCellsX),
-          "x_max_m - x_min_m must be 18 cells of cell_size_m, got " + Num(x_max_m - x_min_m) +
-              " m for cell_size_m " + Num(cell_size_m));
-  Require(spans(y_min_m, y_max_m, Grid234::kCellsY),
-          "y_max_m - y_min_m must be 13 cells of cell_size_m, got " + Num(y_max_m - y_min_m) +
-              " m for cell_size_m " + Num(cell_size_m));
+  Require(spans(x_min_m, x_max_m, Grid234::kCellsX), [&] {
+    return "x_max_m - x_min_m must be 18 cells of cell_size_m, got " + Num(x_max_m - x_min_m) +
+           " m for cell_size_m " + Num(cell_size_m);
+  });
+  Require(spans(y_min_m, y_max_m, Grid234::kCellsY), [&] {
+    return "y_max_m - y_min_m must be 13 cells of cell_size_m, got " + Num(y_max_m - y_min_m) +
+           " m for cell_size_m " + Num(cell_size_m);
+  });
 }
 
 Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& cloud) {
   const GridConstants g = MakeGridConstants(params);
-  Require(cloud.points.size() == static_cast<std::size_t>(PointCloud640::kPoints),
-          "obstacle grid: the cloud holds " + Num(cloud.points.size()) + " points, not 640x480");
+  Require(cloud.points.size() == static_cast<std::size_t>(PointCloud640::kPoints), [&] {
+    return "obstacle grid: the cloud holds " + Num(cloud.points.size()) + " points, not 640x480";
+  });
   FrameCounts counts{};
   alignas(64) float x[kWidth], y[kWidth], z[kWidth];
   for (int row = 0; row < PointCloud640::kHeight; ++row) {
@@ -200,9 +205,10 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
                                    k.fy, k.cx, k.cy, k.m_per_mm,
                                    static_cast<float>(params.cell_size_m)};
   std::copy(rest.begin(), rest.end(), key.begin() + 12);
-  Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight,
-          "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for " +
-              Num(PointCloud640::kHeight) + " rows");
+  Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight, [&] {
+    return "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for " +
+           Num(PointCloud640::kHeight) + " rows";
+  });
   const bool valid = memo->valid_ && memo->key_ == key;
   if (!valid) {
     memo->valid_ = true;
@@ -235,7 +241,7 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
 
 void ObstacleLayerParams::Validate() const {
   Require(lethal_above_count >= 0 && lethal_above_count <= 254,
-          "lethal_above_count must be in [0, 254], got " + Num(lethal_above_count));
+          [&] { return "lethal_above_count must be in [0, 254], got " + Num(lethal_above_count); });
 }
 
 std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,

@@ -15,11 +15,11 @@ constexpr double kMinCarrotDist2_m2 = 0.001;
 constexpr double kHorizonEpsilon_s = 1e-9;
 
 void RequirePositive(double x, const std::string& key) {
-  Require(std::isfinite(x) && x > 0.0, key + " must be > 0, got " + Num(x));
+  Require(std::isfinite(x) && x > 0.0, [&] { return key + " must be > 0, got " + Num(x); });
 }
 
 void RequireNonNegative(double x, const std::string& key) {
-  Require(std::isfinite(x) && x >= 0.0, key + " must be >= 0, got " + Num(x));
+  Require(std::isfinite(x) && x >= 0.0, [&] { return key + " must be >= 0, got " + Num(x); });
 }
 
 bool Finite(const world::Vec2& p) { return std::isfinite(p.x()) && std::isfinite(p.y()); }
@@ -75,9 +75,10 @@ void RegulatedPurePursuitParams::Validate() const {
   RequirePositive(lookahead_dist_m, "lookahead_dist_m");
   RequirePositive(min_lookahead_dist_m, "min_lookahead_dist_m");
   RequirePositive(max_lookahead_dist_m, "max_lookahead_dist_m");
-  Require(min_lookahead_dist_m <= max_lookahead_dist_m,
-          "min_lookahead_dist_m must be <= max_lookahead_dist_m, got " + Num(min_lookahead_dist_m) +
-              " and " + Num(max_lookahead_dist_m));
+  Require(min_lookahead_dist_m <= max_lookahead_dist_m, [&] {
+    return "min_lookahead_dist_m must be <= max_lookahead_dist_m, got " +
+           Num(min_lookahead_dist_m) + " and " + Num(max_lookahead_dist_m);
+  });
   RequirePositive(lookahead_time_s, "lookahead_time_s");
   RequirePositive(regulated_min_radius_m, "regulated_min_radius_m");
   RequireNonNegative(regulated_min_speed_mps, "regulated_min_speed_mps");
@@ -154,10 +155,10 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
                                     const PathFollowerInput& input, PathFollowerState* state) {
   Require(Finite(input.X_F_base), "path follower: the pose must be finite");
   Require(std::isfinite(input.speed_mps),
-          "path follower: speed_mps must be finite, got " + Num(input.speed_mps));
+          [&] { return "path follower: speed_mps must be finite, got " + Num(input.speed_mps); });
   for (std::size_t i = 0; i < input.path.size(); ++i) {
     Require(Finite(input.path[i]),
-            "path follower: path point " + std::to_string(i) + " is not finite");
+            [&] { return "path follower: path point " + std::to_string(i) + " is not finite"; });
   }
   PathFollowerState& s = *state;
   PathFollowerOutput out;

@@ -16,14 +16,16 @@ CloudConstants MakeCloudConstants(const PointCloudParams& params, const std::arr
     return true;
   };
   Require(finite(), "point cloud: P has a non-finite entry");
-  Require(P[0] > 0.0 && P[5] > 0.0,
-          "point cloud: P needs fx, fy > 0, got fx = " + Num(P[0]) + ", fy = " + Num(P[5]));
+  Require(P[0] > 0.0 && P[5] > 0.0, [&] {
+    return "point cloud: P needs fx, fy > 0, got fx = " + Num(P[0]) + ", fy = " + Num(P[5]);
+  });
   Require(P[1] == 0.0 && P[4] == 0.0 && P[8] == 0.0 && P[9] == 0.0 && P[10] == 1.0 && P[11] == 0.0,
           "point cloud: P must be [fx 0 cx Tx; 0 fy cy Ty; 0 0 1 0]");
   // The real code reads fx, cx, fy, cy only; a stereo camera's Tx/Ty would be silently ignored.
-  Require(P[3] == 0.0 && P[7] == 0.0, "point cloud: P has Tx = " + Num(P[3]) +
-                                          ", Ty = " + Num(P[7]) +
-                                          "; only a monocular camera (0, 0) is modeled");
+  Require(P[3] == 0.0 && P[7] == 0.0, [&] {
+    return "point cloud: P has Tx = " + Num(P[3]) + ", Ty = " + Num(P[7]) +
+           "; only a monocular camera (0, 0) is modeled";
+  });
   return CloudConstants{.fx = static_cast<float>(P[0]),
                         .fy = static_cast<float>(P[5]),
                         .cx = static_cast<float>(P[2]),
@@ -33,10 +35,13 @@ CloudConstants MakeCloudConstants(const PointCloudParams& params, const std::arr
 
 void CheckDepthImage(const DepthImageView& depth) {
   Require(depth.width_px == PointCloud640::kWidth && depth.height_px == PointCloud640::kHeight,
-          "point cloud: the depth image must be 640x480, got " + Num(depth.width_px) + "x" +
-              Num(depth.height_px));
-  Require(depth.mm.size() == static_cast<std::size_t>(PointCloud640::kPoints),
-          "point cloud: the depth buffer holds " + Num(depth.mm.size()) + " pixels, not 640x480");
+          [&] {
+            return "point cloud: the depth image must be 640x480, got " + Num(depth.width_px) +
+                   "x" + Num(depth.height_px);
+          });
+  Require(depth.mm.size() == static_cast<std::size_t>(PointCloud640::kPoints), [&] {
+    return "point cloud: the depth buffer holds " + Num(depth.mm.size()) + " pixels, not 640x480";
+  });
 }
 
 AUTONOMSIM_ROW_KERNEL void CameraPointsOfRow(const CloudConstants& k, int row,

@@ -23,7 +23,7 @@ constexpr int kRadiusSearchSteps = 10000;
 std::string Num(double v) { return std::to_string(v); }
 
 void RequireFinite(double value, const std::string& key) {
-  Require(std::isfinite(value), key + " must be finite, got " + Num(value));
+  Require(std::isfinite(value), [&] { return key + " must be finite, got " + Num(value); });
 }
 
 }  // namespace
@@ -35,33 +35,36 @@ void CameraMount::Validate() const {
   for (const auto& [key, value] :
        {std::pair{"roll_deg", roll_deg}, {"pitch_deg", pitch_deg}, {"yaw_deg", yaw_deg}}) {
     Require(std::isfinite(value) && std::abs(value) <= 180.0,
-            std::string(key) + " must be within [-180, 180], got " + Num(value));
+            [&] { return std::string(key) + " must be within [-180, 180], got " + Num(value); });
   }
 }
 
 void CameraParams::Validate() const {
   Require(!name.empty(), "name must not be empty");
   Require(width_px > 0 && width_px <= 8192,
-          "width_px must be in [1, 8192], got " + std::to_string(width_px));
+          [&] { return "width_px must be in [1, 8192], got " + std::to_string(width_px); });
   Require(height_px > 0 && height_px <= 8192,
-          "height_px must be in [1, 8192], got " + std::to_string(height_px));
+          [&] { return "height_px must be in [1, 8192], got " + std::to_string(height_px); });
   for (std::size_t i = 0; i < K.size(); ++i) RequireFinite(K[i], "K[" + std::to_string(i) + "]");
   for (std::size_t i = 0; i < D.size(); ++i) RequireFinite(D[i], "D[" + std::to_string(i) + "]");
   for (std::size_t i = 0; i < P.size(); ++i) RequireFinite(P[i], "P[" + std::to_string(i) + "]");
-  Require(K[0] > 0.0 && K[4] > 0.0,
-          "K: fx (K[0]) and fy (K[4]) must be > 0, got " + Num(K[0]) + ", " + Num(K[4]));
+  Require(K[0] > 0.0 && K[4] > 0.0, [&] {
+    return "K: fx (K[0]) and fy (K[4]) must be > 0, got " + Num(K[0]) + ", " + Num(K[4]);
+  });
   Require(K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0,
           "K must be [fx s cx; 0 fy cy; 0 0 1] (K[3], K[6], K[7] = 0, K[8] = 1)");
-  Require(P[0] > 0.0 && P[5] > 0.0,
-          "P: fx' (P[0]) and fy' (P[5]) must be > 0, got " + Num(P[0]) + ", " + Num(P[5]));
+  Require(P[0] > 0.0 && P[5] > 0.0, [&] {
+    return "P: fx' (P[0]) and fy' (P[5]) must be > 0, got " + Num(P[0]) + ", " + Num(P[5]);
+  });
   Require(P[4] == 0.0 && P[8] == 0.0 && P[9] == 0.0 && P[10] == 1.0 && P[11] == 0.0,
           "P must be [fx' s cx' Tx; 0 fy' cy' Ty; 0 0 1 0]");
   mount.Validate();
   Require(std::isfinite(clip_near_m) && clip_near_m > 0.0,
-          "clip_near_m must be > 0, got " + Num(clip_near_m));
-  Require(std::isfinite(clip_far_m) && clip_far_m > clip_near_m && clip_far_m <= 65.535,
-          "clip_far_m must be > clip_near_m and <= 65.535 (uint16 millimetres), got " +
-              Num(clip_far_m));
+          [&] { return "clip_near_m must be > 0, got " + Num(clip_near_m); });
+  Require(std::isfinite(clip_far_m) && clip_far_m > clip_near_m && clip_far_m <= 65.535, [&] {
+    return "clip_far_m must be > clip_near_m and <= 65.535 (uint16 millimetres), got " +
+           Num(clip_far_m);
+  });
 }
 
 CameraParams ColorCameraParams() {

@@ -20,8 +20,9 @@ constexpr double kGravity_mps2 = 9.81;
 constexpr int kTireIterations = 8;
 
 void RequirePositive(double value, const char* key) {
-  Require(std::isfinite(value) && value > 0.0,
-          std::string(key) + " must be finite and > 0, got " + std::to_string(value));
+  Require(std::isfinite(value) && value > 0.0, [&] {
+    return std::string(key) + " must be finite and > 0, got " + std::to_string(value);
+  });
 }
 
 double Cross(const world::Vec2& a, const world::Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
@@ -55,17 +56,24 @@ void CarParams::Validate() const {
   RequirePositive(top_speed_mps, "top_speed_mps");
   RequirePositive(motor_time_constant_s, "motor_time_constant_s");
   RequirePositive(tire_friction_coefficient, "tire_friction_coefficient");
-  Require(wheelbase_m < length_m, "wheelbase_m must be < length_m (" + std::to_string(length_m) +
-                                      "), got " + std::to_string(wheelbase_m));
-  Require(track_m <= width_m, "track_m must be <= width_m (" + std::to_string(width_m) + "), got " +
-                                  std::to_string(track_m));
-  Require(std::isfinite(body_friction_coefficient) && body_friction_coefficient >= 0.0,
-          "body_friction_coefficient must be finite and >= 0, got " +
-              std::to_string(body_friction_coefficient));
-  Require(esc_neutral_band >= 0.0 && esc_neutral_band < 1.0,
-          "esc_neutral_band must be in [0, 1), got " + std::to_string(esc_neutral_band));
-  Require(body_restitution >= 0.0 && body_restitution <= 1.0,
-          "body_restitution must be in [0, 1], got " + std::to_string(body_restitution));
+  Require(wheelbase_m < length_m, [&] {
+    return "wheelbase_m must be < length_m (" + std::to_string(length_m) + "), got " +
+           std::to_string(wheelbase_m);
+  });
+  Require(track_m <= width_m, [&] {
+    return "track_m must be <= width_m (" + std::to_string(width_m) + "), got " +
+           std::to_string(track_m);
+  });
+  Require(std::isfinite(body_friction_coefficient) && body_friction_coefficient >= 0.0, [&] {
+    return "body_friction_coefficient must be finite and >= 0, got " +
+           std::to_string(body_friction_coefficient);
+  });
+  Require(esc_neutral_band >= 0.0 && esc_neutral_band < 1.0, [&] {
+    return "esc_neutral_band must be in [0, 1), got " + std::to_string(esc_neutral_band);
+  });
+  Require(body_restitution >= 0.0 && body_restitution <= 1.0, [&] {
+    return "body_restitution must be in [0, 1], got " + std::to_string(body_restitution);
+  });
 }
 
 Car::Car(b2World* world, const CarParams& params, int id, const world::Pose2& start)
@@ -73,7 +81,7 @@ Car::Car(b2World* world, const CarParams& params, int id, const world::Pose2& st
   params_.Validate();
   Require(world_ != nullptr, "Car needs a b2World");
   Require(std::isfinite(start.x_m) && std::isfinite(start.y_m) && std::isfinite(start.yaw_rad),
-          "car " + std::to_string(id) + ": start pose must be finite");
+          [&] { return "car " + std::to_string(id) + ": start pose must be finite"; });
 
   b2BodyDef body_def;
   body_def.type = b2_dynamicBody;
@@ -111,7 +119,7 @@ Car::~Car() { world_->DestroyBody(body_); }
 
 void Car::SetCommand(const ActuatorCommand& command) {
   Require(!std::isnan(command.throttle) && !std::isnan(command.curvature_per_m),
-          "car " + std::to_string(id_) + ": actuator command must not be NaN");
+          [&] { return "car " + std::to_string(id_) + ": actuator command must not be NaN"; });
   command_.throttle = std::clamp(command.throttle, -1.0, 1.0);
   command_.curvature_per_m = std::clamp(command.curvature_per_m, -params_.max_curvature_per_m,
                                         params_.max_curvature_per_m);
@@ -119,7 +127,7 @@ void Car::SetCommand(const ActuatorCommand& command) {
 
 void Car::ApplyForces(double dt_s) {
   Require(std::isfinite(dt_s) && dt_s > 0.0,
-          "ApplyForces: dt_s must be finite and > 0, got " + std::to_string(dt_s));
+          [&] { return "ApplyForces: dt_s must be finite and > 0, got " + std::to_string(dt_s); });
 
   // keep Box2D's (float) angle small so its resolution does not decay over many turns
   const float angle = body_->GetAngle();
@@ -211,21 +219,26 @@ double Car::yaw_rate_rad_per_s() const { return static_cast<double>(body_->GetAn
 
 void PwmParams::Validate() const {
   Require(period > Duration::zero(), "period_s must be > 0");
-  Require(throttle_counts_per_unit > 0,
-          "throttle_counts_per_unit must be > 0, got " + std::to_string(throttle_counts_per_unit));
-  Require(throttle_min_counts <= neutral_counts && neutral_counts <= throttle_max_counts,
-          "throttle_min_counts <= neutral_counts <= throttle_max_counts must hold, got " +
-              std::to_string(throttle_min_counts) + ", " + std::to_string(neutral_counts) + ", " +
-              std::to_string(throttle_max_counts));
-  Require(std::isfinite(steering_full_curvature_per_m) && steering_full_curvature_per_m > 0.0,
-          "steering_full_curvature_per_m must be finite and > 0, got " +
-              std::to_string(steering_full_curvature_per_m));
-  Require(steering_counts_at_full > 0,
-          "steering_counts_at_full must be > 0, got " + std::to_string(steering_counts_at_full));
-  Require(steering_min_counts <= neutral_counts && neutral_counts <= steering_max_counts,
-          "steering_min_counts <= neutral_counts <= steering_max_counts must hold, got " +
-              std::to_string(steering_min_counts) + ", " + std::to_string(neutral_counts) + ", " +
-              std::to_string(steering_max_counts));
+  Require(throttle_counts_per_unit > 0, [&] {
+    return "throttle_counts_per_unit must be > 0, got " + std::to_string(throttle_counts_per_unit);
+  });
+  Require(throttle_min_counts <= neutral_counts && neutral_counts <= throttle_max_counts, [&] {
+    return "throttle_min_counts <= neutral_counts <= throttle_max_counts must hold, got " +
+           std::to_string(throttle_min_counts) + ", " + std::to_string(neutral_counts) + ", " +
+           std::to_string(throttle_max_counts);
+  });
+  Require(std::isfinite(steering_full_curvature_per_m) && steering_full_curvature_per_m > 0.0, [&] {
+    return "steering_full_curvature_per_m must be finite and > 0, got " +
+           std::to_string(steering_full_curvature_per_m);
+  });
+  Require(steering_counts_at_full > 0, [&] {
+    return "steering_counts_at_full must be > 0, got " + std::to_string(steering_counts_at_full);
+  });
+  Require(steering_min_counts <= neutral_counts && neutral_counts <= steering_max_counts, [&] {
+    return "steering_min_counts <= neutral_counts <= steering_max_counts must hold, got " +
+           std::to_string(steering_min_counts) + ", " + std::to_string(neutral_counts) + ", " +
+           std::to_string(steering_max_counts);
+  });
 }
 
 int ThrottlePulse(const PwmParams& params, double u) {

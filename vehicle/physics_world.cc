@@ -60,23 +60,27 @@ class ContactRecorder : public b2ContactListener {
 }  // namespace detail
 
 void PhysicsParams::Validate() const {
-  Require(step > Duration::zero() && step <= kMaxStep,
-          "step_s must be in (0, " + std::to_string(ToSeconds(kMaxStep)) + "] s, got " +
-              std::to_string(ToSeconds(step)));
-  Require(velocity_iterations >= 1,
-          "velocity_iterations must be >= 1, got " + std::to_string(velocity_iterations));
-  Require(position_iterations >= 1,
-          "position_iterations must be >= 1, got " + std::to_string(position_iterations));
+  Require(step > Duration::zero() && step <= kMaxStep, [&] {
+    return "step_s must be in (0, " + std::to_string(ToSeconds(kMaxStep)) + "] s, got " +
+           std::to_string(ToSeconds(step));
+  });
+  Require(velocity_iterations >= 1, [&] {
+    return "velocity_iterations must be >= 1, got " + std::to_string(velocity_iterations);
+  });
+  Require(position_iterations >= 1, [&] {
+    return "position_iterations must be >= 1, got " + std::to_string(position_iterations);
+  });
 }
 
 void ObstacleBox::Validate() const {
   Require(!name.empty(), "obstacle needs a name");
   Require(std::isfinite(pose.x_m) && std::isfinite(pose.y_m) && std::isfinite(pose.yaw_rad),
-          "obstacle '" + name + "': pose must be finite");
+          [&] { return "obstacle '" + name + "': pose must be finite"; });
   auto positive = [this](double value, const char* key) {
-    Require(std::isfinite(value) && value > 0.0, "obstacle '" + name + "': " + key +
-                                                     " must be finite and > 0, got " +
-                                                     std::to_string(value));
+    Require(std::isfinite(value) && value > 0.0, [&] {
+      return "obstacle '" + name + "': " + key + " must be finite and > 0, got " +
+             std::to_string(value);
+    });
   };
   positive(length_m, "length_m");
   positive(width_m, "width_m");
@@ -95,7 +99,8 @@ PhysicsWorld::~PhysicsWorld() {
 }
 
 Car& PhysicsWorld::AddCar(int id, const CarParams& params, const world::Pose2& start) {
-  Require(!cars_.contains(id), "car id " + std::to_string(id) + " is already in the world");
+  Require(!cars_.contains(id),
+          [&] { return "car id " + std::to_string(id) + " is already in the world"; });
   auto car = std::make_unique<Car>(world_.get(), params, id, start);
   Car& ref = *car;
   cars_.emplace(id, std::move(car));
@@ -120,7 +125,8 @@ std::vector<int> PhysicsWorld::car_ids() const {
 std::size_t PhysicsWorld::AddObstacle(const ObstacleBox& box, bool enabled) {
   box.Validate();
   for (const Obstacle& other : obstacles_) {
-    Require(other.box.name != box.name, "obstacle name '" + box.name + "' is already in the world");
+    Require(other.box.name != box.name,
+            [&] { return "obstacle name '" + box.name + "' is already in the world"; });
   }
   const std::size_t index = obstacles_.size();
 

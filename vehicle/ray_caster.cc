@@ -52,7 +52,8 @@ Bgr ToBgr(const std::array<int, 3>& rgb) {
 
 void RequireRgb(const std::array<int, 3>& rgb, const std::string& key) {
   for (int c : rgb) {
-    Require(c >= 0 && c <= 255, key + ": channels must be in [0, 255], got " + std::to_string(c));
+    Require(c >= 0 && c <= 255,
+            [&] { return key + ": channels must be in [0, 255], got " + std::to_string(c); });
   }
 }
 
@@ -104,10 +105,11 @@ Bgr SceneAppearance::car_body(int car_id) const {
 }
 
 void CameraNoiseParams::Validate() const {
-  Require(depth_stddev_per_m >= 0.0 && depth_stddev_per_m <= 0.1,
-          "depth_stddev_per_m must be in [0, 0.1], got " + std::to_string(depth_stddev_per_m));
+  Require(depth_stddev_per_m >= 0.0 && depth_stddev_per_m <= 0.1, [&] {
+    return "depth_stddev_per_m must be in [0, 0.1], got " + std::to_string(depth_stddev_per_m);
+  });
   Require(color_stddev >= 0.0 && color_stddev <= 64.0,
-          "color_stddev must be in [0, 64], got " + std::to_string(color_stddev));
+          [&] { return "color_stddev must be in [0, 64], got " + std::to_string(color_stddev); });
 }
 
 FloorTexture::FloorTexture(const world::FloorRaster& raster)
@@ -196,9 +198,10 @@ CameraRays::CameraRays(const CameraModel& camera)
   const CameraParams& params = camera_.params();
   const Eigen::Isometry3d& X_base_camera = camera_.X_base_camera();
   origin_base_ = X_base_camera.translation();
-  Require(origin_base_.z() > 0.0, params.name +
-                                      ": the camera must be above the floor (mount.z_m > 0), got " +
-                                      std::to_string(origin_base_.z()));
+  Require(origin_base_.z() > 0.0, [&] {
+    return params.name + ": the camera must be above the floor (mount.z_m > 0), got " +
+           std::to_string(origin_base_.z());
+  });
   const Eigen::Matrix3d R = X_base_camera.linear();
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   dir_x_.resize(n);
@@ -215,9 +218,10 @@ CameraRays::CameraRays(const CameraModel& camera)
     for (int u = 0; u < width_; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
       const std::optional<Eigen::Vector2d> ray = camera_.NormalizedRay(u, v);
-      Require(ray.has_value(), params.name +
-                                   ": the lens distortion D cannot be inverted at pixel (" +
-                                   std::to_string(u) + ", " + std::to_string(v) + ")");
+      Require(ray.has_value(), [&] {
+        return params.name + ": the lens distortion D cannot be inverted at pixel (" +
+               std::to_string(u) + ", " + std::to_string(v) + ")";
+      });
       ray_x_[i] = static_cast<float>(ray->x());
       ray_y_[i] = static_cast<float>(ray->y());
       const Eigen::Vector3d d = R * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
@@ -344,9 +348,10 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
                                   const RowSpans& region, const ColourLabel& label, LabelView out,
                                   std::span<const std::uint8_t> prism_labels) {
   CheckRegion(region, "label");
-  Require(prism_labels.empty() || prism_labels.size() == prisms.size(),
-          "CameraRenderer::RenderLabels: " + std::to_string(prism_labels.size()) +
-              " prism labels for " + std::to_string(prisms.size()) + " prisms");
+  Require(prism_labels.empty() || prism_labels.size() == prisms.size(), [&] {
+    return "CameraRenderer::RenderLabels: " + std::to_string(prism_labels.size()) +
+           " prism labels for " + std::to_string(prisms.size()) + " prisms";
+  });
   Require(out.origin != nullptr && out.stride >= rays_->width() && label != nullptr,
           "CameraRenderer::RenderLabels needs an output of the camera's width and a label");
   LabelOut labels{.view = out, .label = &label, .prism_labels = prism_labels};

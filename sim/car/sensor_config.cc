@@ -13,7 +13,7 @@ constexpr double kMaxRate_hz = 1e6;  // a sample every microsecond at most
 
 void RequireRate(double rate_hz) {
   Require(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRate_hz,
-          "rate_hz must be in (0, 1e6], got " + std::to_string(rate_hz));
+          [&] { return "rate_hz must be in (0, 1e6], got " + std::to_string(rate_hz); });
 }
 
 // Rethrows a nested struct's error with its key in front, as the config reader expects paths.
@@ -79,9 +79,10 @@ void SensorSuiteParams::Validate() const {
   Within("imu", [&] { imu.Validate(); });
   Within("wheel_speed", [&] { wheel_speed.Validate(); });
   Within("ultrasonic", [&] { ultrasonic.Validate(); });
-  Require(color_camera.camera.name != depth_camera.camera.name,
-          "color_camera.camera.name and depth_camera.camera.name must differ, both are '" +
-              color_camera.camera.name + "'");
+  Require(color_camera.camera.name != depth_camera.camera.name, [&] {
+    return "color_camera.camera.name and depth_camera.camera.name must differ, both are '" +
+           color_camera.camera.name + "'";
+  });
 }
 
 std::optional<CameraBackend> CameraBackendNamed(const std::string& name) {
@@ -92,9 +93,11 @@ std::optional<CameraBackend> CameraBackendNamed(const std::string& name) {
 
 CameraBackend ParseCameraBackend(const std::string& name) {
   const std::optional<CameraBackend> backend = CameraBackendNamed(name);
-  Require(backend.has_value(),
-          "camera_backend must be 'raycast' (the ray caster) or 'gl' (OpenGL ES through EGL), "
-          "got '" + name + "'");
+  Require(backend.has_value(), [&] {
+    return "camera_backend must be 'raycast' (the ray caster) or 'gl' (OpenGL ES through EGL), "
+           "got '" +
+           name + "'";
+  });
   return *backend;
 }
 
