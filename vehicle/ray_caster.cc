@@ -256,34 +256,48 @@ CameraRays::CameraRays(const CameraModel& camera)
     }
   }
 
-  const int blocks = blocks_per_row();
-  floor_blocks_.assign(static_cast<std::size_t>(blocks) * height_, FloorBlock{});
-  for (int v = 0; v < height_; ++v) {
-    for (int k = 0; k < blocks; ++k) {
-      const int u0 = k * kBlockSize;
-      const int u1 = u0 + kBlockSize;
-      if (u1 > width_) continue;
-      double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
-      bool all_floor = true;
-      for (int u = u0; u < u1 && all_floor; ++u) {
+  // The circle holding the floor points of pixels [u0, u1) × [v0, v1), or a negative radius where
+  // one of them does not see the floor.
+  const auto circle = [&](int u0, int u1, int v0, int v1) {
+    double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
+    for (int v = v0; v < v1; ++v) {
+      for (int u = u0; u < u1; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-        all_floor = floor_t_[i] < kInf;
+        if (!(floor_t_[i] < kInf)) return FloorBlock{};
         x_lo = std::min(x_lo, double{floor_x_[i]});
         x_hi = std::max(x_hi, double{floor_x_[i]});
         y_lo = std::min(y_lo, double{floor_y_[i]});
         y_hi = std::max(y_hi, double{floor_y_[i]});
       }
-      if (!all_floor) continue;
-      FloorBlock& block = floor_blocks_[static_cast<std::size_t>(v) * blocks + k];
-      block.centre_x = static_cast<float>(0.5 * (x_lo + x_hi));
-      block.centre_y = static_cast<float>(0.5 * (y_lo + y_hi));
-      double radius = 0.0;
+    }
+    FloorBlock block;
+    block.centre_x = static_cast<float>(0.5 * (x_lo + x_hi));
+    block.centre_y = static_cast<float>(0.5 * (y_lo + y_hi));
+    double radius = 0.0;
+    for (int v = v0; v < v1; ++v) {
       for (int u = u0; u < u1; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
         radius = std::max(radius, std::hypot(floor_x_[i] - double{block.centre_x},
                                              floor_y_[i] - double{block.centre_y}));
       }
-      block.radius = std::nextafter(static_cast<float>(radius), kInf);  // rounded up
+    }
+    block.radius = std::nextafter(static_cast<float>(radius), kInf);  // rounded up
+    return block;
+  };
+  const int blocks = blocks_per_row();
+  floor_blocks_.assign(static_cast<std::size_t>(blocks) * height_, FloorBlock{});
+  const int groups_high = (height_ + kGroupRows - 1) / kGroupRows;
+  floor_block_groups_.assign(static_cast<std::size_t>(blocks) * groups_high, FloorBlock{});
+  for (int k = 0; k < blocks; ++k) {
+    const int u0 = k * kBlockSize;
+    const int u1 = u0 + kBlockSize;
+    if (u1 > width_) continue;
+    for (int v = 0; v < height_; ++v) {
+      floor_blocks_[static_cast<std::size_t>(v) * blocks + k] = circle(u0, u1, v, v + 1);
+    }
+    for (int g = 0; g < groups_high; ++g) {
+      floor_block_groups_[static_cast<std::size_t>(g) * blocks + k] =
+          circle(u0, u1, g * kGroupRows, std::min(height_, (g + 1) * kGroupRows));
     }
   }
 
@@ -547,13 +561,24 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
     return col - reach >= 0.0f && row - reach >= 0.0f && col + reach < tex_cols &&
            row + reach < tex_rows && tex.CommonWithin(col, row, reach);
   };
+  // A block's group (CameraRays::floor_block_groups) is looked up once per frame, when the first
+  // of its blocks is met: 0 not yet, 1 all of the common colour, 2 not known to be.
+  const CameraRays::FloorBlock* groups = r.floor_block_groups().data();
+  group_common_.assign(r.floor_block_groups().size(), 0);
+  const auto group_common = [&](int row, int k) {
+    const std::size_t g = static_cast<std::size_t>(row / CameraRays::kGroupRows) * blocks_per_row +
+                          static_cast<std::size_t>(k);
+    if (group_common_[g] == 0) group_common_[g] = common(groups[g]) ? 1 : 2;
+    return group_common_[g] == 1;
+  };
   for (const CameraRays::Run& run : *floor_runs) {
     const int row = run.begin / w;  // a run lies in one row
     int i = run.begin;
     while (i < run.end) {
       const int column = i - row * w;
       if (column % kBlock == 0 && i + kBlock <= run.end &&
-          common(blocks[row * blocks_per_row + column / kBlock])) {
+          (group_common(row, column / kBlock) ||
+           common(blocks[row * blocks_per_row + column / kBlock]))) {
         if (labels != nullptr) {
           std::memset(label_row(row) + i, labels->palette[tex.common_index()], kBlock);
         } else {
