@@ -184,17 +184,25 @@ void Inflation::Apply(Costmap2D* grid) const {
     }
   }
 
+  // Per row, only the columns with an obstacle within the radius along their column count (most
+  // of a rolling window is free): their indices, ascending, and a window over them per cell.
+  std::vector<int> near;
+  near.reserve(static_cast<std::size_t>(nx));
   for (int y = 0; y < ny; ++y) {
     const int* row_distance = column_distance.data() + static_cast<std::size_t>(y) * nx;
     std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
+    near.clear();
     for (int x = 0; x < nx; ++x) {
+      if (row_distance[x] < far) near.push_back(x);
+    }
+    std::size_t first = 0;  // the first of near within the radius of x
+    for (int x = 0; x < nx && first < near.size(); ++x) {
+      while (first < near.size() && near[first] < x - cell_radius_) ++first;
       if (row_distance[x] == 0) continue;  // the obstacle itself
       int best = radius_sq + 1;
-      const int lo = std::max(0, x - cell_radius_);
-      const int hi = std::min(nx - 1, x + cell_radius_);
-      for (int xx = lo; xx <= hi; ++xx) {
+      for (std::size_t k = first; k < near.size() && near[k] <= x + cell_radius_; ++k) {
+        const int xx = near[k];
         const int g = row_distance[xx];
-        if (g >= far) continue;
         best = std::min(best, (xx - x) * (xx - x) + g * g);
       }
       if (best > radius_sq) continue;

@@ -133,7 +133,8 @@ class Inflation {
 
   // Raises every cell within the inflation radius of a LETHAL cell of *grid to the inflated cost,
   // as Nav2's updateCosts: new = max(old, inflated), except that an unknown cell only takes an
-  // inflated cost of INSCRIBED or more (inflate_unknown false). Deterministic; O(cells · radius).
+  // inflated cost of INSCRIBED or more (inflate_unknown false). Deterministic; O(cells · radius)
+  // where obstacles are near, O(cells) elsewhere.
   void Apply(Costmap2D* grid) const;
 
  private:

@@ -104,21 +104,27 @@ TEST(CostmapInflationTest, InflatedGridMatchesFormulaAroundOneObstacle) {
 
 // The exact distance transform against brute force on a scattered grid: every cell takes the
 // cost of its nearest LETHAL cell, never less than it had, and unknown cells only go INSCRIBED.
-TEST(CostmapInflationTest, InflationEqualsBruteForceNearestObstacle) {
-  Costmap2D grid(37, 29, 0.05, Vec2::Zero());
+// Apply on a grid with `lethal` obstacles scattered over its lower-left nx_obstacles × ny_obstacles
+// cells (and some lower costs and unknown cells anywhere) equals the nearest obstacle found by
+// brute force at every cell.
+void ExpectInflationEqualsBruteForce(int nx, int ny, int nx_obstacles, int ny_obstacles,
+                                     int lethal) {
+  Costmap2D grid(nx, ny, 0.05, Vec2::Zero());
   unsigned state = 12345u;  // a fixed LCG: the same scattered pattern every run
   auto next = [&state] { return (state = state * 1103515245u + 12345u) >> 16; };
-  for (int k = 0; k < 25; ++k) grid.SetCost(next() % 37, next() % 29, kLethalObstacle);
-  for (int k = 0; k < 40; ++k) grid.SetCost(next() % 37, next() % 29, 40);
-  for (int k = 0; k < 40; ++k) grid.SetCost(next() % 37, next() % 29, kNoInformation);
+  for (int k = 0; k < lethal; ++k) {
+    grid.SetCost(next() % nx_obstacles, next() % ny_obstacles, kLethalObstacle);
+  }
+  for (int k = 0; k < 40; ++k) grid.SetCost(next() % nx, next() % ny, 40);
+  for (int k = 0; k < 40; ++k) grid.SetCost(next() % nx, next() % ny, kNoInformation);
   const Costmap2D before = grid;
   const Inflation inflation(InflationParams{}, 0.135, 0.05);
   inflation.Apply(&grid);
-  for (int my = 0; my < 29; ++my) {
-    for (int mx = 0; mx < 37; ++mx) {
+  for (int my = 0; my < ny; ++my) {
+    for (int mx = 0; mx < nx; ++mx) {
       double nearest = 1e9;
-      for (int oy = 0; oy < 29; ++oy) {
-        for (int ox = 0; ox < 37; ++ox) {
+      for (int oy = 0; oy < ny; ++oy) {
+        for (int ox = 0; ox < nx; ++ox) {
           if (before.Cost(ox, oy) == kLethalObstacle) {
             nearest = std::min(nearest, std::hypot(mx - ox, my - oy));
           }
@@ -132,6 +138,15 @@ TEST(CostmapInflationTest, InflationEqualsBruteForceNearestObstacle) {
       ASSERT_EQ(grid.Cost(mx, my), expected) << mx << ", " << my;
     }
   }
+}
+
+TEST(CostmapInflationTest, InflationEqualsBruteForceNearestObstacle) {
+  ExpectInflationEqualsBruteForce(37, 29, 37, 29, 25);
+}
+
+TEST(CostmapInflationTest, InflationOfASparseWindowEqualsBruteForce) {
+  // a rolling window's case: obstacles in one corner, most rows and columns free of them
+  ExpectInflationEqualsBruteForce(100, 100, 20, 12, 6);
 }
 
 // --- obstacle layer ----------------------------------------------------------------------------
