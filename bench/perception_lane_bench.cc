@@ -68,5 +68,25 @@ void BM_LaneRowSums(benchmark::State& state) {
 }
 BENCHMARK(BM_LaneRowSums)->Unit(benchmark::kMicrosecond);
 
+// The warp and row sums alone, as the loop runs them: the renderer has written each source
+// pixel's line class (here ClassOf of the frame's colours), the detector sums the warped classes.
+void BM_LaneRowSumsFromClasses(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  const cv::Mat& image = Frame().image;
+  for (const LaneDetector::SourceSpan& span : detector.source_spans()) {
+    const std::uint8_t* bgr = image.ptr<std::uint8_t>(span.row);
+    for (int c = span.col_begin; c < span.col_end; ++c) {
+      detector.source_classes()[span.row * LaneDetector::kClassStride + c] =
+          detector.ClassOf(bgr[3 * c], bgr[3 * c + 1], bgr[3 * c + 2]);
+    }
+  }
+  BirdsEyeRowSums sums;
+  for (auto _ : state) {
+    detector.ComputeRowSumsFromClasses(&sums);
+    benchmark::DoNotOptimize(sums.yellow.data());
+  }
+}
+BENCHMARK(BM_LaneRowSumsFromClasses)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 }  // namespace autonomsim::stack
