@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace autonomsim::sim {
 namespace {
@@ -29,13 +30,38 @@ std::uint32_t DurationHistogram::KeyOf(std::int64_t ns) {
   return static_cast<std::uint32_t>(kExactBelow_ns + (shift - 1) * kSubBuckets + sub);
 }
 
+DurationHistogram::DurationHistogram(const DurationHistogram& other)
+    : buckets_(other.buckets_), count_(other.count_), sum_ns_(other.sum_ns_) {}
+
+DurationHistogram::DurationHistogram(DurationHistogram&& other) noexcept
+    : buckets_(std::move(other.buckets_)), count_(other.count_), sum_ns_(other.sum_ns_) {
+  other.last_ = other.buckets_.end();
+}
+
+DurationHistogram& DurationHistogram::operator=(const DurationHistogram& other) {
+  if (this != &other) *this = DurationHistogram(other);
+  return *this;
+}
+
+DurationHistogram& DurationHistogram::operator=(DurationHistogram&& other) noexcept {
+  buckets_ = std::move(other.buckets_);
+  count_ = other.count_;
+  sum_ns_ = other.sum_ns_;
+  last_ = buckets_.end();
+  other.last_ = other.buckets_.end();
+  return *this;
+}
+
 void DurationHistogram::Add(Duration d) {
   const std::int64_t ns = d.count();
   if (ns < 0) {
     throw std::invalid_argument("DurationHistogram: negative duration " + std::to_string(ns) +
                                 " ns");
   }
-  Bucket& b = buckets_[KeyOf(ns)];
+  // jobs of one node tend to last alike: the last bucket first (map iterators stay valid)
+  const std::uint32_t key = KeyOf(ns);
+  if (last_ == buckets_.end() || last_->first != key) last_ = buckets_.try_emplace(key).first;
+  Bucket& b = last_->second;
   if (b.count == 0) {
     b.min_ns = ns;
     b.max_ns = ns;

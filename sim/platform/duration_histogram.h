@@ -35,6 +35,13 @@ class DurationHistogram {
   static constexpr std::int64_t kSubBuckets = std::int64_t{1} << kSubBucketBits;
   static constexpr std::int64_t kExactBelow_ns = 2 * kSubBuckets;
 
+  DurationHistogram() = default;
+  // A copy or a move has the same buckets and forgets which one Add used last.
+  DurationHistogram(const DurationHistogram& other);
+  DurationHistogram(DurationHistogram&& other) noexcept;
+  DurationHistogram& operator=(const DurationHistogram& other);
+  DurationHistogram& operator=(DurationHistogram&& other) noexcept;
+
   // Throws std::invalid_argument for a negative duration (a job that ends before it starts).
   void Add(Duration d);
 
@@ -57,6 +64,7 @@ class DurationHistogram {
   static std::uint32_t KeyOf(std::int64_t ns);
 
   std::map<std::uint32_t, Bucket> buckets_;  // ordered by value
+  std::map<std::uint32_t, Bucket>::iterator last_{buckets_.end()};  // the bucket Add last used
   std::uint64_t count_{0};
   std::int64_t sum_ns_{0};  // exact; overflows only past 292 years of summed durations
 };

@@ -85,6 +85,35 @@ TEST(DurationHistogram, CountsFallInTheBinsOfTheirValues) {
   EXPECT_EQ(counts, (std::vector<std::uint64_t>{3, 1, 2}));
 }
 
+TEST(DurationHistogram, CopiesAndMovesAreIndependentHistogramsOfTheSameSample) {
+  // Add remembers its last bucket; a copy or a move must not write into the other's buckets.
+  DurationHistogram a;
+  for (int k = 0; k < 5; ++k) a.Add(milliseconds(3));
+  DurationHistogram copy = a;
+  copy.Add(milliseconds(3));
+  a.Add(milliseconds(7));
+  EXPECT_EQ(a.count(), 6u);
+  EXPECT_EQ(copy.count(), 6u);
+  EXPECT_EQ(copy.Quantile_ns(1.0), 3e6);
+  EXPECT_EQ(a.Quantile_ns(1.0), 7e6);
+  std::vector<DurationHistogram> many;
+  for (int k = 0; k < 9; ++k) {  // reallocations move them
+    many.push_back(a);
+    many.back().Add(milliseconds(k + 1));
+  }
+  for (int k = 0; k < 9; ++k) {
+    many[static_cast<std::size_t>(k)].Add(milliseconds(3));
+    EXPECT_EQ(many[static_cast<std::size_t>(k)].count(), 8u) << k;
+  }
+  DurationHistogram moved = std::move(copy);
+  moved.Add(milliseconds(3));
+  EXPECT_EQ(moved.count(), 7u);
+  copy = a;  // a moved-from histogram takes a new value
+  copy.Add(milliseconds(7));
+  EXPECT_EQ(copy.Quantile_ns(0.5), 3e6);
+  EXPECT_EQ(copy.count(), 7u);
+}
+
 TEST(DurationHistogram, ANegativeDurationIsAnError) {
   DurationHistogram h;
   EXPECT_THROW(h.Add(nanoseconds(-1)), std::invalid_argument);
