@@ -1,9 +1,9 @@
 #include "stack/global_planner.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <queue>
 
 #include "world/validation.h"
 
@@ -13,13 +13,10 @@ namespace {
 // assumed: far below a cell (0.05 m), far above the rounding of cell-centre coordinates.
 constexpr double kSameDistance_m = 1e-9;
 
-struct OpenEntry {
-  double f;  // g + h, metres
-  double h;  // heuristic, metres: among equal f, the one nearer the goal first
-  int index;
-};
+using OpenEntry = PlannerScratch::OpenEntry;
 
-// std::priority_queue is a max-heap: "greater" puts the least (f, h, index) on top.
+// The open list is a heap with the least (f, h, index) on top (std::push_heap and pop_heap with
+// "greater", as std::priority_queue would order it).
 struct WorseEntry {
   bool operator()(const OpenEntry& a, const OpenEntry& b) const {
     if (a.f != b.f) return a.f > b.f;
@@ -28,8 +25,7 @@ struct WorseEntry {
   }
 };
 
-std::vector<world::Vec2> Backtrace(const Costmap2D& costmap, const std::vector<int>& parent,
-                                   int end) {
+std::vector<world::Vec2> Backtrace(const Costmap2D& costmap, const int* parent, int end) {
   std::vector<world::Vec2> path;
   for (int i = end; i >= 0; i = parent[i]) {
     const CellIndex cell = costmap.Cell(static_cast<std::size_t>(i));
@@ -75,7 +71,8 @@ std::string ToString(PlanStatus status) {
 }
 
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
-                          const world::Vec2& start, const world::Vec2& goal) {
+                          const world::Vec2& start, const world::Vec2& goal,
+                          PlannerScratch* scratch) {
   params.Validate();
   GlobalPlan plan;
   const auto start_cell = costmap.WorldToMap(start);
@@ -125,15 +122,37 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
                          {0, 1, 1.0},       {-1, -1, diagonal}, {1, -1, diagonal},
                          {-1, 1, diagonal}, {1, 1, diagonal}};
 
+  PlannerScratch local;
+  PlannerScratch& memory = scratch != nullptr ? *scratch : local;
   const std::size_t n = costs.size();
-  std::vector<double> g(n, std::numeric_limits<double>::infinity());
-  std::vector<int> parent(n, -1);
-  std::vector<std::uint8_t> closed(n, 0);
-  std::priority_queue<OpenEntry, std::vector<OpenEntry>, WorseEntry> open;
+  if (memory.g_.size() != n || ++memory.search_ == 0) {  // a new size, or the stamps wrapped
+    memory.g_.assign(n, 0.0);
+    memory.parent_.assign(n, -1);
+    memory.reached_.assign(n, 0);
+    memory.closed_.assign(n, 0);
+    memory.search_ = 1;
+  }
+  const std::uint32_t search = memory.search_;
+  double* g_cells = memory.g_.data();
+  int* parent = memory.parent_.data();
+  std::uint32_t* reached = memory.reached_.data();
+  std::uint32_t* closed = memory.closed_.data();
+  // The cost so far of cell i: +inf until this search reaches it.
+  const auto g = [&](int i) {
+    return reached[i] == search ? g_cells[i] : std::numeric_limits<double>::infinity();
+  };
+  std::vector<OpenEntry>& open = memory.open_;
+  open.clear();
+  const auto push = [&](const OpenEntry& entry) {
+    open.push_back(entry);
+    std::push_heap(open.begin(), open.end(), WorseEntry{});
+  };
 
-  g[start_index] = 0.0;
+  g_cells[start_index] = 0.0;
+  parent[start_index] = -1;
+  reached[start_index] = search;
   const double h_start = heuristic_m(start_cell->mx, start_cell->my);
-  open.push({h_start, h_start, start_index});
+  push({h_start, h_start, start_index});
 
   // The closed cell nearest the goal point (among equals the cheapest, then the lowest index),
   // for the tolerance.
@@ -142,7 +161,7 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   auto finish = [&](int end, bool exact) {
     plan.status = PlanStatus::kOk;
     plan.path_m = Backtrace(costmap, parent, end);
-    plan.cost = g[end];
+    plan.cost = g(end);
     plan.length_m = Length_m(plan.path_m);
     plan.exact_goal = exact;
   };
@@ -155,11 +174,12 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   };
 
   while (!open.empty()) {
-    const OpenEntry top = open.top();
-    open.pop();
+    std::pop_heap(open.begin(), open.end(), WorseEntry{});
+    const OpenEntry top = open.back();
+    open.pop_back();
     const int i = top.index;
-    if (closed[i]) continue;  // a stale entry: the cell was closed at a lower cost
-    closed[i] = 1;
+    if (closed[i] == search) continue;  // a stale entry: the cell was closed at a lower cost
+    closed[i] = search;
     ++plan.expansions;
 
     if (i == goal_index) {
@@ -172,7 +192,7 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
     // Distances within kSameDistance_m are ties: rounding must not pick among equidistant cells.
     const bool nearer = distance_m < nearest_distance_m - kSameDistance_m;
     const bool tie = !nearer && distance_m <= nearest_distance_m + kSameDistance_m;
-    if (nearer || (tie && (g[i] < g[nearest] || (g[i] == g[nearest] && i < nearest)))) {
+    if (nearer || (tie && (g(i) < g(nearest) || (g(i) == g(nearest) && i < nearest)))) {
       nearest_distance_m = distance_m;
       nearest = i;
     }
@@ -186,15 +206,16 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
       const int cy = my + move.dy;
       if (cx < 0 || cx >= nx || cy < 0 || cy >= ny) continue;
       const int j = cy * nx + cx;
-      if (closed[j] || !traversable(j)) continue;
+      if (closed[j] == search || !traversable(j)) continue;
       const double weight = 1.0 + params.cost_travel_multiplier *
                                       (static_cast<double>(costs[j]) / kMaxNonInscribedCost);
-      const double g_new = g[i] + resolution_m * move.step * weight;
-      if (!(g_new < g[j])) continue;
-      g[j] = g_new;
+      const double g_new = g(i) + resolution_m * move.step * weight;
+      if (!(g_new < g(j))) continue;
+      g_cells[j] = g_new;
       parent[j] = i;
+      reached[j] = search;
       const double h = heuristic_m(cx, cy);
-      open.push({g_new + h, h, j});
+      push({g_new + h, h, j});
     }
   }
   finish_within_tolerance(PlanStatus::kNoPath);
@@ -202,13 +223,14 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
 }
 
 GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
-                            const world::Vec2& start, const std::vector<world::Vec2>& goals) {
-  if (goals.empty()) return PlanGlobalPath(params, costmap, start, start);
+                            const world::Vec2& start, const std::vector<world::Vec2>& goals,
+                            PlannerScratch* scratch) {
+  if (goals.empty()) return PlanGlobalPath(params, costmap, start, start, scratch);
   GlobalPlan joined;
   joined.status = PlanStatus::kOk;
   world::Vec2 from = start;
   for (const world::Vec2& goal : goals) {
-    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goal);
+    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goal, scratch);
     joined.expansions += leg.expansions;
     if (!leg.ok()) {
       joined.status = leg.status;

@@ -76,16 +76,41 @@ struct GlobalPlan {
   bool ok() const { return status == PlanStatus::kOk; }
 };
 
+// The search's memory, for a caller that plans again and again (a planner node): per cell, the
+// cost so far and the parent, valid only where stamped by the current search, so a new search
+// starts without clearing them; and the open list. The plans are the same with or without it.
+class PlannerScratch {
+ public:
+  // An entry of the open list.
+  struct OpenEntry {
+    double f;  // g + h, metres
+    double h;  // heuristic, metres: among equal f, the one nearer the goal first
+    int index;
+  };
+
+ private:
+  friend GlobalPlan PlanGlobalPath(const GlobalPlannerParams&, const Costmap2D&, const world::Vec2&,
+                                   const world::Vec2&, PlannerScratch*);
+  std::vector<double> g_;
+  std::vector<int> parent_;
+  std::vector<std::uint32_t> reached_;  // == search_: g_ and parent_ hold this search's values
+  std::vector<std::uint32_t> closed_;   // == search_: closed in this search
+  std::uint32_t search_{0};
+  std::vector<OpenEntry> open_;
+};
+
 // Plans from start to goal (both in the costmap's frame) on `costmap`. Validates params. A start
-// and goal in the same cell give a one-point path.
+// and goal in the same cell give a one-point path. `scratch` (optional) is the search's memory.
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
-                          const world::Vec2& start, const world::Vec2& goal);
+                          const world::Vec2& start, const world::Vec2& goal,
+                          PlannerScratch* scratch = nullptr);
 
 // Nav2's ComputePathThroughPoses: one plan per leg (start → goals[0] → goals[1] → ...), each leg
 // from the previous leg's last cell, joined without repeating the shared cell. The status is the
 // first failing leg's (and the path empty, as for any failed plan); expansions, cost and length
 // add up; exact_goal is the last leg's. No goals: a one-point plan at start.
 GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
-                            const world::Vec2& start, const std::vector<world::Vec2>& goals);
+                            const world::Vec2& start, const std::vector<world::Vec2>& goals,
+                            PlannerScratch* scratch = nullptr);
 
 }  // namespace autonomsim::stack

@@ -304,6 +304,7 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::optional<stack::LocalizationEkfOutput> odom;
     std::vector<world::Vec2> goals;
     std::uint64_t plans{0};
+    stack::PlannerScratch search;
   };
   auto state = std::make_shared<State>();
   state->costmap.emplace(config.global_costmap, static_map);
@@ -318,8 +319,9 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
       node, config.planner_period, config.planner_period,
       [state, out, params = config.planner](Time, Outbox& outbox) {
         if (!state->odom || state->goals.empty()) return;
-        stack::GlobalPlan plan = stack::PlanThroughPoses(
-            params, state->costmap->costmap(), state->odom->X_map_base.position(), state->goals);
+        stack::GlobalPlan plan = stack::PlanThroughPoses(params, state->costmap->costmap(),
+                                                         state->odom->X_map_base.position(),
+                                                         state->goals, &state->search);
         PathMessage message{
             .path = std::make_shared<const std::vector<world::Vec2>>(std::move(plan.path_m)),
             .id = ++state->plans,

@@ -358,6 +358,40 @@ TEST_F(GlobalPlannerLabTest, SameInputsSamePath) {
   EXPECT_EQ(a.expansions, b.expansions);
 }
 
+TEST_F(GlobalPlannerLabTest, OneScratchForManyPlansGivesEachPlanAsAFreshSearchWould) {
+  // The node's way: one search memory for plan after plan, on the lab map and on a small grid
+  // (another size), with failing plans among them; every plan equals one without the memory.
+  PlannerScratch scratch;
+  Costmap2D small(12, 9, 0.05, Vec2::Zero());
+  small.SetCost(5, 4, kLethalObstacle);
+  const auto same = [](const GlobalPlan& a, const GlobalPlan& b) {
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_EQ(a.path_m, b.path_m);
+    EXPECT_EQ(a.cost, b.cost);
+    EXPECT_EQ(a.expansions, b.expansions);
+    EXPECT_EQ(a.exact_goal, b.exact_goal);
+  };
+  int ok = 0, failed = 0;
+  for (int k = 0; k < 24; ++k) {
+    SCOPED_TRACE(k);
+    const Vec2 start(-2.2 + 0.19 * k, -2.18 + 0.05 * (k % 7));
+    const Vec2 goal(2.1 - 0.17 * k, 2.17 - 0.3 * (k % 5));
+    const GlobalPlannerParams params{.max_expansions = k % 6 == 5 ? 50 : 1000000};
+    const GlobalPlan fresh = PlanGlobalPath(params, *costmap_, start, goal);
+    same(PlanGlobalPath(params, *costmap_, start, goal, &scratch), fresh);
+    (fresh.ok() ? ok : failed) += 1;
+    if (k % 4 == 0) {
+      const Vec2 a = small.MapToWorld(0, k % 9), b = small.MapToWorld(11, 8 - k % 9);
+      same(PlanGlobalPath({}, small, a, b, &scratch), PlanGlobalPath({}, small, a, b));
+    }
+  }
+  EXPECT_GE(ok, 8);  // both kinds were compared
+  EXPECT_GE(failed, 3);
+  const std::vector<Vec2> goals{Vec2(0.96, -2.18), Vec2(-0.96, 2.17), Vec2(1.5, 0.3)};
+  same(PlanThroughPoses({}, *costmap_, Vec2(-2.0, -2.1), goals, &scratch),
+       PlanThroughPoses({}, *costmap_, Vec2(-2.0, -2.1), goals));
+}
+
 // The behaviour's goals (stack/behavior.h): poses every 0.25 m along a car's route. Planned
 // through, the path stays near the route all the way round, intersections included, where one
 // far goal lets A* take the other lane (OppositeCornerUsesAJunction).
