@@ -198,4 +198,11 @@ nlohmann::json ReportJson(const MetricsReport& report);
 // executor (its jobs, on the cores or in its slot), per DDS receive thread and per FPGA slot.
 std::string TraceJson(const std::vector<BoardMetrics>& boards);
 
+namespace detail {
+// A trace time, ns nanoseconds, in microseconds as JSON text: what fmt prints for the double
+// ns / 1e3 (its shortest round trip), the whole microseconds and up to three decimals without
+// trailing zeros, from integer arithmetic (below 13 days; the double beyond).
+void AppendMicroseconds(std::int64_t ns, std::string* out);
+}  // namespace detail
+
 }  // namespace autonomsim::sim

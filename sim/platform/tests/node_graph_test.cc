@@ -3,6 +3,7 @@
 // mapping and transport from a scenario's config, determinism with jitter.
 #include "sim/platform/node_graph.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -426,6 +427,39 @@ TEST(Board, BuildsFromAScenarioConfigAndWritesNodesCsvTraceAndSummary) {
   PlatformConfig missing;
   missing.profile = "platforms/nope.yaml";
   EXPECT_THROW(Board(other_kernel, "car2", missing, "scenarios", &rng), ConfigError);
+}
+
+// Trace times are written from integers; the text must be what fmt writes for the double they
+// stood for before (ns / 1e3), which tools and earlier traces read.
+TEST(NodeMetrics, TraceTimesAreTheMicrosecondsFmtWritesForTheDouble) {
+  std::vector<std::int64_t> values{0,
+                                   1,
+                                   9,
+                                   10,
+                                   100,
+                                   999,
+                                   1000,
+                                   1001,
+                                   1010,
+                                   1100,
+                                   1500,
+                                   123456789,
+                                   200000000000,
+                                   86400000000000,
+                                   9007199254740991,
+                                   -1,
+                                   -1500,
+                                   -123456789};
+  std::uint64_t state = 42;  // a fixed LCG: spread over 1 ns to 100 days
+  for (int k = 0; k < 100000; ++k) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    values.push_back(static_cast<std::int64_t>((state >> 11) % (1ull << (10 + k % 43))));
+  }
+  for (const std::int64_t ns : values) {
+    std::string text;
+    detail::AppendMicroseconds(ns, &text);
+    ASSERT_EQ(text, fmt::format("{}", static_cast<double>(ns) / 1e3)) << ns;
+  }
 }
 
 // A subscription with its own cost (a callback that only keeps the message) costs that instead of
