@@ -2,6 +2,7 @@
 // from the repository root).
 //   BM_GlobalPlanLab       A* from the real car's start (outer south lane) to the outer north lane
 //                          on the inflated 100 × 100 global costmap (reference §1, §6).
+//   BM_GlobalPlanLabScratch  the same with the search's memory kept from plan to plan.
 //   BM_InflateGlobal       static layer + inflation rebuild of the global costmap.
 //   BM_LocalCostmapUpdate  one 5 × 5 m rolling local costmap update with the 234 marks of the
 //                          obstacle grid (reference §4), the car moving along the lane.
@@ -43,6 +44,20 @@ void BM_GlobalPlanLab(benchmark::State& state) {
   state.counters["length_m"] = length_m;
 }
 BENCHMARK(BM_GlobalPlanLab)->Unit(benchmark::kMicrosecond);
+
+// The same plan as the planner node makes it, with one PlannerScratch for plan after plan.
+void BM_GlobalPlanLabScratch(benchmark::State& state) {
+  const autonomsim::stack::GlobalCostmap global({}, LabMap());
+  const autonomsim::stack::GlobalPlannerParams params;
+  autonomsim::stack::PlannerScratch scratch;
+  for (auto _ : state) {
+    const auto plan = PlanGlobalPath(params, global.costmap(), Vec2(0.96, -2.18),
+                                     Vec2(-0.96, 2.17), &scratch);
+    if (!plan.ok()) state.SkipWithError("no plan");
+    benchmark::DoNotOptimize(plan.path_m.data());
+  }
+}
+BENCHMARK(BM_GlobalPlanLabScratch)->Unit(benchmark::kMicrosecond);
 
 void BM_InflateGlobal(benchmark::State& state) {
   autonomsim::stack::GlobalCostmap global({}, LabMap());
