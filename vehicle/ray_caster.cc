@@ -207,6 +207,7 @@ CameraRays::CameraRays(const CameraModel& camera)
   dir_x_.resize(n);
   dir_y_.resize(n);
   dir_z_.resize(n);
+  inv_dir_z_.resize(n);
   floor_x_.resize(n);
   floor_y_.resize(n);
   floor_t_.resize(n);
@@ -228,6 +229,7 @@ CameraRays::CameraRays(const CameraModel& camera)
       dir_x_[i] = static_cast<float>(d.x());
       dir_y_[i] = static_cast<float>(d.y());
       dir_z_[i] = static_cast<float>(d.z());
+      inv_dir_z_[i] = 1.0f / dir_z_[i];
       floor_t_[i] = kInf;
       floor_depth_mm_[i] = 0;
       if (d.z() < 0.0) {
@@ -717,6 +719,7 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   const float* dir_x = r.dir_x().data();
   const float* dir_y = r.dir_y().data();
   const float* dir_z = r.dir_z().data();
+  const float* inv_dir_z = r.inv_dir_z().data();
   const int w = r.width();
   std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
   std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
@@ -749,7 +752,7 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
         const F4 ly = rc * dy - rs * dx;
         const F4 ix = one / lx;
         const F4 iy = one / ly;
-        const F4 iz = one / dz;
+        const F4 iz = Load(inv_dir_z + i, n);
         const F4 tx_a = x_lo_o * ix, tx_b = x_hi_o * ix;
         const F4 ty_a = y_lo_o * iy, ty_b = y_hi_o * iy;
         const F4 tz_a = z_lo_o * iz, tz_b = z_hi_o * iz;
