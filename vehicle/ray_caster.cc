@@ -206,7 +206,6 @@ CameraRays::CameraRays(const CameraModel& camera)
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   dir_x_.resize(n);
   dir_y_.resize(n);
-  dir_z_.resize(n);
   inv_dir_z_.resize(n);
   floor_x_.resize(n);
   floor_y_.resize(n);
@@ -228,8 +227,7 @@ CameraRays::CameraRays(const CameraModel& camera)
       const Eigen::Vector3d d = R * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
       dir_x_[i] = static_cast<float>(d.x());
       dir_y_[i] = static_cast<float>(d.y());
-      dir_z_[i] = static_cast<float>(d.z());
-      inv_dir_z_[i] = 1.0f / dir_z_[i];
+      inv_dir_z_[i] = 1.0f / static_cast<float>(d.z());
       floor_t_[i] = kInf;
       floor_depth_mm_[i] = 0;
       if (d.z() < 0.0) {
@@ -718,7 +716,6 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   const float* ray_y = r.ray_y().data();
   const float* dir_x = r.dir_x().data();
   const float* dir_y = r.dir_y().data();
-  const float* dir_z = r.dir_z().data();
   const float* inv_dir_z = r.inv_dir_z().data();
   const int w = r.width();
   std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
@@ -747,7 +744,6 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
         // slabs: a zero direction gives infinite bounds of the right signs
         const F4 dx = Load(dir_x + i, n);
         const F4 dy = Load(dir_y + i, n);
-        const F4 dz = Load(dir_z + i, n);
         const F4 lx = rc * dx + rs * dy;
         const F4 ly = rc * dy - rs * dx;
         const F4 ix = one / lx;
@@ -773,7 +769,8 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
             } else if (t_in[k] == ty_min[k]) {
               face = ly[k] > 0.0f ? 2 : 3;
             } else {
-              face = dz[k] > 0.0f ? 5 : 4;
+              // the z slab set a finite t_in > 0, so iz is finite and has dz's sign
+              face = iz[k] > 0.0f ? 5 : 4;
             }
           }
           const std::size_t p = static_cast<std::size_t>(i + k);

@@ -200,8 +200,7 @@ class CameraRays {
   // optical depth t is origin_base() + t · dir.
   const std::vector<float>& dir_x() const { return dir_x_; }
   const std::vector<float>& dir_y() const { return dir_y_; }
-  const std::vector<float>& dir_z() const { return dir_z_; }
-  // 1 / dir_z (float division, +-inf for 0), which every prism's slab test needs.
+  // Its z as 1 / z (float division; +-inf for 0), the form every prism's slab test needs.
   const std::vector<float>& inv_dir_z() const { return inv_dir_z_; }
   // Where each pixel's ray meets the floor (base frame, metres), and at what optical depth;
   // floor_t is +inf where it does not within the far clip.
@@ -239,7 +238,7 @@ class CameraRays {
   int height_;
   Eigen::Vector3d origin_base_;
   std::vector<float> ray_x_, ray_y_;
-  std::vector<float> dir_x_, dir_y_, dir_z_, inv_dir_z_;
+  std::vector<float> dir_x_, dir_y_, inv_dir_z_;
   std::vector<float> floor_x_, floor_y_, floor_t_;
   std::vector<std::uint16_t> floor_depth_mm_;
   std::vector<Run> floor_runs_;
