@@ -32,10 +32,11 @@ void CameraMount::Validate() const {
   RequireFinite(x_m, "x_m");
   RequireFinite(y_m, "y_m");
   RequireFinite(z_m, "z_m");
-  for (const auto& [key, value] :
+  for (const auto& angle :
        {std::pair{"roll_deg", roll_deg}, {"pitch_deg", pitch_deg}, {"yaw_deg", yaw_deg}}) {
-    Require(std::isfinite(value) && std::abs(value) <= 180.0,
-            [&] { return std::string(key) + " must be within [-180, 180], got " + Num(value); });
+    Require(std::isfinite(angle.second) && std::abs(angle.second) <= 180.0, [&] {
+      return std::string(angle.first) + " must be within [-180, 180], got " + Num(angle.second);
+    });
   }
 }
 
