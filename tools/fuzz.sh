@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]] (default 60 s, every target): builds the libFuzzer
 # targets (preset fuzz: clang, AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds
-# their corpora from the shipped files, and runs each for SECONDS_PER_TARGET. Prints the
-# executions per target; exits 1 when any target finds something (a crash, a sanitizer report, a
-# hang over 10 s, over 2 GB of memory, or an error message that does not say where), with its
-# input in build-fuzz/artifacts/. Corpora grow in build-fuzz/corpus/<target>/ from run to run.
-# Naming targets builds and runs only those. README "Fuzzing" says more.
+# their corpora from the shipped files, and runs each for SECONDS_PER_TARGET, as many at once as
+# there are cores. Prints the executions per target; exits 1 when any target finds something (a
+# crash, a sanitizer report, a hang over 10 s, over 2 GB of memory, or an error message that does
+# not say where), with its input in build-fuzz/artifacts/. Corpora grow in
+# build-fuzz/corpus/<target>/ from run to run. Naming targets builds and runs only those. README
+# "Fuzzing" says more.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 usage="usage: tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]"
@@ -63,26 +64,47 @@ build_targets=()
 for entry in "${selected[@]}"; do build_targets+=("${entry%%|*}"); done
 cmake --build --preset fuzz -j "$(nproc)" --target "${build_targets[@]}"
 
-failed=()
-for entry in "${selected[@]}"; do
-  IFS='|' read -r target seeds dictionary <<<"$entry"
-  corpus=$build/corpus/$target
+# fuzz_one TARGET SEEDS DICTIONARY: seeds the target's corpus and fuzzes it; its exit status goes
+# to $build/logs/TARGET.status, its output to $build/logs/TARGET.log.
+fuzz_one() {
+  local target=$1 seeds=$2 dictionary=$3
+  local corpus=$build/corpus/$target log=$build/logs/$target.log status=0
   mkdir -p "$corpus"
   if [[ $seeds == *.seeds ]]; then
     seed_lines "$seeds" "$corpus"
   else
     cp $seeds "$corpus/"  # a glob, unquoted on purpose
   fi
-  args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
-        -artifact_prefix="$artifacts/$target-")
+  local args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+              -artifact_prefix="$artifacts/$target-")
   [[ -n $dictionary ]] && args+=(-dict="$dictionary")
-  log=$build/logs/$target.log
-  status=0
   "$build/bin/$target" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+  echo "$status" >"$build/logs/$target.status"
+}
+
+# The targets run side by side, one per core (each writes only its own corpus, log and scratch
+# folder), then are reported in the order above.
+running=0
+for entry in "${selected[@]}"; do
+  IFS='|' read -r target seeds dictionary <<<"$entry"
+  if ((running >= $(nproc))); then
+    wait -n
+    running=$((running - 1))
+  fi
+  fuzz_one "$target" "$seeds" "$dictionary" &
+  running=$((running + 1))
+done
+wait
+
+failed=()
+for entry in "${selected[@]}"; do
+  target=${entry%%|*}
+  log=$build/logs/$target.log
+  status=$(cat "$build/logs/$target.status")
   runs=$(sed -nE 's/^stat::number_of_executed_units: *([0-9]+).*/\1/p' "$log" | tail -1)
   if ((status == 0)); then
-    echo "fuzz: $target: ${runs:-?} executions in ${seconds} s, corpus $(ls "$corpus" | wc -l)" \
-         "inputs, no finding"
+    echo "fuzz: $target: ${runs:-?} executions in ${seconds} s, corpus" \
+         "$(ls "$build/corpus/$target" | wc -l) inputs, no finding"
   else
     echo "fuzz: $target: FINDING after ${runs:-?} executions (exit $status); log $log:" >&2
     grep -vE '^(#[0-9]|INFO:|	NEW_FUNC)' "$log" | tail -40 >&2
