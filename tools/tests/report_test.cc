@@ -2,11 +2,14 @@
 // page in a real browser (Debian's chromium, headless): it loads from a temporary folder with no
 // error and no network request, and after seeking the time slider the cars are drawn where
 // trajectory.csv has them.
+#include "sim/results/report.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -17,7 +20,6 @@
 #include <string>
 #include <vector>
 
-#include "sim/results/report.h"
 #include "sim/scenario/run_record.h"
 #include "tools/tests/cli_testing.h"
 #include "vehicle/tests/gl_available.h"
@@ -32,21 +34,43 @@ using testing::Read;
 using testing::Result;
 using testing::Shell;
 
-// One run shared by the tests: the default scenario cut to 15 s, with an expectation it fails (a
+// The run the tests share: the default scenario cut to 15 s, with an expectation it fails (a
 // lateral error bound tighter than the cars hold), so the report has a failure and snapshots.
+Result MakeSharedRun(const fs::path& folder, const std::string& more = "") {
+  return Cli(
+      "run scenarios/lab_two_cars.yaml -q --set duration_s=15 "
+      "--set 'expect=[{max_lateral_error: {max_m: 0.05}}, {no_collision: {}}]' --out " +
+      folder.string() + more);
+}
+
+// Under ctest this test makes the shared run once, in the folder AUTONOMSIM_REPORT_RUN names (the
+// ctest fixture report_run, tools/CMakeLists.txt), and each ReportTest process copies it instead
+// of running the scenario again. A process started by hand runs it itself.
+TEST(ReportRun, MakeTheSharedRun) {
+  const char* folder = std::getenv("AUTONOMSIM_REPORT_RUN");
+  if (folder == nullptr) GTEST_SKIP() << "ctest's fixture (AUTONOMSIM_REPORT_RUN is not set)";
+  const Result r = MakeSharedRun(folder, " --force");  // a folder of the build's, made by a run
+  EXPECT_EQ(r.exit_code, 1) << r.output;               // its expectation fails, on purpose
+  EXPECT_TRUE(fs::exists(fs::path(folder) / "summary.json")) << r.output;
+}
+
 class ReportTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    // one folder per process: ctest runs these tests in parallel processes
+    // one folder per process: ctest runs these tests in parallel processes, each writing beside
+    // its copy of the run
     root_ = new fs::path(fs::path(::testing::TempDir()) /
                          ("autonomsim_report_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
     run_dir_ = new fs::path(*root_ / "run");
-    const Result r = Cli(
-        "run scenarios/lab_two_cars.yaml -q --set duration_s=15 "
-        "--set 'expect=[{max_lateral_error: {max_m: 0.05}}, {no_collision: {}}]' --out " +
-        run_dir_->string());
-    run_output_ = new std::string(r.output);
+    const char* shared = std::getenv("AUTONOMSIM_REPORT_RUN");
+    if (shared != nullptr && fs::exists(fs::path(shared) / "summary.json")) {
+      fs::create_directories(*root_);
+      fs::copy(shared, *run_dir_, fs::copy_options::recursive);
+      run_output_ = new std::string("a copy of " + std::string(shared));
+    } else {
+      run_output_ = new std::string(MakeSharedRun(*run_dir_).output);
+    }
   }
   static void TearDownTestSuite() {
     fs::remove_all(*root_);
