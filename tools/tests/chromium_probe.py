@@ -65,7 +65,8 @@ def describe(event):
         text = details.get("exception", {}).get("description") or details.get("text", "")
         return "exception", text
     if method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
-        args = " ".join(str(a.get("value", a.get("description", ""))) for a in params.get("args", []))
+        args = " ".join(str(a.get("value", a.get("description", "")))
+                        for a in params.get("args", []))
         return "console", f"console.{params['type']}: {args}"
     if method == "Log.entryAdded":
         entry = params.get("entry", {})
@@ -110,7 +111,8 @@ def main():
     found = False
     try:
         target = pipe.call("Target.createTarget", {"url": "about:blank"})["targetId"]
-        session = pipe.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+        attached = pipe.call("Target.attachToTarget", {"targetId": target, "flatten": True})
+        session = attached["sessionId"]
         for domain in ("Runtime.enable", "Log.enable", "Page.enable"):
             pipe.call(domain, session=session)
         navigated = pipe.call("Page.navigate", {"url": args.url}, session=session)
