@@ -328,8 +328,9 @@ class CameraRenderer {
                     std::span<const std::uint8_t> prism_labels);
 
   // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
-  // their pixels up, a group of them at a time where the group's circle allows: on by default; off, every floor pixel is looked up (the reference that tests
-  // and benchmarks compare with). The images are the same either way.
+  // their pixels up, a group of them at a time where the group's circle allows: on by default;
+  // off, every floor pixel is looked up (the reference that tests and benchmarks compare with).
+  // The images are the same either way.
   void set_common_floor_blocks(bool on) { common_floor_blocks_on_ = on; }
   // How many blocks were filled that way, over every frame so far.
   std::uint64_t common_floor_blocks() const { return common_floor_blocks_; }

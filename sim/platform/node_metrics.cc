@@ -334,6 +334,10 @@ void AppendMicroseconds(std::int64_t ns, std::string* out) {
 }
 }  // namespace detail
 
+// A little more than one trace event's text takes (the default scenario's trace.json: 31 MB for
+// its two boards' 200 k events each, some 78 bytes an event): what TraceJson reserves per event.
+constexpr std::size_t kTypicalTraceEventBytes = 96;
+
 std::string TraceJson(const std::vector<BoardMetrics>& boards) {
   // Written event by event rather than through a JSON document: a run's trace holds up to
   // trace_max_events per board, and a document of them takes ~1 KB per event.
@@ -377,7 +381,7 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
       meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
     }
     // the events are most of the file: appended piece by piece, the times from integers
-    out.reserve(out.size() + metrics.trace_events().size() * 96);
+    out.reserve(out.size() + metrics.trace_events().size() * kTypicalTraceEventBytes);
     const auto append_int = [&out](int value) {
       const fmt::format_int text(value);
       out.append(text.data(), text.size());
