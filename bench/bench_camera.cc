@@ -93,8 +93,8 @@ vehicle::CameraParams AtSize(vehicle::CameraParams params, int width, int height
   params.K[4] *= scale;
   params.K[2] = scale * (params.K[2] + 0.5) - 0.5;
   params.K[5] = scale * (params.K[5] + 0.5) - 0.5 - 0.5 * (scale * params.height_px - height);
-  params.P = {params.K[0], 0.0, params.K[2], 0.0, 0.0, params.K[4], params.K[5], 0.0,
-              0.0,         0.0, 1.0,         0.0};
+  params.P = {params.K[0], 0.0, params.K[2], 0.0, 0.0, params.K[4],
+              params.K[5], 0.0, 0.0,         0.0, 1.0, 0.0};
   params.width_px = width;
   params.height_px = height;
   return params;
@@ -183,8 +183,7 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
   vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
   const stack::LaneDetector detector(stack::LaneDetectionParams{},
                                      sim::LaneCalibration(color_camera.camera()));
-  const vehicle::RowSpans region =
-      sim::LaneDetectorReads(detector, color_camera.camera().height());
+  const vehicle::RowSpans region = sim::LaneDetectorReads(detector, color_camera.camera().height());
   color_camera.set_common_floor_blocks(state.range(0) != 0);
   vehicle::ColorImage color;
   for (auto _ : state) {
@@ -202,7 +201,11 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
       benchmark::Counter::kAvgIterations);
 }
 // /1: bare floor blocks filled at once (the default); /0: every pixel looked up
-BENCHMARK(BM_RenderColorLaneRegion)->ArgName("blocks")->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RenderColorLaneRegion)
+    ->ArgName("blocks")
+    ->Arg(1)
+    ->Arg(0)
+    ->Unit(benchmark::kMicrosecond);
 
 // The colour camera as the lane nodes render it in the loop now: the line class of each pixel the
 // detector reads (CameraRenderer::RenderLabels), straight into the detector's class buffer.
@@ -211,8 +214,7 @@ void BM_RenderLaneLabels(benchmark::State& state) {
   vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
   stack::LaneDetector detector(stack::LaneDetectionParams{},
                                sim::LaneCalibration(color_camera.camera()));
-  const vehicle::RowSpans region =
-      sim::LaneDetectorReads(detector, color_camera.camera().height());
+  const vehicle::RowSpans region = sim::LaneDetectorReads(detector, color_camera.camera().height());
   const vehicle::ColourLabel line_class = sim::LaneLineClass(detector);
   const vehicle::LabelView out{detector.source_classes(), stack::LaneDetector::kClassStride};
   for (auto _ : state) {

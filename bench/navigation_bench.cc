@@ -51,8 +51,8 @@ void BM_GlobalPlanLabScratch(benchmark::State& state) {
   const autonomsim::stack::GlobalPlannerParams params;
   autonomsim::stack::PlannerScratch scratch;
   for (auto _ : state) {
-    const auto plan = PlanGlobalPath(params, global.costmap(), Vec2(0.96, -2.18),
-                                     Vec2(-0.96, 2.17), &scratch);
+    const auto plan =
+        PlanGlobalPath(params, global.costmap(), Vec2(0.96, -2.18), Vec2(-0.96, 2.17), &scratch);
     if (!plan.ok()) state.SkipWithError("no plan");
     benchmark::DoNotOptimize(plan.path_m.data());
   }

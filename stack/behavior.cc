@@ -95,10 +95,10 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
       state->mode = BehaviorMode::kDrive;  // retry
     }
     if (state->mode != BehaviorMode::kRecovery) {
-      const bool stale = params.intersection_free_timeout > kZeroTime && input.in_stop_zone &&
-                         (!input.intersection_free_stamp ||
-                          input.now - *input.intersection_free_stamp >
-                              params.intersection_free_timeout);
+      const bool stale =
+          params.intersection_free_timeout > kZeroTime && input.in_stop_zone &&
+          (!input.intersection_free_stamp ||
+           input.now - *input.intersection_free_stamp > params.intersection_free_timeout);
       if (!input.intersection_free || stale) {
         state->mode = BehaviorMode::kIntersectionWait;
       } else if (input.collision_ahead && !state->plan_failed && params.patient_in_queue &&
@@ -134,8 +134,8 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
   return out;
 }
 
-bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
-                   const world::Vec2& p_map, double margin_m) {
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections, const world::Vec2& p_map,
+                   double margin_m) {
   auto within = [&](const world::Box& box) {
     if (margin_m <= 0.0) return box.Contains(p_map);
     return p_map.x() > box.x_min_m - margin_m && p_map.x() < box.x_max_m + margin_m &&

@@ -88,7 +88,7 @@ struct BehaviorInput {
   bool intersection_free{true};            // the intersection client's permission
   // The sensor time of the newest permission (intersection_free_timeout); none before the first.
   std::optional<Time> intersection_free_stamp;
-  bool collision_ahead{false};             // the controller's latest report
+  bool collision_ahead{false};  // the controller's latest report
   // The newest plan reply since the previous tick: true when it failed; none when no reply came.
   std::optional<bool> plan_failed;
   bool mission_done{false};  // the operator ended the drive (laps done)
@@ -123,8 +123,8 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
 // Which controller the controller server runs (reference §6, /controller_selector): FollowPath
 // inside an intersection's area or stop zones (strict boxes, as the real cars test them),
 // LaneController elsewhere. With margin_m > 0 (beyond the lab's), also within margin_m of a box.
-bool UseFollowPath(std::span<const world::IntersectionSpec> intersections,
-                   const world::Vec2& p_map, double margin_m = 0.0);
+bool UseFollowPath(std::span<const world::IntersectionSpec> intersections, const world::Vec2& p_map,
+                   double margin_m = 0.0);
 
 // Whether p_map is in a stop zone of one of the intersections (strict boxes, as the client tests).
 bool InStopZone(std::span<const world::IntersectionSpec> intersections, const world::Vec2& p_map);

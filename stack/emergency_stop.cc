@@ -16,8 +16,8 @@ void EmergencyStopParams::Validate() const {
 std::optional<bool> StepEmergencyStop(const EmergencyStopParams& params, double range_m,
                                       EmergencyStopState* state) {
   if (std::isnan(range_m)) return std::nullopt;
-  const bool stop = state->stopped ? range_m <= params.release_distance_m
-                                   : range_m < params.stop_distance_m;
+  const bool stop =
+      state->stopped ? range_m <= params.release_distance_m : range_m < params.stop_distance_m;
   if (stop == state->stopped) return std::nullopt;
   state->stopped = stop;
   return stop;

@@ -93,8 +93,8 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   const int start_index = static_cast<int>(costmap.Index(start_cell->mx, start_cell->my));
   const int goal_index = static_cast<int>(costmap.Index(goal_cell->mx, goal_cell->my));
 
-  const double escape_cells_sq = (params.start_escape_m / resolution_m) *
-                                 (params.start_escape_m / resolution_m);
+  const double escape_cells_sq =
+      (params.start_escape_m / resolution_m) * (params.start_escape_m / resolution_m);
   auto near_start = [&](int i) {
     const double dx = i % nx - static_cast<int>(start_cell->mx);
     const double dy = i / nx - static_cast<int>(start_cell->my);

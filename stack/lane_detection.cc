@@ -484,8 +484,8 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
   const auto all_dark = [&](const std::uint8_t* eight) {
     std::uint64_t w[3];
     std::memcpy(w, eight, sizeof w);
-    return ((((w[0] + add) | w[0]) | ((w[1] + add) | w[1]) | ((w[2] + add) | w[2])) &
-            kHighBits) == 0;
+    return ((((w[0] + add) | w[0]) | ((w[1] + add) | w[1]) | ((w[2] + add) | w[2])) & kHighBits) ==
+           0;
   };
   for (const SourceSpan& span : spans_) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(span.row);
@@ -524,7 +524,8 @@ void LaneDetector::FindLineCells() {
       cells[k] |= static_cast<std::uint8_t>(word != 0);
     }
     const auto partial = [&](int begin, int end) {
-      for (int c = begin; c < end; ++c) cells[c / kCellSize] |= static_cast<std::uint8_t>(in[c] != 0);
+      for (int c = begin; c < end; ++c)
+        cells[c / kCellSize] |= static_cast<std::uint8_t>(in[c] != 0);
     };
     if (first_full > end_full) {  // the span lies inside one cell
       partial(span.col_begin, span.col_end);
@@ -568,10 +569,11 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   masks->white.setTo(0);
   std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
   std::uint8_t* white = masks->white.ptr<std::uint8_t>();
-  ForEachWarpedLinePixel([&](std::uint32_t dst, std::uint8_t yellow_value, std::uint8_t white_value) {
-    yellow[dst] = yellow_value;
-    white[dst] = white_value;
-  });
+  ForEachWarpedLinePixel(
+      [&](std::uint32_t dst, std::uint8_t yellow_value, std::uint8_t white_value) {
+        yellow[dst] = yellow_value;
+        white[dst] = white_value;
+      });
 }
 
 template <class Visit>

@@ -139,7 +139,8 @@ struct LocalizationEkfState {
 };
 
 // The estimate jumps (a fault: a kidnapped car, a wrong fix taken): its map-frame position moves by
-// (dx_m, dy_m) and its heading by dyaw_rad; the covariance stays, so the filter trusts it as before.
+// (dx_m, dy_m) and its heading by dyaw_rad; the covariance stays, so the filter trusts it as
+// before.
 void JumpLocalizationEstimate(double dx_m, double dy_m, double dyaw_rad,
                               LocalizationEkfState* state);
 

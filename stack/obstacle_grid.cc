@@ -201,9 +201,9 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
   detail::CheckDepthImage(depth);
   std::array<float, 24> key;
   std::copy(g.m.begin(), g.m.end(), key.begin());
-  const std::array<float, 12> rest{g.x_min, g.x_max, g.y_min, g.y_max, g.z_min, g.z_max, k.fx,
-                                   k.fy, k.cx, k.cy, k.m_per_mm,
-                                   static_cast<float>(params.cell_size_m)};
+  const std::array<float, 12> rest{
+      g.x_min, g.x_max, g.y_min, g.y_max, g.z_min,    g.z_max,
+      k.fx,    k.fy,    k.cx,    k.cy,    k.m_per_mm, static_cast<float>(params.cell_size_m)};
   std::copy(rest.begin(), rest.end(), key.begin() + 12);
   Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight, [&] {
     return "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for " +

@@ -109,7 +109,7 @@ class DepthGridMemo {
   friend Grid234 StepDepthToGrid(const PointCloudParams&, const ObstacleGridParams&,
                                  const DepthImageView&, const std::array<double, 12>&,
                                  DepthGridMemo*, std::span<const std::uint8_t>);
-  std::array<float, 24> key_{};       // the constants the rows were counted with
+  std::array<float, 24> key_{};  // the constants the rows were counted with
   bool valid_{false};
   std::vector<std::uint16_t> depth_;  // the last frame's depth, row-major
   // per row: the cells it counted into and how many (the slot past the last cell included)

@@ -213,8 +213,10 @@ Command AddVideoForwarder(CLI::App& parent) {
             const fs::path helper =
                 fs::read_symlink("/proc/self/exe", error).parent_path() / "autonomsim-video";
             if (error || !fs::exists(helper)) {
-              fmt::print(stderr, "error: the video helper {} is not there (build it: it is built "
-                         "with autonomsim)\n", helper.string());
+              fmt::print(stderr,
+                         "error: the video helper {} is not there (build it: it is built "
+                         "with autonomsim)\n",
+                         helper.string());
               return kExitUnusableInput;
             }
             std::vector<std::string> args{helper.string(), "video"};

@@ -24,8 +24,8 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
   std::string suites;
   for (const Outcome& o : outcomes) {
     const std::string name = sim::XmlEscape(o.scenario_name);
-    std::string properties = fmt::format(
-        "      <property name=\"scenario_file\" value=\"{}\"/>\n", sim::XmlEscape(o.file));
+    std::string properties = fmt::format("      <property name=\"scenario_file\" value=\"{}\"/>\n",
+                                         sim::XmlEscape(o.file));
     std::string cases;
     int suite_failures = 0;
     if (o.input_error) {
@@ -184,12 +184,18 @@ Command AddCheckCommand(CLI::App& parent) {
       ->add_option("SCENARIO_OR_DIR", o->args,
                    "Scenario files, or folders whose *.yaml files are scenarios")
       ->required();
-  check->add_option("--junit", o->junit, "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; properties scenario_file, seed, scenario_sha256, result_folder with --out, report with --report), a testcase per expectation")->type_name("FILE");
-  CLI::Option* out = check
-      ->add_option("--out", o->out,
-                   "Keep each run's result folder under DIR/<scenario> (each replaced only if "
-                   "this program wrote it, else refused: see --force)")
-      ->type_name("DIR");
+  check
+      ->add_option("--junit", o->junit,
+                   "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; "
+                   "properties scenario_file, seed, scenario_sha256, result_folder with --out, "
+                   "report with --report), a testcase per expectation")
+      ->type_name("FILE");
+  CLI::Option* out =
+      check
+          ->add_option("--out", o->out,
+                       "Keep each run's result folder under DIR/<scenario> (each replaced only if "
+                       "this program wrote it, else refused: see --force)")
+          ->type_name("DIR");
   check->add_flag("--force", o->force,
                   "Replace DIR/<scenario> even if this program did not write it (never a device)");
   check
@@ -200,8 +206,7 @@ Command AddCheckCommand(CLI::App& parent) {
   check->add_option("--jobs,-j", o->jobs, "Scenarios run in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
   AddSetOption(check, &o->overrides);
-  return {check,
-          [o] {
+  return {check, [o] {
             return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs, o->force,
                                 o->report);
           }};

@@ -78,8 +78,7 @@ int RenderCommand(const RenderArgs& a) {
   try {
     cameras.emplace(loaded->track, car->sensors, scenario.appearance, camera_backend);
   } catch (const vehicle::GlUnavailable& e) {
-    fmt::print(stderr, "error: --backend gl: {}\n",
-               e.what());
+    fmt::print(stderr, "error: --backend gl: {}\n", e.what());
     return kExitUnusableInput;
   }
   const sim::RngStreams streams(scenario.seed);
@@ -97,8 +96,7 @@ int RenderCommand(const RenderArgs& a) {
     fmt::print("{} instants: {}/t_*/\n", rendered.size(), a.out);
   }
   fmt::print("car {} at {} instant(s) of {} rendered ({}{}) in {:.2f} s wall\n", a.car,
-             rendered.size(), scenario.name,
-             sim::CameraBackendName(camera_backend),
+             rendered.size(), scenario.name, sim::CameraBackendName(camera_backend),
              a.labels ? ", with labels" : "", WallSecondsSince(start));
   return kExitOk;
 }

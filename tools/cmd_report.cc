@@ -42,7 +42,9 @@ Command AddReportCommand(CLI::App& parent) {
       "a timeline, plots speed, lateral error, commands, CPU load and end-to-end latency over "
       "time, lists the expectations (each failure links to its instant) and shows the cameras "
       "of a car with a board at each failing instant");
-  report->add_option("RUN_DIR", o->run_dir, "A run's result folder (run --out, check --out, a sweep's runs/<id>)")
+  report
+      ->add_option("RUN_DIR", o->run_dir,
+                   "A run's result folder (run --out, check --out, a sweep's runs/<id>)")
       ->required();
   report
       ->add_option("--out", o->out,

@@ -120,7 +120,8 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
       summary.failed_expectations.size());
   for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
   for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
-  if (!summary.plots_error.empty()) fmt::print(stderr, "warning: no plots: {}\n", summary.plots_error);
+  if (!summary.plots_error.empty())
+    fmt::print(stderr, "warning: no plots: {}\n", summary.plots_error);
   fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
   fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
   if (!summary.failures.empty()) {
@@ -146,7 +147,8 @@ int MergeCommand(const SweepOptions& o) {
   }
   fmt::print("{} run(s) with failed expectations\n", merged.failed_expectations.size());
   for (const std::string& f : merged.failed_expectations) fmt::print("  FAIL {}\n", f);
-  if (!merged.plots_error.empty()) fmt::print(stderr, "warning: no plots: {}\n", merged.plots_error);
+  if (!merged.plots_error.empty())
+    fmt::print(stderr, "warning: no plots: {}\n", merged.plots_error);
   fmt::print("results: {}\n", (out / "results.csv").string());
   fmt::print("index: {}\n", (out / "index.html").string());
   return merged.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;

@@ -70,8 +70,7 @@ int VideoCommand(const VideoArgs& a) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   } catch (const vehicle::GlUnavailable& e) {
-    fmt::print(stderr, "error: --chase/--overview: {}\n",
-               e.what());
+    fmt::print(stderr, "error: --chase/--overview: {}\n", e.what());
     return kExitUnusableInput;
   }
   fmt::print("video: {} ({} frames at {:g} fps, {:g}x real time; {:.1f} MB, made in {:.1f} s)\n",

@@ -12,6 +12,7 @@ packages=(
   openssl  # the TLS test makes its certificates with it
   parallel  # GNU parallel: the sweep test runs shards with it, as the README's recipe does
   clang libclang-rt-14-dev  # tools/fuzz.sh: libFuzzer and clang's sanitizer runtimes
+  clang-format  # .ci/run checks every C++ file against .clang-format before the builds
   chromium  # the replay report's browser test loads it in headless chromium
   gnuplot-nox  # draws a sweep's plots (pngcairo)
   python3-paho-mqtt  # the real-time test's stand-in of the lab's vtl.py (tools/tests/vtl_standin.py)

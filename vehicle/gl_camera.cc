@@ -78,8 +78,7 @@ std::string EglFailure(const std::string& what) {
 bool HasExtension(const char* list, std::string_view name) {
   if (list == nullptr) return false;
   std::string_view all(list);
-  for (std::size_t at = all.find(name); at != std::string_view::npos;
-       at = all.find(name, at + 1)) {
+  for (std::size_t at = all.find(name); at != std::string_view::npos; at = all.find(name, at + 1)) {
     const bool starts = at == 0 || all[at - 1] == ' ';
     const std::size_t end = at + name.size();
     if (starts && (end == all.size() || all[end] == ' ')) return true;
@@ -181,10 +180,10 @@ std::shared_ptr<GlContext> GlContext::Create() {
     if (display != EGL_NO_DISPLAY) platform = "EGL software device " + std::to_string(i);
   }
   if (display == EGL_NO_DISPLAY) {
-    throw GlUnavailable("EGL: no display could be initialized (tried: " +
-                        (tried.empty() ? std::string("nothing: no device or surfaceless platform")
-                                       : tried) +
-                        "); on Debian, install libegl-mesa0 and libgl1-mesa-dri");
+    throw GlUnavailable(
+        "EGL: no display could be initialized (tried: " +
+        (tried.empty() ? std::string("nothing: no device or surfaceless platform") : tried) +
+        "); on Debian, install libegl-mesa0 and libgl1-mesa-dri");
   }
   const char* display_extensions = eglQueryString(display, EGL_EXTENSIONS);
   if (!HasExtension(display_extensions, "EGL_KHR_surfaceless_context")) {
@@ -365,9 +364,10 @@ GlScene::Target& GlScene::TargetOfSize(int width, int height) {
 
 void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out,
                      GlImages wanted) {
-  if (!(view.width_px > 0 && view.height_px > 0 && view.near_m > 0.0 &&
-        view.far_m > view.near_m && view.K[0] > 0.0 && view.K[4] > 0.0)) {
-    throw std::invalid_argument("GlScene::Render: a view needs a size, fx, fy > 0 and 0 < near < far");
+  if (!(view.width_px > 0 && view.height_px > 0 && view.near_m > 0.0 && view.far_m > view.near_m &&
+        view.K[0] > 0.0 && view.K[4] > 0.0)) {
+    throw std::invalid_argument(
+        "GlScene::Render: a view needs a size, fx, fy > 0 and 0 < near < far");
   }
   context_->MakeCurrent();
   const int w = view.width_px, h = view.height_px;

@@ -133,7 +133,7 @@ class GlScene {
   int floor_texels_[2]{0, 0};
   std::vector<std::unique_ptr<Target>> targets_;
   std::vector<float> vertices_;  // scratch: x, y, z and a packed colour per vertex
-  bool read_red_{true};  // the float attachment reads back as GL_RED (else GL_RGBA)
+  bool read_red_{true};          // the float attachment reads back as GL_RED (else GL_RGBA)
   std::vector<std::uint8_t> rgba_bytes_;  // scratch: read-backs
   std::vector<float> rgba_floats_;
 };
@@ -158,8 +158,8 @@ class GlCameraRenderer {
  private:
   std::shared_ptr<GlScene> scene_;
   std::shared_ptr<const CameraRays> rays_;
-  GlView pinhole_;          // the pinhole view rendered; its pose set per frame
-  bool resample_{false};    // lens distortion: remap the pinhole image
+  GlView pinhole_;                    // the pinhole view rendered; its pose set per frame
+  bool resample_{false};              // lens distortion: remap the pinhole image
   std::vector<std::int16_t> map_xy_;  // cv::remap's nearest-neighbour map (CV_16SC2)
   std::vector<float> exact_xy_;       // the rays' exact positions in it (CV_32FC2)
   GlFrame frame_;

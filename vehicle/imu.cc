@@ -68,9 +68,9 @@ ImuReading StepImu(const ImuParams& params, const ImuTruth& truth, const ImuNois
                        params.yaw_noise_stddev_rad * noise.yaw);
   if (state->bias_step_rad_per_s != 0.0) {  // only after a step: a run without one is unchanged
     reading.yaw_rate_rad_per_s += state->bias_step_rad_per_s;
-    reading.yaw_rad = world::WrapAngle(reading.yaw_rad +
-                                       state->bias_step_rad_per_s * ToSeconds(truth.t) -
-                                       state->bias_step_time_rad);
+    reading.yaw_rad =
+        world::WrapAngle(reading.yaw_rad + state->bias_step_rad_per_s * ToSeconds(truth.t) -
+                         state->bias_step_time_rad);
   }
   return reading;
 }

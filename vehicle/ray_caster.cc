@@ -57,7 +57,6 @@ void RequireRgb(const std::array<int, 3>& rgb, const std::string& key) {
   }
 }
 
-
 // SplitMix64's output function (Steele, Lea & Flood 2014): a bijection with full avalanche, used
 // as a counter-based generator (its input a seed plus the draw's index).
 constexpr std::uint64_t Mix64(std::uint64_t z) {
@@ -149,8 +148,8 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
 
   std::vector<std::size_t> uses(palette_.size(), 0);
   for (std::size_t i = 0; i < n; ++i) ++uses[index_[i]];
-  common_index_ = static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) -
-                                            uses.begin());
+  common_index_ =
+      static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) - uses.begin());
   const int cells_x = (width_ + kCommonCell - 1) / kCommonCell;
   const int cells_y = (height_ + kCommonCell - 1) / kCommonCell;
   cells_y_ = static_cast<std::size_t>(cells_y);
@@ -353,8 +352,7 @@ void CameraRenderer::CheckRegion(const RowSpans& region, const char* what) const
 }
 
 void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const Prism> prisms,
-                                  const RowSpans& region, const ColourLabel& label,
-                                  LabelView out) {
+                                  const RowSpans& region, const ColourLabel& label, LabelView out) {
   RenderLabels(X_map_car, prisms, region, label, out, {});
 }
 
@@ -402,9 +400,8 @@ void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region,
 }  // namespace
 
 void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
-                                ColorImage* color, DepthImage* depth,
-                                const RowSpans* color_region, DepthRowHistory* history,
-                                const LabelOut* labels) {
+                                ColorImage* color, DepthImage* depth, const RowSpans* color_region,
+                                DepthRowHistory* history, const LabelOut* labels) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);

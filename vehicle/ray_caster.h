@@ -7,9 +7,10 @@
 // constants of the camera (CameraRays, computed once, lens distortion included). A frame then
 // costs, per floor pixel, one 2D rigid transform and one raster look-up (and a block of 16 pixels
 // over the bare floor between the painted lines costs one look-up in all), and the empty floor's
-// depth image is a copy (only of the rows a prism changed, for a consumer that keeps its buffer). Prisms are culled to those in front of the camera; each one's corners
-// bound it on the image, and only the pixels of the tiles under that bound get the exact
-// ray–prism test, which keeps the nearest surface.
+// depth image is a copy (only of the rows a prism changed, for a consumer that keeps its buffer).
+// Prisms are culled to those in front of the camera; each one's corners bound it on the image, and
+// only the pixels of the tiles under that bound get the exact ray–prism test, which keeps the
+// nearest surface.
 //
 // Depth is the optical-axis z of the surface (what a real depth camera reports, and what
 // back-projection with P expects: a pixel's point is z · (x, y, 1) in the optical frame), in

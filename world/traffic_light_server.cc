@@ -1,8 +1,8 @@
 #include "world/traffic_light_server.h"
 
 #include <algorithm>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 namespace autonomsim::world {
 namespace {

@@ -60,7 +60,6 @@ cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch,
   return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
 }
 
-
 // The input-independent part of a perception step: the component's params and the camera data.
 struct GridParams {
   stack::PointCloudParams cloud;
@@ -87,16 +86,15 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
   if (InHardware(mapping, "obstacle_detection", kSlot0)) {
     // Point cloud and grid fused in one slot; the cloud is never written (reference §4).
     params.cloud.hardware_scale = true;
-    AddComponentNode(
-        graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image, obstacles,
-        std::move(params), std::make_shared<DepthScratch>(),
-        [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
-          return Report(p,
-                        stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch), p.P,
-                                               &scratch->grid_memo,
-                                               scratch->history.changed_rows()),
-                        frame.stamp);
-        });
+    AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image,
+                     obstacles, std::move(params), std::make_shared<DepthScratch>(),
+                     [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
+                       return Report(p,
+                                     stack::StepDepthToGrid(
+                                         p.cloud, p.grid, RenderDepth(frame, scratch), p.P,
+                                         &scratch->grid_memo, scratch->history.changed_rows()),
+                                     frame.stamp);
+                     });
     return obstacles;
   }
 
@@ -119,7 +117,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
 }
 
 struct LaneParams {
-  std::shared_ptr<stack::LaneDetector> detector;  // its tables are shared by the lane nodes
+  std::shared_ptr<stack::LaneDetector> detector;   // its tables are shared by the lane nodes
   std::shared_ptr<const vehicle::RowSpans> reads;  // the image pixels the detector reads
   vehicle::ColourLabel line_class;                 // LaneLineClass(*detector)
   std::function<void(const stack::LanePoints&, Time)> hook;
@@ -132,9 +130,9 @@ struct LaneParams {
 void LaneRowSums(const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch,
                  stack::BirdsEyeRowSums* sums) {
   stack::LaneDetector& detector = *p.detector;
-  if (frame.RenderLabels(*p.reads, p.line_class,
-                         vehicle::LabelView{detector.source_classes(),
-                                            stack::LaneDetector::kClassStride})) {
+  if (frame.RenderLabels(
+          *p.reads, p.line_class,
+          vehicle::LabelView{detector.source_classes(), stack::LaneDetector::kClassStride})) {
     detector.ComputeRowSumsFromClasses(sums);
   } else {
     detector.ComputeRowSums(RenderColor(frame, scratch, *p.reads), sums);
@@ -200,7 +198,8 @@ vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int hei
   reads.columns.assign(static_cast<std::size_t>(height), {0, 0});
   for (const stack::LaneDetector::SourceSpan& span : detector.source_spans()) {
     // (a camera of another size has no lane detection: its Step refuses the image)
-    if (span.row < height) reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
+    if (span.row < height)
+      reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
   }
   return reads;
 }

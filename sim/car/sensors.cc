@@ -125,8 +125,7 @@ void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
   CameraOf(*this).Render(*this, color, depth, &color_region);
 }
 
-void CameraFrame::RenderDepth(vehicle::DepthImage* depth,
-                              vehicle::DepthRowHistory* history) const {
+void CameraFrame::RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history) const {
   CameraOf(*this).RenderDepth(*this, depth, history);
 }
 

@@ -152,7 +152,7 @@ class CameraSensor {
 
  private:
   CameraStreamParams params_;
-  mutable vehicle::CameraRenderer renderer_;  // scratch memory only: rendering is pure
+  mutable vehicle::CameraRenderer renderer_;               // scratch memory only: rendering is pure
   mutable std::unique_ptr<vehicle::GlCameraRenderer> gl_;  // the GL backend's, or null
   mutable std::uint64_t frames_rendered_{0};
 };

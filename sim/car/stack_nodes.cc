@@ -256,12 +256,11 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("bt_navigator"));
   cache.KeepLatest(node, topics.odometry, state, &State::odom);
-  cache.Keep<IntersectionFree>(
-      node, topics.intersection_free,
-      [state](const IntersectionFree& f, Time stamp) {
-        state->intersection_free = f.free;
-        state->intersection_free_stamp = stamp;
-      });
+  cache.Keep<IntersectionFree>(node, topics.intersection_free,
+                               [state](const IntersectionFree& f, Time stamp) {
+                                 state->intersection_free = f.free;
+                                 state->intersection_free_stamp = stamp;
+                               });
   cache.Keep<stack::ControllerStatus>(node, topics.status,
                                       [state](const stack::ControllerStatus& s, Time) {
                                         state->collision_ahead = s.collision_ahead;
@@ -269,31 +268,30 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
   cache.Keep<PathMessage>(node, topics.plan,
                           [state](const PathMessage& p, Time) { state->plan_failed = !p.ok; });
   const auto out = graph.AddPublisher(node, topics.behavior);
-  graph.AddTimer(node, params.tick_period, params.tick_period,
-                 [state, out, params, route = context.route,
-                  intersections = context.intersections, mission_done = hooks.mission_done,
-                  on_behavior = hooks.on_behavior](Time now, Outbox& outbox) {
-                   if (!state->odom) return;
-                   const world::Vec2 p = state->odom->X_map_base.position();
-                   const stack::BehaviorInput input{
-                       .now = now,
-                       .p_map = p,
-                       .intersection_free = state->intersection_free,
-                       .intersection_free_stamp = state->intersection_free_stamp,
-                       .collision_ahead = state->collision_ahead,
-                       .plan_failed = state->plan_failed,
-                       .mission_done = mission_done && mission_done(),
-                       .near_intersection =
-                           params.patient_in_queue &&
-                           stack::UseFollowPath(*intersections, p, params.queue_margin_m),
-                       .in_stop_zone = params.intersection_free_timeout > kZeroTime &&
-                                       stack::InStopZone(*intersections, p)};
-                   state->plan_failed.reset();
-                   stack::BehaviorOutput result =
-                       stack::StepBehavior(params, *route, input, &state->behavior);
-                   if (on_behavior) on_behavior(result);
-                   outbox.Publish(out, std::move(result), state->odom->stamp);
-                 });
+  graph.AddTimer(
+      node, params.tick_period, params.tick_period,
+      [state, out, params, route = context.route, intersections = context.intersections,
+       mission_done = hooks.mission_done,
+       on_behavior = hooks.on_behavior](Time now, Outbox& outbox) {
+        if (!state->odom) return;
+        const world::Vec2 p = state->odom->X_map_base.position();
+        const stack::BehaviorInput input{
+            .now = now,
+            .p_map = p,
+            .intersection_free = state->intersection_free,
+            .intersection_free_stamp = state->intersection_free_stamp,
+            .collision_ahead = state->collision_ahead,
+            .plan_failed = state->plan_failed,
+            .mission_done = mission_done && mission_done(),
+            .near_intersection = params.patient_in_queue &&
+                                 stack::UseFollowPath(*intersections, p, params.queue_margin_m),
+            .in_stop_zone = params.intersection_free_timeout > kZeroTime &&
+                            stack::InStopZone(*intersections, p)};
+        state->plan_failed.reset();
+        stack::BehaviorOutput result = stack::StepBehavior(params, *route, input, &state->behavior);
+        if (on_behavior) on_behavior(result);
+        outbox.Publish(out, std::move(result), state->odom->stamp);
+      });
 }
 
 // planner_server: a plan through the behaviour's goals, at 1 Hz.
@@ -481,13 +479,13 @@ void AddCruiseControlNode(NodeGraph& graph, Cache& cache, const StackTopics& top
   const auto out = graph.AddPublisher(node, topics.command);
   graph.AddTimer(node, params.period, params.period,
                  [state, out, params](Time now, Outbox& outbox) {
-                   const stack::CruiseControlOutput r = stack::StepCruiseControl(
-                       params,
-                       {.now = now,
-                        .command = state->command,
-                        .odometry = state->odometry,
-                        .set_emergency = state->set_emergency},
-                       &state->cruise);
+                   const stack::CruiseControlOutput r =
+                       stack::StepCruiseControl(params,
+                                                {.now = now,
+                                                 .command = state->command,
+                                                 .odometry = state->odometry,
+                                                 .set_emergency = state->set_emergency},
+                                                &state->cruise);
                    state->command.reset();
                    state->odometry.reset();
                    state->set_emergency.reset();
@@ -523,7 +521,8 @@ void AddEmergencyStopNodes(NodeGraph& graph, SensorSuite& sensors,
       node, range,
       [params, out, state = std::make_shared<stack::EmergencyStopState>()](
           const RangeMessage& m, Time stamp, Outbox& outbox) {
-        if (const std::optional<bool> call = stack::StepEmergencyStop(params, m.range_m, state.get())) {
+        if (const std::optional<bool> call =
+                stack::StepEmergencyStop(params, m.range_m, state.get())) {
           outbox.Publish(out, EmergencyCall{*call}, stamp);
         }
       });

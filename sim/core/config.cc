@@ -3,12 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <unordered_set>
 #include <array>
 #include <cctype>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <unordered_set>
 
 namespace autonomsim::sim {
 namespace detail {
@@ -44,8 +44,8 @@ bool IsOverridden(const std::string& path, const ConfigSource& source) {
 
 std::string LeadingWord(const std::string& message) {
   std::size_t n = 0;
-  while (n < message.size() && (std::isalnum(static_cast<unsigned char>(message[n])) != 0 ||
-                                message[n] == '_')) {
+  while (n < message.size() &&
+         (std::isalnum(static_cast<unsigned char>(message[n])) != 0 || message[n] == '_')) {
     ++n;
   }
   return message.substr(0, n);
@@ -258,13 +258,14 @@ ConfigError ErrorAtMark(const std::string& where, const YAML::Mark& mark,
 void CheckTree(const YAML::Node& node, const std::string& where, std::vector<YAML::Node>* ancestors,
                std::size_t* nodes) {
   if (++*nodes > kMaxYamlNodes) {
-    throw ErrorAtMark(where, node.Mark(),
-                      fmt::format("the file expands to over {} values through its aliases",
-                                  kMaxYamlNodes));
+    throw ErrorAtMark(
+        where, node.Mark(),
+        fmt::format("the file expands to over {} values through its aliases", kMaxYamlNodes));
   }
   for (const YAML::Node& above : *ancestors) {
     if (node.is(above)) {
-      throw ErrorAtMark(where, node.Mark(), "an alias refers to a value that contains it (a cycle)");
+      throw ErrorAtMark(where, node.Mark(),
+                        "an alias refers to a value that contains it (a cycle)");
     }
   }
   ancestors->push_back(node);
@@ -272,17 +273,16 @@ void CheckTree(const YAML::Node& node, const std::string& where, std::vector<YAM
     std::map<std::string, YAML::Mark> seen;
     for (const auto& entry : node) {
       if (!entry.first.IsScalar()) {
-        throw ErrorAtMark(where, entry.first.Mark(), "a key must be a plain name, got a " +
-                                                        std::string(entry.first.IsMap()
-                                                                        ? "mapping"
-                                                                        : "list or null"));
+        throw ErrorAtMark(where, entry.first.Mark(),
+                          "a key must be a plain name, got a " +
+                              std::string(entry.first.IsMap() ? "mapping" : "list or null"));
       }
       const std::string key = entry.first.Scalar();
       const auto [first, inserted] = seen.emplace(key, entry.first.Mark());
       if (!inserted) {
-        throw ErrorAtMark(where, entry.first.Mark(),
-                          fmt::format("{}: duplicate key (first at line {})", key,
-                                      first->second.line + 1));
+        throw ErrorAtMark(
+            where, entry.first.Mark(),
+            fmt::format("{}: duplicate key (first at line {})", key, first->second.line + 1));
       }
       CheckTree(entry.second, where, ancestors, nodes);
     }

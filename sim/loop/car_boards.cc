@@ -81,9 +81,10 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
       .true_pose = [agent] { return agent->car->pose(); },
       .pose_fix_noise = streams.Stream("car" + std::to_string(id) + "/pose_fix/noise")};
   StackHooks hooks{
-      .intersection_client = [this, agent](const world::Vec2& p, bool navigation_failed) {
-        return StepClient(agent, p, navigation_failed);
-      },
+      .intersection_client =
+          [this, agent](const world::Vec2& p, bool navigation_failed) {
+            return StepClient(agent, p, navigation_failed);
+          },
       .actuate =
           [agent](const vehicle::ActuatorCommand& command) {
             agent->command = command;

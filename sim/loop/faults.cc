@@ -17,10 +17,11 @@ std::string DescribeFault(const FaultClause& fault) {
   if (a.loss) parts.push_back(fmt::format("loss {}", *a.loss));
   if (a.node) parts.push_back("node " + *a.node);
   if (fault.kind().starts_with("camera_")) parts.push_back("camera " + a.camera.value_or("color"));
-  if (a.gyro_bias_rad_per_s) parts.push_back(fmt::format("gyro bias {:+} rad/s", *a.gyro_bias_rad_per_s));
+  if (a.gyro_bias_rad_per_s)
+    parts.push_back(fmt::format("gyro bias {:+} rad/s", *a.gyro_bias_rad_per_s));
   if (fault.kind() == "localization_jump") {
-    parts.push_back(fmt::format("jump ({}, {}) m, {} deg", a.dx_m.value_or(0.0), a.dy_m.value_or(0.0),
-                                a.dyaw_deg.value_or(0.0)));
+    parts.push_back(fmt::format("jump ({}, {}) m, {} deg", a.dx_m.value_or(0.0),
+                                a.dy_m.value_or(0.0), a.dyaw_deg.value_or(0.0)));
   }
   if (a.for_s) {
     parts.push_back(fmt::format("for {} s", *a.for_s));
@@ -133,7 +134,10 @@ void Simulation::Impl::ScheduleFaults() {
     kernel.ScheduleAt(
         begin_at,
         [this, begin = std::move(actions.begin), kind, car, detail = DescribeFault(fault)] {
-          Emit(Event{.t = kernel.Now(), .type = "fault_begin", .car = car, .fault = kind,
+          Emit(Event{.t = kernel.Now(),
+                     .type = "fault_begin",
+                     .car = car,
+                     .fault = kind,
                      .detail = detail});
           begin();
         },

@@ -6,10 +6,13 @@
 // by what the fault does. What each kind does:
 //
 //   v2i_partition   {car?, direction: up|down|both, for_s?}  the car's (every car's) messages in
-//                   those directions are lost, in flight included (v2i_lost, detail "(v2i_partition)")
-//   v2i_loss_burst  {car?, loss, for_s?}  each message is lost with probability `loss` on top of the
+//                   those directions are lost, in flight included (v2i_lost, detail
+//                   "(v2i_partition)")
+//   v2i_loss_burst  {car?, loss, for_s?}  each message is lost with probability `loss` on top of
+//   the
 //                   modeled loss (the link's own draw decides, so the burst shifts no delays)
-//   server_restart  {for_s?}  the traffic-light server loses its state (holders, queues, leases), as
+//   server_restart  {for_s?}  the traffic-light server loses its state (holders, queues, leases),
+//   as
 //                   the lab's vtl.py does on a restart; with for_s it is down that long first and
 //                   what reaches it meanwhile is lost; without, it is back at once
 //   broker_outage   {for_s?}  the MQTT broker is away: every message of every car, both ways, is

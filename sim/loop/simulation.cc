@@ -93,8 +93,8 @@ void Simulation::Impl::AddCars() {
 void Simulation::Impl::AddSensorsAndBoards() {
   floor = world::RasterizeFloor(loaded.track);
   try {  // the GL backend's context and each camera's renderer
-    sensor_world = std::make_unique<SensorEnvironment>(
-        &physics, floor, scenario.appearance, ParseCameraBackend(scenario.camera_backend));
+    sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance,
+                                                       ParseCameraBackend(scenario.camera_backend));
     for (const CarAgent& agent : agents) {
       const CarConfig& config = *agent.config;
       // On a board the cameras are the graph's source nodes, which capture the frames.

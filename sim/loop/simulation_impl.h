@@ -49,11 +49,11 @@ struct CarAgent {
   OracleDriverState driver;
   stack::IntersectionClientState client;
   std::vector<world::Response> inbox;  // responses for this car since the client's last step
-  vehicle::ActuatorCommand command;  // what its driver commands
-  bool stalled{false};               // car_stall: the motor is dead (sim/loop/faults.h)
-  StackControls stack_controls;      // driver: stack
-  bool waiting{false};  // the intersection client says: stop here until granted
-  bool parked{false};   // done: laps driven or route ended
+  vehicle::ActuatorCommand command;    // what its driver commands
+  bool stalled{false};                 // car_stall: the motor is dead (sim/loop/faults.h)
+  StackControls stack_controls;        // driver: stack
+  bool waiting{false};                 // the intersection client says: stop here until granted
+  bool parked{false};                  // done: laps driven or route ended
   std::vector<ObstacleOnRoute> obstacles_on_lane;
   std::optional<Time> wait_started;
   int waiting_for{-1};  // the intersection of the current (or last) wait

@@ -121,7 +121,7 @@ class MosquittoClient final : public MqttClient {
   // stops.
   std::atomic<bool> closing_{false};
   std::mutex closing_mu_;
-  std::condition_variable closing_cv_;  // wakes the back-off wait when closing_ is set
+  std::condition_variable closing_cv_;       // wakes the back-off wait when closing_ is set
   std::chrono::seconds reconnect_delay_{0};  // network thread only
 
   mutable std::mutex mu_;

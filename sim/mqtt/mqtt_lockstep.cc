@@ -167,7 +167,8 @@ std::string EncodeAck(const SimAck& ack) {
   }
   Json records = Json::array();
   for (const world::ServerRecord& r : ack.records) {
-    records.push_back(Json::array({world::ToString(r.kind), r.car, r.intersection, r.also_released}));
+    records.push_back(
+        Json::array({world::ToString(r.kind), r.car, r.intersection, r.also_released}));
   }
   Json j{{"epoch", ack.epoch},
          {"seq", ack.seq},

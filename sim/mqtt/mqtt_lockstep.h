@@ -73,7 +73,7 @@ struct SimAck {
   std::vector<std::pair<int, std::optional<int>>> holders;  // (intersection, holder)
   world::TrafficLightServer::Counters counters;
   std::vector<world::ServerRecord> records;  // what the server did in this step, in order
-  std::string error;  // not empty: the server did not take the step, and why
+  std::string error;                         // not empty: the server did not take the step, and why
 };
 
 std::string EncodeStepTag(const StepTag& tag);

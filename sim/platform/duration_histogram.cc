@@ -78,8 +78,8 @@ double DurationHistogram::Quantile_ns(double q) const {
   if (count_ == 0) return 0.0;
   // nearest rank: the smallest value with at least q of the sample at or below it
   const double r = std::ceil(q * static_cast<double>(count_));
-  const std::uint64_t rank = std::clamp<std::uint64_t>(
-      r < 1.0 ? 1 : static_cast<std::uint64_t>(r), 1, count_);
+  const std::uint64_t rank =
+      std::clamp<std::uint64_t>(r < 1.0 ? 1 : static_cast<std::uint64_t>(r), 1, count_);
   std::uint64_t before = 0;
   for (const auto& [key, b] : buckets_) {
     if (before + b.count >= rank) {

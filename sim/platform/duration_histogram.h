@@ -63,7 +63,7 @@ class DurationHistogram {
   };
   static std::uint32_t KeyOf(std::int64_t ns);
 
-  std::map<std::uint32_t, Bucket> buckets_;  // ordered by value
+  std::map<std::uint32_t, Bucket> buckets_;                         // ordered by value
   std::map<std::uint32_t, Bucket>::iterator last_{buckets_.end()};  // the bucket Add last used
   std::uint64_t count_{0};
   std::int64_t sum_ns_{0};  // exact; overflows only past 292 years of summed durations

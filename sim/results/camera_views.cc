@@ -33,7 +33,8 @@ void DrawBirdsEyeCurve(cv::Mat& image, const stack::RowPolynomial& curve, const 
   cv::perspectiveTransform(birds_eye, in_image, to_image);
   std::vector<cv::Point> polyline;
   for (const cv::Point2d& p : in_image) {
-    if (std::abs(p.x) < 1e5 && std::abs(p.y) < 1e5) polyline.emplace_back(cvRound(p.x), cvRound(p.y));
+    if (std::abs(p.x) < 1e5 && std::abs(p.y) < 1e5)
+      polyline.emplace_back(cvRound(p.x), cvRound(p.y));
   }
   cv::polylines(image, polyline, false, cv::Scalar(0, 0, 0), thickness + 2, cv::LINE_AA);
   cv::polylines(image, polyline, false, colour, thickness, cv::LINE_AA);
@@ -58,8 +59,7 @@ CarCameraViewer::CarCameraViewer(const world::Track& track, const Scenario& scen
   const CarConfig& car = CarOf(scenario, car_id);
   const vehicle::CameraParams& color = car.sensors.color_camera.camera;
   if (car.has_board() && color.width_px == 640 && color.height_px == 480) {
-    lanes_.emplace(car.perception.lane_detection,
-                   LaneCalibration(vehicle::CameraModel(color)));
+    lanes_.emplace(car.perception.lane_detection, LaneCalibration(vehicle::CameraModel(color)));
   }
 }
 

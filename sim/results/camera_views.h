@@ -5,8 +5,8 @@
 // (render.h) and the lane detector the car's stack runs (stack/lane_detection.h).
 #pragma once
 
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "sim/results/render.h"

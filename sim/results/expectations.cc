@@ -275,9 +275,9 @@ ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
             fmt::format("{} waits, longest {:.1f} s (car {}, intersection {})", count, s,
                         longest->car, longest->intersection)};
   }
-  ExpectationResult r{"", false,
-                      fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s,
-                                  first)};
+  ExpectationResult r{
+      "", false,
+      fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s, first)};
   r.at_s = ToSeconds(first_over->start) + *args.max_s;  // when the wait passed its bound
   r.car = first_over->car;
   return r;
@@ -303,7 +303,8 @@ ExpectationResult MinThroughput(const ExpectArgs& args, const RunRecord& record)
   for (int id : ids) {
     const double rate = crossings[id] / minutes;
     passed = passed && rate >= *args.per_minute;
-    parts.push_back(fmt::format("intersection {}: {} crossings, {:.2f}/min", id, crossings[id], rate));
+    parts.push_back(
+        fmt::format("intersection {}: {} crossings, {:.2f}/min", id, crossings[id], rate));
   }
   if (parts.empty()) return {"", *args.per_minute <= 0.0, "no crossings"};
   return {"", passed, fmt::format("{} (bound {}/min)", fmt::join(parts, "; "), *args.per_minute)};
@@ -337,7 +338,8 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
     int holder = -1;
     Time since = w.start;
     auto flush = [&](Time until) {
-      if (holder >= 0 && holder != w.car && until > since) excused[w.car].emplace_back(since, until);
+      if (holder >= 0 && holder != w.car && until > since)
+        excused[w.car].emplace_back(since, until);
     };
     for (const auto& [t, h] : timeline) {
       if (t <= w.start) {
@@ -354,7 +356,8 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
   for (const auto& [car, t] : parked) excused[car].emplace_back(t, record.sim_duration);
   // a car whose motor a fault killed cannot move: that is car_stall's effect, not a gridlock
   for (const FaultSpan& f : Faults(record)) {
-    if (f.kind == "car_stall") excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
+    if (f.kind == "car_stall")
+      excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
   }
   for (auto& [car, intervals] : excused) std::sort(intervals.begin(), intervals.end());
 
@@ -392,8 +395,8 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
     return {"", true,
             fmt::format("no car stood still over {} s unless held by a red light", bound_s)};
   }
-  ExpectationResult r{"", false,
-                      fmt::format("{} standstill(s) over {} s; first: {}", episodes, bound_s, first)};
+  ExpectationResult r{
+      "", false, fmt::format("{} standstill(s) over {} s; first: {}", episodes, bound_s, first)};
   r.at_s = ToSeconds(first_at->first);  // when the standstill began
   r.car = first_at->second;
   return r;

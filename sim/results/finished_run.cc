@@ -59,8 +59,7 @@ FinishedRun ReadFinishedRun(const fs::path& dir) {
   try {
     ReadTrajectoryCsv(dir / "trajectory.csv",
                       [&](const TrajectorySample& s) { run.record.trajectory.push_back(s); });
-    ReadEventsJsonl(dir / "events.jsonl",
-                    [&](const Event& e) { run.record.events.push_back(e); });
+    ReadEventsJsonl(dir / "events.jsonl", [&](const Event& e) { run.record.events.push_back(e); });
   } catch (const ConfigError&) {
     throw;
   } catch (const std::runtime_error& e) {

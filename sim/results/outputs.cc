@@ -29,8 +29,7 @@ RunFolder::RunFolder(const std::filesystem::path& out_dir, bool force)
     : folder_(out_dir, force), files_(std::make_shared<RecordFiles>(folder_.path())) {}
 
 void RunFolder::Complete(const LoadedScenario& loaded, const RunRecord& record,
-                         const std::vector<ExpectationResult>& expectations,
-                         double wall_seconds) {
+                         const std::vector<ExpectationResult>& expectations, double wall_seconds) {
   if (record.store != files_) {
     throw std::logic_error("RunFolder::Complete: the record was not made with this folder's store");
   }

@@ -28,7 +28,6 @@ nlohmann::json Array(const std::array<double, N>& values) {
   return nlohmann::json(std::vector<double>(values.begin(), values.end()));
 }
 
-
 }  // namespace
 
 WorldSnapshot SnapshotWithPoses(const Scenario& scenario, const std::vector<world::Pose2>& poses,
@@ -95,9 +94,9 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
     for (std::size_t i = 0; i < cut.scenario.cars.size() && t > kZeroTime; ++i) {
       const int id = cut.scenario.cars[i].id;
       const auto& samples = simulation.record().trajectory;
-      const auto sample = std::find_if(samples.begin(), samples.end(), [&](const TrajectorySample& s) {
-        return s.car == id && s.t == t;
-      });
+      const auto sample =
+          std::find_if(samples.begin(), samples.end(),
+                       [&](const TrajectorySample& s) { return s.car == id && s.t == t; });
       if (sample == samples.end()) {
         throw std::logic_error("SnapshotsAt: no trajectory sample of car " + std::to_string(id) +
                                " at " + std::to_string(ToSeconds(t)) + " s");
@@ -134,8 +133,7 @@ CarCameras::CarCameras(const world::Track& track, const SensorSuiteParams& senso
     const auto rays =
         std::make_shared<const vehicle::CameraRays>(vehicle::CameraModel(stream->camera));
     cameras_.push_back(
-        {stream,
-         std::make_unique<vehicle::CameraRenderer>(rays, floor, appearance_.surround()),
+        {stream, std::make_unique<vehicle::CameraRenderer>(rays, floor, appearance_.surround()),
          scene != nullptr ? std::make_unique<vehicle::GlCameraRenderer>(scene, rays) : nullptr});
   }
 }
@@ -194,8 +192,8 @@ std::vector<RenderedCamera> CarCameras::Render(const WorldSnapshot& snapshot, in
         throw std::invalid_argument("labels: more than 255 objects in view");
       }
       const int w = camera.params.width_px, h = camera.params.height_px;
-      const vehicle::RowSpans all{std::vector<std::pair<int, int>>(static_cast<std::size_t>(h),
-                                                                   std::pair{0, w})};
+      const vehicle::RowSpans all{
+          std::vector<std::pair<int, int>>(static_cast<std::size_t>(h), std::pair{0, w})};
       std::vector<std::uint8_t> prism_classes, prism_ids;
       const std::uint8_t car_class = static_cast<std::uint8_t>(class_names_.size() - 2);
       for (std::size_t k = 0; k < prisms.size(); ++k) {
@@ -287,8 +285,7 @@ std::vector<std::uint8_t> DepthPreview(const vehicle::DepthImage& depth, double 
   return bgr;
 }
 
-cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_m,
-                                  double far_m) {
+cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_m, double far_m) {
   std::vector<std::uint8_t> preview = DepthPreview(depth, near_m, far_m);
   cv::Mat out(depth.height, depth.width + kColourBarPanelWidthPx, CV_8UC3, cv::Scalar(40, 40, 40));
   cv::Mat(depth.height, depth.width, CV_8UC3, preview.data())
@@ -313,8 +310,8 @@ cv::Mat DepthPreviewWithColourBar(const vehicle::DepthImage& depth, double near_
   // ticks every metre (every 0.5 m under 3 m of range), and the clip limits
   const double step = far_m - near_m < 3.0 ? 0.5 : 1.0;
   auto tick = [&](double m) {
-    const int y = top + static_cast<int>(std::lround((m - near_m) / (far_m - near_m) *
-                                                     (bottom - top)));
+    const int y =
+        top + static_cast<int>(std::lround((m - near_m) / (far_m - near_m) * (bottom - top)));
     cv::line(out, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, white, 1);
     cv::putText(out, fmt::format("{:g}", m), {bar_x + bar_w + 8, y + 4}, font, 0.4, white, 1,
                 cv::LINE_AA);
@@ -346,50 +343,50 @@ void WriteRenderFolder(const std::vector<RenderedInstant>& instants, int car_id,
       out_dir,
       [&](const fs::path& partial) {
         for (const RenderedInstant& instant : instants) {
-        const fs::path root =
-            instants.size() == 1 ? partial : partial / InstantFolderName(instant.t);
-        fs::create_directories(root);
-        const Time t = instant.t;
-        bool labelled = false;
-        for (const RenderedCamera& camera : instant.cameras) {
-          const fs::path dir = root / camera.name;
-          fs::create_directory(dir);
-          // OpenCV only reads through the Mats: the const_casts lend it our buffers
-          if (camera.has_color) {
-            WritePng(dir / "color.png",
-                     cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
-                             const_cast<std::uint8_t*>(camera.color.bgr.data())));
+          const fs::path root =
+              instants.size() == 1 ? partial : partial / InstantFolderName(instant.t);
+          fs::create_directories(root);
+          const Time t = instant.t;
+          bool labelled = false;
+          for (const RenderedCamera& camera : instant.cameras) {
+            const fs::path dir = root / camera.name;
+            fs::create_directory(dir);
+            // OpenCV only reads through the Mats: the const_casts lend it our buffers
+            if (camera.has_color) {
+              WritePng(dir / "color.png",
+                       cv::Mat(camera.color.height, camera.color.width, CV_8UC3,
+                               const_cast<std::uint8_t*>(camera.color.bgr.data())));
+            }
+            if (camera.has_depth) {
+              WritePng(dir / "depth.png",
+                       cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
+                               const_cast<std::uint16_t*>(camera.depth.mm.data())));
+              WritePng(dir / "depth_preview.png",
+                       DepthPreviewWithColourBar(camera.depth, camera.params.clip_near_m,
+                                                 camera.params.clip_far_m));
+            }
+            if (!camera.classes.empty()) {
+              labelled = true;
+              const int w = camera.params.width_px, h = camera.params.height_px;
+              WritePng(dir / "labels.png",
+                       cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.classes.data())));
+              WritePng(dir / "instances.png",
+                       cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.instances.data())));
+            }
+            WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
           }
-          if (camera.has_depth) {
-            WritePng(dir / "depth.png",
-                     cv::Mat(camera.depth.height, camera.depth.width, CV_16UC1,
-                             const_cast<std::uint16_t*>(camera.depth.mm.data())));
-            WritePng(dir / "depth_preview.png",
-                     DepthPreviewWithColourBar(camera.depth, camera.params.clip_near_m,
-                                               camera.params.clip_far_m));
+          if (labelled) {
+            const nlohmann::json legend = {
+                {"t_s", ToSeconds(t)},
+                {"car", car_id},
+                {"images",
+                 "<camera>/labels.png: each pixel's class id (mono8); <camera>/instances.png: "
+                 "each pixel's instance id, 0 for none (mono8); ground truth from the scene's "
+                 "geometry"},
+                {"classes", class_names},
+                {"instances", instant.instances}};
+            WriteFile(root / "labels.json", legend.dump(2) + "\n");
           }
-          if (!camera.classes.empty()) {
-            labelled = true;
-            const int w = camera.params.width_px, h = camera.params.height_px;
-            WritePng(dir / "labels.png",
-                     cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.classes.data())));
-            WritePng(dir / "instances.png",
-                     cv::Mat(h, w, CV_8UC1, const_cast<std::uint8_t*>(camera.instances.data())));
-          }
-          WriteFile(dir / "camera_info.json", CameraInfoJson(camera, t, car_id).dump(2) + "\n");
-        }
-        if (labelled) {
-          const nlohmann::json legend = {
-              {"t_s", ToSeconds(t)},
-              {"car", car_id},
-              {"images",
-               "<camera>/labels.png: each pixel's class id (mono8); <camera>/instances.png: "
-               "each pixel's instance id, 0 for none (mono8); ground truth from the scene's "
-               "geometry"},
-              {"classes", class_names},
-              {"instances", instant.instances}};
-          WriteFile(root / "labels.json", legend.dump(2) + "\n");
-        }
         }
       },
       force);

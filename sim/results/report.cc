@@ -11,12 +11,12 @@
 #include <set>
 #include <string_view>
 
-#include "sim/core/files.h"
 #include "sim/car/stack_config.h"
+#include "sim/core/files.h"
 #include "sim/core/random.h"
 #include "sim/results/camera_views.h"
-#include "sim/results/scene_views.h"
 #include "sim/results/report/report_assets.h"
+#include "sim/results/scene_views.h"
 #include "sim/results/track_figure.h"
 #include "world/floor_raster.h"
 
@@ -61,7 +61,9 @@ std::string DataUrl(const cv::Mat& image, const std::string& format) {
 }
 
 json BoxJson(const world::Box& b) {
-  return {{"x_min_m", b.x_min_m}, {"x_max_m", b.x_max_m}, {"y_min_m", b.y_min_m},
+  return {{"x_min_m", b.x_min_m},
+          {"x_max_m", b.x_max_m},
+          {"y_min_m", b.y_min_m},
           {"y_max_m", b.y_max_m}};
 }
 
@@ -97,12 +99,9 @@ json FloorJson(const world::Track& track) {
   const world::FloorRaster raster = world::RasterizeFloor(track);
   const cv::Mat image(raster.height_px, raster.width_px, CV_8UC3,
                       const_cast<std::uint8_t*>(raster.bgr.data()));
-  return {{"image", DataUrl(image, "png")},
-          {"x0_m", raster.origin_m.x()},
-          {"y0_m", raster.origin_m.y()},
-          {"m_per_px", raster.m_per_px},
-          {"width_px", raster.width_px},
-          {"height_px", raster.height_px}};
+  return {{"image", DataUrl(image, "png")}, {"x0_m", raster.origin_m.x()},
+          {"y0_m", raster.origin_m.y()},    {"m_per_px", raster.m_per_px},
+          {"width_px", raster.width_px},    {"height_px", raster.height_px}};
 }
 
 json TrackJson(const world::Track& track) {
@@ -272,8 +271,8 @@ json SceneJson(const FinishedRun& run, LazySceneViews& views) {
     return {{"t", ToSeconds(end)},
             {"overview", DataUrl(v->Overview(SnapshotOf(run, end), kReportViewSize), "jpeg")}};
   }
-  return {{"note", "no 3D views: no OpenGL ES context could be made here (" +
-                       views.unavailable() + ")"}};
+  return {{"note",
+           "no 3D views: no OpenGL ES context could be made here (" + views.unavailable() + ")"}};
 }
 
 // The failing instants worth a picture: each failed expectation pinned to a car with a board,
@@ -349,12 +348,23 @@ std::string XmlEscape(std::string_view text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;

@@ -42,7 +42,8 @@ void ReplacePlaceholder(std::string& page, std::string_view placeholder, std::st
 
 // What every report carries in its first bytes, so that an earlier report may be replaced
 // (CheckOutputFile) and nothing else is.
-inline constexpr const char* kReportSignature = "<meta name=\"generator\" content=\"autonomsim report\">";
+inline constexpr const char* kReportSignature =
+    "<meta name=\"generator\" content=\"autonomsim report\">";
 
 // The report file of a run folder when no --out is given.
 inline constexpr const char* kReportFileName = "report.html";

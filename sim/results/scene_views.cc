@@ -40,8 +40,7 @@ SceneViews::SceneViews(const world::Track& track, const Scenario& scenario, Scen
   centre_m_ = Eigen::Vector2d(floor.origin_m.x() + 0.5 * floor.width_px * floor.m_per_px,
                               floor.origin_m.y() - 0.5 * floor.height_px * floor.m_per_px);
   scene_ = std::make_shared<vehicle::GlScene>(vehicle::GlContext::Create(),
-                                              vehicle::FloorTexture(floor),
-                                              appearance_.surround());
+                                              vehicle::FloorTexture(floor), appearance_.surround());
 }
 
 cv::Mat SceneViews::Chase(const WorldSnapshot& snapshot, int car_id, cv::Size size) {
@@ -61,14 +60,13 @@ cv::Mat SceneViews::Chase(const WorldSnapshot& snapshot, int car_id, cv::Size si
 cv::Mat SceneViews::Overview(const WorldSnapshot& snapshot, cv::Size size) {
   const Eigen::Vector3d eye(centre_m_.x(), centre_m_.y() - params_.overview_back * size_m_,
                             params_.overview_height * size_m_);
-  const Eigen::Vector3d target(centre_m_.x(),
-                               centre_m_.y() - params_.overview_look_south * size_m_, 0.0);
+  const Eigen::Vector3d target(centre_m_.x(), centre_m_.y() - params_.overview_look_south * size_m_,
+                               0.0);
   return Draw(eye, target, params_.overview_hfov_deg, size, snapshot, "overview from the south");
 }
 
-cv::Mat SceneViews::Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
-                         double hfov_deg, cv::Size size, const WorldSnapshot& snapshot,
-                         const std::string& title) {
+cv::Mat SceneViews::Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double hfov_deg,
+                         cv::Size size, const WorldSnapshot& snapshot, const std::string& title) {
   // the optical frame: z at the target, x to the right (level), y down
   const Eigen::Vector3d z = (target - eye).normalized();
   const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
@@ -101,7 +99,7 @@ cv::Mat SceneViews::Draw(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
   }
   ViewText(image, title, {10, 24}, 0.6, 1);
   ViewText(image, fmt::format("t = {:.2f} s", ToSeconds(snapshot.t)), {size.width - 120, 24}, 0.55,
-       1);
+           1);
   return image;
 }
 

@@ -23,8 +23,8 @@ struct SceneViewParams {
   double chase_height_m{0.65};     // this high,
   double chase_look_ahead_m{0.9};  // looking at the floor this far ahead of the car
   double chase_hfov_deg{75.0};
-  double overview_back{0.80};    // the overview: back (south) from the track's centre and up,
-  double overview_height{1.05};  // in track sizes,
+  double overview_back{0.80};        // the overview: back (south) from the track's centre and up,
+  double overview_height{1.05};      // in track sizes,
   double overview_look_south{0.12};  // looking at the floor this far south of the centre
   double overview_hfov_deg{68.0};
   double near_m{0.02};  // nothing nearer to the camera (optical z) is drawn,

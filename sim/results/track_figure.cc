@@ -5,8 +5,8 @@
 #include <array>
 #include <cmath>
 #include <map>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <vector>
 
 #include "world/floor_raster.h"
@@ -129,7 +129,8 @@ TrackFigureBase DrawTrackFigureBase(const Scenario& scenario, const world::Track
   cv::rectangle(image, cv::Rect(bar.x - 4, bar.y - 24, one_m + 8, 32), cv::Scalar(0, 0, 0),
                 cv::FILLED);
   cv::line(image, bar, bar + cv::Point(one_m, 0), kText, 3);
-  for (int end : {0, one_m}) cv::line(image, bar + cv::Point(end, -6), bar + cv::Point(end, 6), kText, 2);
+  for (int end : {0, one_m})
+    cv::line(image, bar + cv::Point(end, -6), bar + cv::Point(end, 6), kText, 2);
   Text(image, "1 m", bar + cv::Point(one_m / 2 - 14, -10), 0.5);
   Text(image,
        fmt::format("{}  (seed {}, {:g} s)", scenario.name, scenario.seed,

@@ -55,7 +55,8 @@ std::map<int, IntersectionTimeline> IntersectionTimelines(const FinishedRun& run
     if ((e.type == "free" && next.holder == e.car) || e.type == "lease_expired") next.holder = -1;
     auto& q = next.queue;
     if (e.type == "wait" && std::find(q.begin(), q.end(), e.car) == q.end()) q.push_back(e.car);
-    if (e.type == "go" || e.type == "enter") q.erase(std::remove(q.begin(), q.end(), e.car), q.end());
+    if (e.type == "go" || e.type == "enter")
+      q.erase(std::remove(q.begin(), q.end(), e.car), q.end());
     it->second.since.push_back(e.t);
     it->second.states.push_back(std::move(next));
   }
@@ -88,7 +89,8 @@ void DrawCar(cv::Mat& image, const TrackFigureLayout& at, const CarTrack& car,
   cv::arrowedLine(image, at.ToPixel(s.x_m, s.y_m), at.ToPixel(s.x_m + c * tip, s.y_m + n * tip),
                   cv::Scalar(255, 255, 255), 2, cv::LINE_AA, 0, 0.35);
   const cv::Point label = at.ToPixel(s.x_m, s.y_m) + cv::Point(-6, -22);
-  cv::putText(image, std::to_string(car.id), label, kVideoFont, 0.6, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
+  cv::putText(image, std::to_string(car.id), label, kVideoFont, 0.6, cv::Scalar(0, 0, 0), 4,
+              cv::LINE_AA);
   cv::putText(image, std::to_string(car.id), label, kVideoFont, 0.6, kVideoText, 2, cv::LINE_AA);
 }
 
@@ -111,17 +113,17 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
     throw std::invalid_argument(fmt::format("--speed {}: must be > 0", options.speed));
   }
   if (!(options.from_s >= 0.0 && options.from_s <= to_s && to_s <= end_s)) {
-    throw std::invalid_argument(fmt::format(
-        "--from {} --to {}: must satisfy 0 <= from <= to <= {} (the run's end)", options.from_s,
-        to_s, end_s));
+    throw std::invalid_argument(
+        fmt::format("--from {} --to {}: must satisfy 0 <= from <= to <= {} (the run's end)",
+                    options.from_s, to_s, end_s));
   }
   std::optional<CarCameraViewer> viewer;
   if (options.camera_car) {
     const CarConfig* car = run.scenario.FindCar(*options.camera_car);
     if (car == nullptr || !car->has_board()) {
-      throw std::invalid_argument(fmt::format(
-          "--cameras {}: the run has no car {} with a board (cameras and a stack)",
-          *options.camera_car, *options.camera_car));
+      throw std::invalid_argument(
+          fmt::format("--cameras {}: the run has no car {} with a board (cameras and a stack)",
+                      *options.camera_car, *options.camera_car));
     }
     viewer.emplace(run.track, run.scenario, *options.camera_car);
   }
@@ -145,8 +147,8 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
 
   std::vector<CarTrack> cars;
   for (const CarConfig& c : run.scenario.cars) {
-    cars.push_back({c.id, CarColourBgr(run.scenario, c.id), c.vehicle.length_m, c.vehicle.width_m,
-                    {}, 0});
+    cars.push_back(
+        {c.id, CarColourBgr(run.scenario, c.id), c.vehicle.length_m, c.vehicle.width_m, {}, 0});
   }
   for (const TrajectorySample& s : run.record.trajectory) {
     for (CarTrack& car : cars) {
@@ -159,8 +161,9 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
     if (e.type == "collision") collisions.emplace_back(e.t, e.car);
   }
 
-  const fs::path partial = out.parent_path() / (out.stem().string() + ".partial-" +
-                                                std::to_string(::getpid()) + out.extension().string());
+  const fs::path partial =
+      out.parent_path() /
+      (out.stem().string() + ".partial-" + std::to_string(::getpid()) + out.extension().string());
   cv::VideoWriter writer;
   for (const char* codec : {"avc1", "mp4v"}) {
     if (writer.open(partial.string(), cv::CAP_FFMPEG,
@@ -170,7 +173,8 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
     }
   }
   if (!writer.isOpened()) {
-    throw std::runtime_error(out.string() + ": OpenCV's video writer (FFmpeg) opens no MPEG-4 encoder");
+    throw std::runtime_error(out.string() +
+                             ": OpenCV's video writer (FFmpeg) opens no MPEG-4 encoder");
   }
   const RngStreams streams(run.scenario.seed);
   const std::size_t frames = VideoFrameCount(run, options);
@@ -179,7 +183,8 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
   std::size_t next_collision = 0;
   try {
     for (std::size_t k = 0; k < frames; ++k) {
-      const Time t = FromSeconds(options.from_s + static_cast<double>(k) * options.speed / options.fps);
+      const Time t =
+          FromSeconds(options.from_s + static_cast<double>(k) * options.speed / options.fps);
       background.copyTo(frame);
       for (CarTrack& car : cars) car.Advance(t);
       // intersections: tinted in the holder's colour, the queue under the label
@@ -230,11 +235,11 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
           continue;
         }
         DrawCar(frame, at, car, *car.samples[car.now]);
-        poses.push_back({car.samples[car.now]->x_m, car.samples[car.now]->y_m,
-                         car.samples[car.now]->yaw_rad});
+        poses.push_back(
+            {car.samples[car.now]->x_m, car.samples[car.now]->y_m, car.samples[car.now]->yaw_rad});
       }
-      cv::putText(frame, fmt::format("t = {:.2f} s", ToSeconds(t)), {base.legend_x, legend_end + 20},
-                  kVideoFont, 0.8, kVideoText, 2, cv::LINE_AA);
+      cv::putText(frame, fmt::format("t = {:.2f} s", ToSeconds(t)),
+                  {base.legend_x, legend_end + 20}, kVideoFont, 0.8, kVideoText, 2, cv::LINE_AA);
       cv::putText(frame, fmt::format("{:g}x real time", options.speed),
                   {base.legend_x, legend_end + 46}, kVideoFont, 0.5, kVideoText, 1, cv::LINE_AA);
       if (viewer) {
@@ -251,9 +256,11 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
                      0, 0, cv::INTER_AREA);
           y += h + 10;
           if (view == &views.color) {
-            cv::putText(frame, views.lane, {x, y + 8}, kVideoFont, 0.42, kVideoText, 1, cv::LINE_AA);
+            cv::putText(frame, views.lane, {x, y + 8}, kVideoFont, 0.42, kVideoText, 1,
+                        cv::LINE_AA);
             y += 36;
-            cv::putText(frame, "depth camera", {x, y - 8}, kVideoFont, 0.5, kVideoText, 1, cv::LINE_AA);
+            cv::putText(frame, "depth camera", {x, y - 8}, kVideoFont, 0.5, kVideoText, 1,
+                        cv::LINE_AA);
           }
         }
       }

@@ -16,11 +16,11 @@
 namespace autonomsim::sim {
 
 struct VideoOptions {
-  double fps{20.0};         // frames per second of the video
-  double speed{1.0};        // simulated seconds per second of video
-  double from_s{0.0};       // the run's part to show
-  std::optional<double> to_s;  // default: the run's end
-  double trail_s{10.0};     // how much of each car's path is drawn behind it
+  double fps{20.0};               // frames per second of the video
+  double speed{1.0};              // simulated seconds per second of video
+  double from_s{0.0};             // the run's part to show
+  std::optional<double> to_s;     // default: the run's end
+  double trail_s{10.0};           // how much of each car's path is drawn behind it
   std::optional<int> camera_car;  // add this car's camera views (a car with a board)
   std::optional<int> chase_car;   // add a 3D chase view behind this car
   bool overview{false};           // add a 3D overview of the track

@@ -73,9 +73,7 @@ void RecordFiles::Append(const TrajectorySample& sample) {
   Write(trajectory_, TrajectoryCsvLine(sample), trajectory_file_);
 }
 
-void RecordFiles::Append(const Event& event) {
-  Write(events_, EventJsonLine(event), events_file_);
-}
+void RecordFiles::Append(const Event& event) { Write(events_, EventJsonLine(event), events_file_); }
 
 void RecordFiles::RequireClosed() const {
   if (!closed_) throw std::logic_error("RecordFiles read before Close: " + events_file_.string());
@@ -99,8 +97,7 @@ void ReadEventsJsonl(const fs::path& file, const std::function<void(const Event&
   ForEachLine(file, false, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
 }
 
-void RecordFiles::ForEachSample(
-    const std::function<void(const TrajectorySample&)>& visit) const {
+void RecordFiles::ForEachSample(const std::function<void(const TrajectorySample&)>& visit) const {
   RequireClosed();
   ReadTrajectoryCsv(trajectory_file_, visit);
 }

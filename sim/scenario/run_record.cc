@@ -115,8 +115,8 @@ Event ParseEventJsonLine(std::string_view line) {
     e.detail = j.value("detail", std::string());
     return e;
   } catch (const nlohmann::json::exception& error) {
-    throw std::invalid_argument("not an events.jsonl line (" + std::string(error.what()) +
-                                "): '" + std::string(line) + "'");
+    throw std::invalid_argument("not an events.jsonl line (" + std::string(error.what()) + "): '" +
+                                std::string(line) + "'");
   }
 }
 

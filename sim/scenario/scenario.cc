@@ -1,6 +1,6 @@
-#include <algorithm>
 #include "sim/scenario/scenario.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <set>
@@ -123,8 +123,7 @@ void ExpectClause::Validate() const {
                     no_entry_without_grant.has_value() + completes.has_value() +
                     max_lateral_error.has_value() + min_obstacle_gap.has_value() +
                     node_rate.has_value() + cpu_demand.has_value() + no_gridlock.has_value() +
-                    max_wait.has_value() + min_throughput.has_value() +
-                    recovers_within.has_value();
+                    max_wait.has_value() + min_throughput.has_value() + recovers_within.has_value();
   Require(count == 1,
           "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
           "got " +
@@ -209,9 +208,8 @@ const FaultArgs& FaultClause::args() const {
 
 void FaultClause::Validate() const {
   int count = 0;
-  ForEachFaultKind(*this, [&](const char*, const std::optional<FaultArgs>& args) {
-    count += args.has_value();
-  });
+  ForEachFaultKind(
+      *this, [&](const char*, const std::optional<FaultArgs>& args) { count += args.has_value(); });
   Require(count == 1,
           "a faults entry names exactly one fault, e.g. '- car_stall: {car: 1, at_s: 20}'; got " +
               std::to_string(count));
@@ -243,8 +241,7 @@ void FaultClause::Validate() const {
   if (on_node) Require(a.node.has_value() && !a.node->empty(), k + " needs node");
   if (a.direction) {
     Require(*a.direction == "up" || *a.direction == "down" || *a.direction == "both",
-            "direction must be 'up' (car to server), 'down' or 'both', got '" + *a.direction +
-                "'");
+            "direction must be 'up' (car to server), 'down' or 'both', got '" + *a.direction + "'");
   }
   if (k == "v2i_loss_burst") {
     Require(a.loss.has_value() && *a.loss > 0.0 && *a.loss <= 1.0,
@@ -444,7 +441,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   YAML::Node root = LoadYamlFile(file);
   ConfigSource source{file.string(), {}};
   // before any --set: a file that is not a mapping is the file's error, not the override's
-  if (!root.IsMap()) detail::Fail(root, "", source, "expected a mapping, got " + detail::Describe(root));
+  if (!root.IsMap())
+    detail::Fail(root, "", source, "expected a mapping, got " + detail::Describe(root));
   BreakAliases(root);
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
@@ -495,7 +493,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     const std::string kind = scenario.faults[i].kind();
     const FaultArgs& args = scenario.faults[i].args();
     if (args.car && car_ids.count(*args.car) == 0) {
-      FailAt(root, source, {"faults", i, kind, "car"}, "no car with id " + std::to_string(*args.car));
+      FailAt(root, source, {"faults", i, kind, "car"},
+             "no car with id " + std::to_string(*args.car));
     }
     if (args.at_s >= ToSeconds(scenario.duration)) {
       FailAt(root, source, {"faults", i, kind, "at_s"},
@@ -505,8 +504,9 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     if (scenario.v2i.link == "realtime" &&
         (kind.starts_with("v2i_") || kind == "server_restart" || kind == "broker_outage")) {
       FailAt(root, source, {"faults", i, kind},
-             kind + " acts on the modeled V2I link and the server in the run; with v2i.link: "
-                    "realtime (run --realtime) both are real and outside the run");
+             kind +
+                 " acts on the modeled V2I link and the server in the run; with v2i.link: "
+                 "realtime (run --realtime) both are real and outside the run");
     }
     const CarConfig* car = args.car ? scenario.FindCar(*args.car) : nullptr;
     const bool needs_stack = kind == "localization_jump" || kind == "imu_bias_step";
@@ -531,7 +531,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     }
   }
   loaded.sha256 = Sha256Hex(loaded.resolved.dump());
-  loaded.error_at = [root, source](const LoadedScenario::KeyPath& keys, const std::string& message) {
+  loaded.error_at = [root, source](const LoadedScenario::KeyPath& keys,
+                                   const std::string& message) {
     return ErrorAt(root, source, keys, message);
   };
   return loaded;

@@ -4,10 +4,10 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <variant>
 #include <functional>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "sim/car/oracle_driver.h"
@@ -224,13 +224,13 @@ struct ExpectClause {
 struct FaultArgs {
   double at_s{0.0};
   std::optional<double> for_s;
-  std::optional<int> car;                 // the car it strikes (v2i_*: default every car)
-  std::optional<std::string> direction;   // v2i_partition: "up" (car → server), "down", "both"
-  std::optional<double> loss;             // v2i_loss_burst: probability a message is lost
-  std::optional<std::string> node;        // node_crash, node_hang: a node on the car's board
-  std::optional<std::string> camera;      // camera_*: "color" (default) or "depth"
+  std::optional<int> car;                // the car it strikes (v2i_*: default every car)
+  std::optional<std::string> direction;  // v2i_partition: "up" (car → server), "down", "both"
+  std::optional<double> loss;            // v2i_loss_burst: probability a message is lost
+  std::optional<std::string> node;       // node_crash, node_hang: a node on the car's board
+  std::optional<std::string> camera;     // camera_*: "color" (default) or "depth"
   std::optional<double> gyro_bias_rad_per_s;  // imu_bias_step: added to the gyro's z bias
-  std::optional<double> dx_m;             // localization_jump: the estimate's jump, map frame
+  std::optional<double> dx_m;                 // localization_jump: the estimate's jump, map frame
   std::optional<double> dy_m;
   std::optional<double> dyaw_deg;
 

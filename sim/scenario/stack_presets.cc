@@ -65,8 +65,7 @@ std::optional<std::string> PresetAt(const YAML::Node& node, const std::string& p
   if (!preset || preset.IsNull()) return std::nullopt;
   const std::string where = detail::JoinPath(detail::JoinPath(path, "stack"), "preset");
   const auto& names = StackPresetNames();
-  if (!preset.IsScalar() ||
-      std::find(names.begin(), names.end(), preset.Scalar()) == names.end()) {
+  if (!preset.IsScalar() || std::find(names.begin(), names.end(), preset.Scalar()) == names.end()) {
     detail::Fail(preset, where, source,
                  "unknown stack preset " + detail::Describe(preset) +
                      " (lab: the lab's code as published; safe: every fix)");
@@ -87,9 +86,7 @@ const std::vector<std::string>& StackPresetNames() {
 
 YAML::Node StackPresetForCar(const std::string& name) { return Build(kCarOptions, name); }
 
-YAML::Node StackPresetForScenario(const std::string& name) {
-  return Build(kScenarioOptions, name);
-}
+YAML::Node StackPresetForScenario(const std::string& name) { return Build(kScenarioOptions, name); }
 
 std::vector<std::string> StackPresetKeys() {
   std::vector<std::string> keys;
@@ -117,8 +114,7 @@ void ApplyStackPresets(YAML::Node& root, const ConfigSource& source) {
     for (std::size_t i = 0; i < cars.size(); ++i) {
       YAML::Node car = cars[i];
       if (!car.IsMap()) continue;  // the strict reader reports it
-      const std::optional<std::string> own =
-          PresetAt(car, detail::JoinIndex("cars", i), source);
+      const std::optional<std::string> own = PresetAt(car, detail::JoinIndex("cars", i), source);
       if (own || fleet) MergeBeneath(car, StackPresetForCar(own ? *own : *fleet));
     }
   }

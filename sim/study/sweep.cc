@@ -16,9 +16,9 @@
 #include "sim/loop/simulation.h"
 #include "sim/results/expectations.h"
 #include "sim/results/outputs.h"
+#include "sim/results/report.h"
 #include "sim/results/summary.h"
 #include "sim/scenario/scenario.h"
-#include "sim/results/report.h"
 #include "sim/study/sweep_index.h"
 #include "sim/study/sweep_plots.h"
 
@@ -125,8 +125,8 @@ void WriteIndex(const SweepSpec& spec, const ResultsTable& table,
 // results.csv and the plots of `points` (grid order), reading summaries from the first of `dirs`
 // that has each run.
 SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
-                               const std::vector<fs::path>& dirs, const fs::path& out_dir,
-                               bool plots) {
+                                     const std::vector<fs::path>& dirs, const fs::path& out_dir,
+                                     bool plots) {
   std::vector<PointRecord> complete;
   std::vector<RunSummary> summaries;
   std::map<std::string, RunSummary> cache;  // points may share a run
@@ -157,9 +157,10 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
       result.plots_error = e.what();
     }
   }
-  WriteIndex(spec, table, folders, out_dir, result.missing,
-             static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
-                                                    [](const RunSummary& r) { return !r.passed; })));
+  WriteIndex(
+      spec, table, folders, out_dir, result.missing,
+      static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
+                                             [](const RunSummary& r) { return !r.passed; })));
   for (std::size_t i = 0; i < complete.size(); ++i) {
     if (summaries[i].passed) continue;
     std::vector<std::string> names;

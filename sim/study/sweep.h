@@ -66,7 +66,7 @@ struct SweepSummary {
 
 // What the results table of a sweep (or of merged shards) found.
 struct SweepTableSummary {
-  std::size_t missing{0};  // grid points without a complete run
+  std::size_t missing{0};   // grid points without a complete run
   std::string plots_error;  // why there are no plots (gnuplot failed); empty when they were drawn
   std::vector<std::string> failed_expectations;  // as in SweepSummary
 };
@@ -81,6 +81,6 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options);
 // and the plots. Returns how many grid points have no complete run (warned about) and the runs
 // whose expectations failed.
 SweepTableSummary MergeSweeps(const std::vector<std::filesystem::path>& dirs,
-                        const std::filesystem::path& out_dir, bool plots = true);
+                              const std::filesystem::path& out_dir, bool plots = true);
 
 }  // namespace autonomsim::sim

@@ -6,9 +6,7 @@
 #include "sim/results/report/report_assets.h"
 
 namespace autonomsim::sim {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 std::string SweepIndexHtml(const SweepIndexInput& input) {
   const nlohmann::json data = {{"title", input.title},

@@ -12,9 +12,9 @@
 namespace autonomsim::sim {
 
 struct SweepIndexInput {
-  std::string title;                    // the sweep's name
-  std::vector<std::string> axis_keys;   // the varied keys
-  const ResultsTable* table{nullptr};   // results.csv's rows
+  std::string title;                   // the sweep's name
+  std::vector<std::string> axis_keys;  // the varied keys
+  const ResultsTable* table{nullptr};  // results.csv's rows
   // run id -> its report (or folder when it has none), relative to the index's folder
   std::map<std::string, std::string> links;
   std::vector<std::string> plots;  // plot files, relative to the index's folder

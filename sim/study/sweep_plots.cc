@@ -197,40 +197,43 @@ std::vector<PlotSeries> MetricSeries(const ResultsTable& table, const std::strin
     // only car/board-level columns (carN.metric), not per-node ones (carN.node.metric)
     if (suffix != metric || prefix.find('.') != std::string::npos) continue;
     for (std::size_t v = 0; v < values.size(); ++v) {
-    // one car's lines: its colour, a dash per split value; a metric of all cars: a colour each
-    const bool one_prefix = prefixes.size() == 1;
-    const std::string colour =
-        split && one_prefix ? std::string(kPalette[v % kPalette.size()]) : PrefixColour(prefix);
-    const int dash = split && !one_prefix ? static_cast<int>(v % 5) + 1 : 1;
-    const std::string name =
-        split ? fmt::format("{}, {}={}", prefix, split->key, values[v]) : prefix;
-    PlotSeries dots{.label = name + ", each run", .dots = true, .line = false, .colour = colour,
-                    .dash = dash};
-    std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
-    for (const auto& row : table.rows) {
-      double y = 0.0, x = 0.0;
-      if (split && row[split->column] != values[v]) continue;
-      if (!ParseDouble(row[c], &y) || !positions.X(row[axis_column], &x)) continue;
-      dots.x.push_back(x);
-      dots.y.push_back(y);
-      mean[x].first += y;
-      mean[x].second += 1;
-    }
-    if (dots.x.empty()) continue;
-    PlotSeries line{.label = name, .dots = false, .line = true, .colour = colour, .dash = dash};
-    for (const auto& [x, sum] : mean) {
-      line.x.push_back(x);
-      line.y.push_back(sum.first / sum.second);
-      *runs_per_x = std::max(*runs_per_x, static_cast<std::size_t>(sum.second));
-    }
-    if (line.x.size() == dots.x.size()) {  // one run per x: the line's own dots
-      line.dots = true;
-      series.push_back(std::move(line));
-    } else {
-      line.label = name + ", mean";
-      series.push_back(std::move(line));
-      series.push_back(std::move(dots));
-    }
+      // one car's lines: its colour, a dash per split value; a metric of all cars: a colour each
+      const bool one_prefix = prefixes.size() == 1;
+      const std::string colour =
+          split && one_prefix ? std::string(kPalette[v % kPalette.size()]) : PrefixColour(prefix);
+      const int dash = split && !one_prefix ? static_cast<int>(v % 5) + 1 : 1;
+      const std::string name =
+          split ? fmt::format("{}, {}={}", prefix, split->key, values[v]) : prefix;
+      PlotSeries dots{.label = name + ", each run",
+                      .dots = true,
+                      .line = false,
+                      .colour = colour,
+                      .dash = dash};
+      std::map<double, std::pair<double, int>> mean;  // x -> (sum, count)
+      for (const auto& row : table.rows) {
+        double y = 0.0, x = 0.0;
+        if (split && row[split->column] != values[v]) continue;
+        if (!ParseDouble(row[c], &y) || !positions.X(row[axis_column], &x)) continue;
+        dots.x.push_back(x);
+        dots.y.push_back(y);
+        mean[x].first += y;
+        mean[x].second += 1;
+      }
+      if (dots.x.empty()) continue;
+      PlotSeries line{.label = name, .dots = false, .line = true, .colour = colour, .dash = dash};
+      for (const auto& [x, sum] : mean) {
+        line.x.push_back(x);
+        line.y.push_back(sum.first / sum.second);
+        *runs_per_x = std::max(*runs_per_x, static_cast<std::size_t>(sum.second));
+      }
+      if (line.x.size() == dots.x.size()) {  // one run per x: the line's own dots
+        line.dots = true;
+        series.push_back(std::move(line));
+      } else {
+        line.label = name + ", mean";
+        series.push_back(std::move(line));
+        series.push_back(std::move(dots));
+      }
     }
   }
   return series;
@@ -255,8 +258,8 @@ std::vector<PlotSeries> RunSeries(std::vector<PlotSeries> runs) {
     r.label.clear();
   }
   runs.front().label = fmt::format("each of the {} runs", runs.size());
-  PlotSeries m{.label = "mean of the runs", .dots = false, .line = true, .colour = "#000000",
-               .width = 2.5};
+  PlotSeries m{
+      .label = "mean of the runs", .dots = false, .line = true, .colour = "#000000", .width = 2.5};
   for (const auto& [x, sum] : mean) {
     m.x.push_back(x);
     m.y.push_back(sum.first / sum.second);
@@ -338,11 +341,10 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
   if (!spec.subtitle.empty()) lines.emplace_back(spec.subtitle, "DejaVu Sans,10");
   gp += fmt::format("set tmargin {}\n", 2 + 2 * lines.size());
   for (std::size_t l = 0; l < lines.size(); ++l) {
-    gp += fmt::format("set label {} {} at graph 0, graph 1 left offset 0, char {} font '{}'{}\n",
-                      l + 1, Quoted(lines[l].first),
-                      1.7 * static_cast<double>(lines.size() - l) - 0.6, lines[l].second,
-                      l + 1 == lines.size() && !spec.subtitle.empty() ? " textcolor rgb '#555555'"
-                                                                      : "");
+    gp += fmt::format(
+        "set label {} {} at graph 0, graph 1 left offset 0, char {} font '{}'{}\n", l + 1,
+        Quoted(lines[l].first), 1.7 * static_cast<double>(lines.size() - l) - 0.6, lines[l].second,
+        l + 1 == lines.size() && !spec.subtitle.empty() ? " textcolor rgb '#555555'" : "");
   }
   gp += "set xlabel " + Quoted(spec.x_label) + "\nset ylabel " + Quoted(spec.y_label) + "\n";
   gp += "set grid lc rgb '#e0e0e0'\nset border 3\nset tics nomirror\nset yrange [0:*]\n";

@@ -45,8 +45,7 @@ class EmbeddedV2ILink final : public V2ILink {
   using ServerReceive = std::function<void(int car_id, const world::V2IMessage&)>;
   using CarReceive = std::function<void(int car_id, const world::V2IMessage&)>;
   // `cause`: empty for the modeled loss, else the fault's (V2ILinkFault::cause, "server down").
-  using Lost =
-      std::function<void(int car_id, const world::V2IMessage&, const std::string& cause)>;
+  using Lost = std::function<void(int car_id, const world::V2IMessage&, const std::string& cause)>;
 
   EmbeddedV2ILink(Kernel* kernel, const V2IConfig& config, const RngStreams& streams,
                   std::vector<int> car_ids, ServerReceive to_server, CarReceive to_car, Lost lost);

@@ -10,8 +10,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 TEST(EmergencyStopTest, StopsBelowTheStopDistanceAndReleasesOnlyAboveTheReleaseDistance) {
-  const EmergencyStopParams params{.enabled = true, .stop_distance_m = 0.3,
-                                   .release_distance_m = 0.45};
+  const EmergencyStopParams params{
+      .enabled = true, .stop_distance_m = 0.3, .release_distance_m = 0.45};
   EmergencyStopState state;
   EXPECT_EQ(StepEmergencyStop(params, 1.0, &state), std::nullopt);
   EXPECT_EQ(StepEmergencyStop(params, 0.31, &state), std::nullopt);

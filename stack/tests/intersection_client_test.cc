@@ -79,9 +79,9 @@ TEST(IntersectionClientParamsTest, DefaultsKeysAndValidation) {
   std::vector<std::string> keys;
   auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
   params.Describe(visit);
-  EXPECT_THAT(keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s",
-                                "release_margin_m", "exit_margin_m", "re_request", "latch_wait",
-                                "release_on_failure"));
+  EXPECT_THAT(
+      keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s", "release_margin_m",
+                        "exit_margin_m", "re_request", "latch_wait", "release_on_failure"));
 
   params.retry_period = Duration::zero();
   try {
@@ -253,8 +253,8 @@ TEST(IntersectionClientTest, WithoutReRequestADeniedCarAsksOnceAndAHolderNeverRe
   const Vec2 in_zone{0.9, -0.31};
   EXPECT_THAT(client.Step(0.0, in_zone).requests, ElementsAre(Request{kCar, 0}));
   for (int k = 1; k <= 60; ++k) {
-    const auto out = client.Step(0.1 * k, in_zone, k == 1 ? std::vector{Response{kCar, false}}
-                                                          : std::vector<Response>{});
+    const auto out = client.Step(
+        0.1 * k, in_zone, k == 1 ? std::vector{Response{kCar, false}} : std::vector<Response>{});
     EXPECT_THAT(out.requests, IsEmpty()) << "k = " << k;
     EXPECT_FALSE(out.may_proceed);
   }

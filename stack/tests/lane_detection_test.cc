@@ -3,11 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -270,10 +269,18 @@ TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
       const int i = static_cast<int>(rng() % static_cast<unsigned>(bgr.rows * bgr.cols));
       std::uint8_t* px = bgr.data + 3 * i;
       switch (k % 4) {
-        case 0: px[0] = px[1] = px[2] = 255; break;                   // white
-        case 1: px[0] = 0, px[1] = 235, px[2] = 235; break;           // yellow
-        case 2: px[k % 3] = static_cast<std::uint8_t>(v_min); break;  // at the bound
-        default: px[2] = 255; break;                                  // bright, not a line
+        case 0:
+          px[0] = px[1] = px[2] = 255;
+          break;  // white
+        case 1:
+          px[0] = 0, px[1] = 235, px[2] = 235;
+          break;  // yellow
+        case 2:
+          px[k % 3] = static_cast<std::uint8_t>(v_min);
+          break;  // at the bound
+        default:
+          px[2] = 255;
+          break;  // bright, not a line
       }
     }
     BirdsEyeMasks reference, fast;

@@ -256,7 +256,8 @@ TEST(LocalizationEkfTest, WithoutTheImuHeadingTheFixesHoldTheYaw) {
       fixes.push_back(fix);
     }
     const LocalizationEkfOutput out = drive.Run(60.0, fixes);
-    return std::abs(world::WrapAngle(out.X_map_base.yaw_rad - truth.At(ToSeconds(out.stamp)).yaw_rad));
+    return std::abs(
+        world::WrapAngle(out.X_map_base.yaw_rad - truth.At(ToSeconds(out.stamp)).yaw_rad));
   };
   EXPECT_GT(yaw_error_after_60_s(true), 0.15);  // the estimate follows the drift
   EXPECT_LT(yaw_error_after_60_s(false), 0.02);

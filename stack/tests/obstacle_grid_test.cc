@@ -402,8 +402,9 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
       // both scales: it forgets when they change) gives the same grid
       EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &memo), fused)
           << poses[i].first << " s " << poses[i].second;
-      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &kept[hardware_scale]),
-                fused)
+      EXPECT_EQ(
+          StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &kept[hardware_scale]),
+          fused)
           << poses[i].first << " s " << poses[i].second;
       // with the rows that changed since the memo's last frame flagged (as the renderer's
       // DepthRowHistory says them), the others not compared
@@ -411,9 +412,9 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
       std::vector<std::uint16_t>& last = last_depth[hardware_scale];
       if (!last.empty()) {
         for (int row = 0; row < PointCloud640::kHeight; ++row) {
-          changed[row] = !std::equal(frame.depth.mm.begin() + row * 640,
-                                     frame.depth.mm.begin() + (row + 1) * 640,
-                                     last.begin() + row * 640);
+          changed[row] =
+              !std::equal(frame.depth.mm.begin() + row * 640,
+                          frame.depth.mm.begin() + (row + 1) * 640, last.begin() + row * 640);
           skipped_rows += changed[row] == 0;
         }
       }

@@ -172,9 +172,10 @@ TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
 TEST(CliTest, CheckJunitSuitesCarryTheRunsIdentityAndTime) {
   const fs::path dir = Scratch();
   const fs::path junit = dir / "check.xml";
-  const Result r = Cli("check scenarios/intersection_conflict.yaml --set seed=7 --set "
-                       "expect[3].completes.laps=9 --out " +
-                       (dir / "out").string() + " --junit " + junit.string());
+  const Result r =
+      Cli("check scenarios/intersection_conflict.yaml --set seed=7 --set "
+          "expect[3].completes.laps=9 --out " +
+          (dir / "out").string() + " --junit " + junit.string());
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const std::string xml = Read(junit);
   const nlohmann::json summary =
@@ -189,8 +190,7 @@ TEST(CliTest, CheckJunitSuitesCarryTheRunsIdentityAndTime) {
   EXPECT_THAT(xml, HasSubstr("<property name=\"result_folder\" value=\"" +
                              (dir / "out" / "intersection_conflict").string() + "\"/>"));
   EXPECT_EQ(Count(xml, "<testcase "), static_cast<int>(summary["expectations"].size()));
-  EXPECT_EQ(Count(xml, "<testcase classname=\"intersection_conflict\" name=\"completes(laps=9"),
-            1);
+  EXPECT_EQ(Count(xml, "<testcase classname=\"intersection_conflict\" name=\"completes(laps=9"), 1);
   EXPECT_THAT(xml, ::testing::Not(HasSubstr("<testcase classname=\"intersection_conflict\" "
                                             "name=\"no_collision\" time=")));
 }

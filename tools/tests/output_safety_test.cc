@@ -76,7 +76,7 @@ TEST(OutputSafety, TheWorkingFolderAndTheRootAreRefusedAtOnce) {
     EXPECT_THAT(r.output, Not(HasSubstr("simulated in"))) << out;
     // the reason given is the true one
     EXPECT_THAT(r.output, HasSubstr(std::string(out) == "/" ? "the filesystem root"
-                                                             : "holds the working folder"))
+                                                            : "holds the working folder"))
         << out;
   }
   EXPECT_TRUE(fs::exists("CMakeLists.txt"));  // still here

@@ -28,8 +28,8 @@ namespace autonomsim {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using testing::Cli;
+using ::testing::HasSubstr;
 using testing::Read;
 using testing::Result;
 using testing::Shell;
@@ -109,9 +109,9 @@ TEST_F(ReportTest, ReplacesOnlyItsOwnReports) {
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_THAT(refused.output, HasSubstr("--force"));
   EXPECT_EQ(Read(elsewhere), "<p>my notes</p>\n");
-  EXPECT_EQ(Cli("report " + run_dir_->string() + " --out " + elsewhere.string() + " --force")
-                .exit_code,
-            0);
+  EXPECT_EQ(
+      Cli("report " + run_dir_->string() + " --out " + elsewhere.string() + " --force").exit_code,
+      0);
   // now it is a report: replaced without --force
   EXPECT_EQ(Cli("report " + run_dir_->string() + " --out " + elsewhere.string()).exit_code, 0);
   const Result not_a_run = Cli("report " + elsewhere.parent_path().string());
@@ -131,7 +131,8 @@ TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
   EXPECT_EQ(snapshot["car"], lateral["car"]);
   EXPECT_LE(snapshot["t"].get<double>(), lateral["at_s"].get<double>());
   EXPECT_GT(snapshot["t"].get<double>(), lateral["at_s"].get<double>() - 0.051);  // its sample
-  EXPECT_THAT(snapshot["color"].get<std::string>(), ::testing::StartsWith("data:image/jpeg;base64,"));
+  EXPECT_THAT(snapshot["color"].get<std::string>(),
+              ::testing::StartsWith("data:image/jpeg;base64,"));
   EXPECT_THAT(snapshot["lane"].get<std::string>(), HasSubstr("lane detection:"));
   // every sample of every car, in order
   std::size_t samples = 0;
@@ -154,10 +155,9 @@ TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
 TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
   const fs::path out = *root_ / "check";
   const fs::path junit = *root_ / "check.xml";
-  const Result r = Cli(
-      "check scenarios/lab_two_cars_oracle.yaml --report --out " + out.string() + " --junit " +
-      junit.string() +
-      " --set duration_s=20 --set 'expect=[{max_lateral_error: {max_m: 0.001}}]'");
+  const Result r = Cli("check scenarios/lab_two_cars_oracle.yaml --report --out " + out.string() +
+                       " --junit " + junit.string() +
+                       " --set duration_s=20 --set 'expect=[{max_lateral_error: {max_m: 0.001}}]'");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   const fs::path report = out / "lab_two_cars_oracle" / "report.html";
   EXPECT_TRUE(fs::exists(report));
@@ -184,12 +184,12 @@ TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
   while (capture.read(frame)) ++frames;
   EXPECT_EQ(frames, 51);
   // the run's own folder may be replaced by a video; a file elsewhere only with --force
-  EXPECT_EQ(Cli("video " + run_dir_->string() + " --out " + video.string() + " --to 1 -q").exit_code,
-            2);
-  EXPECT_EQ(Cli("video " + run_dir_->string() + " --out " + (*run_dir_ / "v.mp4").string() +
-                " --to 1 -q")
-                .exit_code,
-            0);
+  EXPECT_EQ(
+      Cli("video " + run_dir_->string() + " --out " + video.string() + " --to 1 -q").exit_code, 2);
+  EXPECT_EQ(
+      Cli("video " + run_dir_->string() + " --out " + (*run_dir_ / "v.mp4").string() + " --to 1 -q")
+          .exit_code,
+      0);
   const Result no_board = Cli("video " + run_dir_->string() + " --out " +
                               (*root_ / "x.mp4").string() + " --cameras 7 -q");
   EXPECT_EQ(no_board.exit_code, 2);
@@ -200,9 +200,8 @@ TEST_F(ReportTest, TheVideoHasOneFramePerInstantAndReadsBack) {
 TEST_F(ReportTest, TheVideoShowsTheRunIn3DFromBehindACarAndFromAbove) {
   AUTONOMSIM_REQUIRE_GL();
   const fs::path plain = *root_ / "plain.mp4", views = *root_ / "views.mp4";
-  ASSERT_EQ(Cli("video " + run_dir_->string() + " --out " + plain.string() + " --to 1 -q")
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      Cli("video " + run_dir_->string() + " --out " + plain.string() + " --to 1 -q").exit_code, 0);
   const Result r = Cli("video " + run_dir_->string() + " --out " + views.string() +
                        " --to 1 --chase 1 --overview -q");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -237,10 +236,10 @@ TEST_F(ReportTest, RenderWritesACameraDatasetWithLabelsFromEitherBackend) {
     const nlohmann::json legend = nlohmann::json::parse(Read(gl / instant / "labels.json"));
     EXPECT_EQ(legend["classes"][1], "floor");
     EXPECT_EQ(legend["instances"][0]["car"], 1);
-    for (const char* file : {"color_camera/color.png", "color_camera/labels.png",
-                             "color_camera/instances.png", "color_camera/camera_info.json",
-                             "depth_camera/depth.png", "depth_camera/depth_preview.png",
-                             "depth_camera/labels.png"}) {
+    for (const char* file :
+         {"color_camera/color.png", "color_camera/labels.png", "color_camera/instances.png",
+          "color_camera/camera_info.json", "depth_camera/depth.png",
+          "depth_camera/depth_preview.png", "depth_camera/labels.png"}) {
       EXPECT_TRUE(fs::exists(gl / instant / file)) << instant << "/" << file;
       EXPECT_TRUE(fs::exists(ray_cast / instant / file)) << instant << "/" << file;
     }
@@ -250,20 +249,21 @@ TEST_F(ReportTest, RenderWritesACameraDatasetWithLabelsFromEitherBackend) {
     cv::Mat differ;
     cv::compare(a.reshape(1), b.reshape(1), differ, cv::CMP_NE);
     EXPECT_LT(cv::countNonZero(differ), a.total() / 100) << instant;
-    const cv::Mat la = cv::imread((gl / instant / "color_camera/labels.png").string(),
-                                  cv::IMREAD_UNCHANGED);
-    const cv::Mat lb = cv::imread((ray_cast / instant / "color_camera/labels.png").string(),
-                                  cv::IMREAD_UNCHANGED);
+    const cv::Mat la =
+        cv::imread((gl / instant / "color_camera/labels.png").string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat lb =
+        cv::imread((ray_cast / instant / "color_camera/labels.png").string(), cv::IMREAD_UNCHANGED);
     EXPECT_EQ(cv::norm(la, lb, cv::NORM_INF), 0.0) << instant;
-    const cv::Mat da = cv::imread((gl / instant / "depth_camera/depth.png").string(),
-                                  cv::IMREAD_UNCHANGED);
-    const cv::Mat db = cv::imread((ray_cast / instant / "depth_camera/depth.png").string(),
-                                  cv::IMREAD_UNCHANGED);
+    const cv::Mat da =
+        cv::imread((gl / instant / "depth_camera/depth.png").string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat db =
+        cv::imread((ray_cast / instant / "depth_camera/depth.png").string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(da.type(), CV_16UC1);
     EXPECT_LE(cv::norm(da, db, cv::NORM_INF), 1.0) << instant;
   }
-  const Result bad = Cli("render scenarios/lab_two_cars.yaml --car 0 --at 1 --backend vulkan --out " +
-                         (*root_ / "bad").string());
+  const Result bad =
+      Cli("render scenarios/lab_two_cars.yaml --car 0 --at 1 --backend vulkan --out " +
+          (*root_ / "bad").string());
   EXPECT_EQ(bad.exit_code, 2);
 }
 

@@ -34,13 +34,14 @@ inline bool InCi() {
 }  // namespace autonomsim::vehicle::testing
 
 // At the top of a test body: skips it (fails it under CI=true) where no context can be made.
-#define AUTONOMSIM_REQUIRE_GL()                                                                  \
-  do {                                                                                           \
-    const std::string& autonomsim_gl_reason = ::autonomsim::vehicle::testing::GlUnavailableReason(); \
-    if (!autonomsim_gl_reason.empty()) {                                                         \
-      if (::autonomsim::vehicle::testing::InCi()) {                                              \
-        FAIL() << "CI=true and no OpenGL ES context: " << autonomsim_gl_reason;                  \
-      }                                                                                          \
-      GTEST_SKIP() << "no OpenGL ES context here: " << autonomsim_gl_reason;                     \
-    }                                                                                            \
+#define AUTONOMSIM_REQUIRE_GL()                                                 \
+  do {                                                                          \
+    const std::string& autonomsim_gl_reason =                                   \
+        ::autonomsim::vehicle::testing::GlUnavailableReason();                  \
+    if (!autonomsim_gl_reason.empty()) {                                        \
+      if (::autonomsim::vehicle::testing::InCi()) {                             \
+        FAIL() << "CI=true and no OpenGL ES context: " << autonomsim_gl_reason; \
+      }                                                                         \
+      GTEST_SKIP() << "no OpenGL ES context here: " << autonomsim_gl_reason;    \
+    }                                                                           \
   } while (false)

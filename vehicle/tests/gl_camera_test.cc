@@ -50,7 +50,6 @@ Backends& Shared() {
   return backends;
 }
 
-
 // A pose on a route of the lab track, `lateral_m` left of its centre, turned by `yaw_rad`.
 world::Pose2 OnRoute(const world::Track& track, const std::string& route, double s_m,
                      double lateral_m = 0.0, double yaw_rad = 0.0) {
@@ -62,14 +61,14 @@ world::Pose2 OnRoute(const world::Track& track, const std::string& route, double
 }
 
 // A box `ahead_m` ahead of `car` and `left_m` to its left, turned by `yaw_rad` from its heading.
-Prism Ahead(const world::Pose2& car, double ahead_m, double left_m, double yaw_rad,
-            double length_m, double width_m, double height_m, const Bgr& bgr) {
+Prism Ahead(const world::Pose2& car, double ahead_m, double left_m, double yaw_rad, double length_m,
+            double width_m, double height_m, const Bgr& bgr) {
   const double c = std::cos(car.yaw_rad), s = std::sin(car.yaw_rad);
-  return Prism{world::OrientedBox{world::Pose2{car.x_m + c * ahead_m - s * left_m,
-                                               car.y_m + s * ahead_m + c * left_m,
-                                               car.yaw_rad + yaw_rad},
-                                  length_m, width_m},
-               height_m, bgr};
+  return Prism{
+      world::OrientedBox{world::Pose2{car.x_m + c * ahead_m - s * left_m,
+                                      car.y_m + s * ahead_m + c * left_m, car.yaw_rad + yaw_rad},
+                         length_m, width_m},
+      height_m, bgr};
 }
 
 struct Scene {
@@ -90,13 +89,12 @@ std::vector<Scene> Scenes(const world::Track& track) {
       Scene scene;
       scene.car = OnRoute(track, route, s, 0.03 * ((k % 5) - 2), 0.04 * ((k % 3) - 1));
       const double ahead = 0.6 + 0.15 * (k % 8);
-      scene.prisms.push_back(Ahead(scene.car, ahead, 0.12 * ((k % 4) - 1.5), 0.25 * (k % 3),
-                                   0.525, 0.296, 0.2, look.car_body(k)));
+      scene.prisms.push_back(Ahead(scene.car, ahead, 0.12 * ((k % 4) - 1.5), 0.25 * (k % 3), 0.525,
+                                   0.296, 0.2, look.car_body(k)));
       scene.prisms.push_back(Ahead(scene.car, ahead + 0.5 + 0.1 * (k % 5), -0.3 + 0.05 * (k % 7),
                                    0.5 * k, 0.2, 0.15, 0.1 + 0.05 * (k % 4), look.obstacle()));
       if (k % 6 == 0) {  // a tall box beside the car, reaching past the camera
-        scene.prisms.push_back(
-            Ahead(scene.car, 0.3, 0.35, 0.0, 1.2, 0.1, 0.4, Bgr{40, 160, 60}));
+        scene.prisms.push_back(Ahead(scene.car, 0.3, 0.35, 0.0, 1.2, 0.1, 0.4, Bgr{40, 160, 60}));
       }
       scenes.push_back(std::move(scene));
     }
@@ -105,7 +103,8 @@ std::vector<Scene> Scenes(const world::Track& track) {
 }
 
 // Which surface each pixel of the ray caster's image sees: the prism's index, -1 for the floor,
-// -2 for no return (the surround, the floor beyond the far clip); from its depth against the bare floor's and from each prism alone.
+// -2 for no return (the surround, the floor beyond the far clip); from its depth against the bare
+// floor's and from each prism alone.
 std::vector<int> Surfaces(CameraRenderer& renderer, const Scene& scene, const DepthImage& depth,
                           const ColorImage& color) {
   ColorImage bare_color, alone_color;
@@ -150,12 +149,12 @@ std::vector<bool> NearEdges(const std::vector<int>& id, int w, int h) {
 }
 
 struct Agreement {
-  std::size_t pixels{0};        // away from edges
+  std::size_t pixels{0};  // away from edges
   std::size_t depth_within_1mm{0};
   std::size_t colour_equal{0};
   std::size_t edge_pixels{0};
   std::size_t edge_colour_equal{0};
-  int max_depth_error_mm{0};    // away from edges
+  int max_depth_error_mm{0};  // away from edges
 };
 
 Agreement Compare(const CameraParams& params, const std::vector<Scene>& scenes) {
@@ -194,11 +193,12 @@ double Share(std::size_t part, std::size_t whole) {
 
 // The figures README "Two renderers" quotes, printed with the test's output.
 void Print(const char* camera, const Agreement& a) {
-  std::printf("%s, %zu pixels away from edges: depth within 1 mm %.4f %%, colour equal %.4f %%, "
-              "largest depth difference %d mm; %zu edge pixels, colour equal %.2f %%\n",
-              camera, a.pixels, 100.0 * Share(a.depth_within_1mm, a.pixels),
-              100.0 * Share(a.colour_equal, a.pixels), a.max_depth_error_mm, a.edge_pixels,
-              100.0 * Share(a.edge_colour_equal, a.edge_pixels));
+  std::printf(
+      "%s, %zu pixels away from edges: depth within 1 mm %.4f %%, colour equal %.4f %%, "
+      "largest depth difference %d mm; %zu edge pixels, colour equal %.2f %%\n",
+      camera, a.pixels, 100.0 * Share(a.depth_within_1mm, a.pixels),
+      100.0 * Share(a.colour_equal, a.pixels), a.max_depth_error_mm, a.edge_pixels,
+      100.0 * Share(a.edge_colour_equal, a.edge_pixels));
 }
 
 TEST(GlCameraTest, TheDepthCameraAgreesWithTheRayCasterOnTwentyFourPoses) {

@@ -515,7 +515,7 @@ TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
       }
     }
   }
-  EXPECT_GT(untouched, 24 * 100000);  // the floor outside the region was not computed
+  EXPECT_GT(untouched, 24 * 100000);             // the floor outside the region was not computed
   EXPECT_GT(prism_pixels_in_region, 24 * 1000);  // the comparison saw the prisms
   EXPECT_THROW(renderer.Render(world::Pose2{}, {}, nullptr, nullptr, RowSpans{}),
                std::invalid_argument);
@@ -606,8 +606,8 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
   region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
   for (int row = 150; row < params.height_px; ++row) {
     if (row % 41 == 0) continue;
-    region.columns[static_cast<std::size_t>(row)] = {std::max(0, 310 - 2 * (row - 150)),
-                                                     std::min(params.width_px, 330 + 3 * (row - 150))};
+    region.columns[static_cast<std::size_t>(row)] = {
+        std::max(0, 310 - 2 * (row - 150)), std::min(params.width_px, 330 + 3 * (row - 150))};
   }
   const ColourLabel label = [](const Bgr& c) {
     return static_cast<std::uint8_t>(1 + (c[0] * 7 + c[1] * 3 + c[2]) % 251);
@@ -625,7 +625,8 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
     ColorImage full;
     renderer.Render(pose, prisms, &full, nullptr);
     std::fill(padded.begin(), padded.end(), 0);
-    renderer.RenderLabels(pose, prisms, region, label, LabelView{padded.data() + stride + 1, stride});
+    renderer.RenderLabels(pose, prisms, region, label,
+                          LabelView{padded.data() + stride + 1, stride});
     for (int v = -1; v <= params.height_px; ++v) {
       for (int u = -1; u <= params.width_px; ++u) {
         const std::uint8_t got = padded[static_cast<std::size_t>((v + 1) * stride + u + 1)];
@@ -652,7 +653,8 @@ TEST(RayCasterTest, PrismLabelsNameTheObjectEachPixelSeesWhateverItsColour) {
   const CameraParams params = DepthCameraParams();
   CameraRenderer renderer = MakeRenderer(params, BlackFloor());
   const world::Pose2 car{};
-  const std::vector<Prism> prisms{Box(1.5, 0.1, 0.0, 0.3, 0.6, 0.3), Box(1.0, -0.1, 0.4, 0.2, 0.2, 0.2)};
+  const std::vector<Prism> prisms{Box(1.5, 0.1, 0.0, 0.3, 0.6, 0.3),
+                                  Box(1.0, -0.1, 0.4, 0.2, 0.2, 0.2)};
   ColorImage colour;
   DepthImage depth;
   renderer.Render(car, prisms, &colour, &depth);
@@ -660,10 +662,12 @@ TEST(RayCasterTest, PrismLabelsNameTheObjectEachPixelSeesWhateverItsColour) {
   all.columns.assign(static_cast<std::size_t>(params.height_px), {0, params.width_px});
   std::vector<std::uint8_t> ids(static_cast<std::size_t>(params.width_px) * params.height_px, 99);
   const std::vector<std::uint8_t> prism_ids{1, 2};
-  renderer.RenderLabels(car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
-                        LabelView{ids.data(), params.width_px}, prism_ids);
+  renderer.RenderLabels(
+      car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
+      LabelView{ids.data(), params.width_px}, prism_ids);
   std::array<DepthImage, 2> alone;
-  for (std::size_t k = 0; k < 2; ++k) renderer.Render(car, std::span(&prisms[k], 1), nullptr, &alone[k]);
+  for (std::size_t k = 0; k < 2; ++k)
+    renderer.Render(car, std::span(&prisms[k], 1), nullptr, &alone[k]);
   std::array<int, 3> count{};
   for (std::size_t i = 0; i < ids.size(); ++i) {
     ASSERT_LE(ids[i], 2) << i;
@@ -675,9 +679,9 @@ TEST(RayCasterTest, PrismLabelsNameTheObjectEachPixelSeesWhateverItsColour) {
   }
   EXPECT_GT(count[1], 1000);
   EXPECT_GT(count[2], 1000);
-  EXPECT_THROW(renderer.RenderLabels(car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
-                                     LabelView{ids.data(), params.width_px},
-                                     std::vector<std::uint8_t>{1}),
+  EXPECT_THROW(renderer.RenderLabels(
+                   car, prisms, all, [](const Bgr&) { return std::uint8_t{0}; },
+                   LabelView{ids.data(), params.width_px}, std::vector<std::uint8_t>{1}),
                std::invalid_argument);
 }
 

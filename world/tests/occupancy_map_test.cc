@@ -71,11 +71,11 @@ TEST(OccupancyMapTest, APlannerMapLargerThanTheFloorIsFreeBeyondIt) {
   const OccupancyMap map = BuildStaticMap(track);
   EXPECT_EQ(map.width_cells, 120);
   EXPECT_TRUE(map.origin_m.isApprox(Vec2(-3.0, -3.0)));
-  EXPECT_FALSE(map.Occupied({2.5, 0.0}));   // beyond the 4 m floor, on the map: free
-  EXPECT_TRUE(map.Occupied({0.0, 0.01}));   // the middle line where it was
-  EXPECT_TRUE(map.Occupied({0.0, 0.9}));    // inside the filled island, as on the floor's map
+  EXPECT_FALSE(map.Occupied({2.5, 0.0}));  // beyond the 4 m floor, on the map: free
+  EXPECT_TRUE(map.Occupied({0.0, 0.01}));  // the middle line where it was
+  EXPECT_TRUE(map.Occupied({0.0, 0.9}));   // inside the filled island, as on the floor's map
   EXPECT_TRUE(map.Occupied({3.01, 0.0}));  // outside the map
-  spec.planner_map_size_m = 3.0;            // smaller than the floor
+  spec.planner_map_size_m = 3.0;           // smaller than the floor
   EXPECT_THROW(spec.Validate(), std::invalid_argument);
 }
 

@@ -174,14 +174,14 @@ TEST(TrafficLightServerTest, TheRecordsAddUpToTheCountersAndNameTheIntersection)
   server.OnFree(At(3.0), {0});          // releases 1, grants it to car 1
   server.OnFree(At(3.5), {3});          // releases nothing
   server.OnTick(At(8.0));               // car 1 silent since 2.0: its lease expired at 7.0
-  EXPECT_THAT(server.TakeRecords(),
-              ElementsAre(ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kGrant, 0, kI1},
-                          ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kRequest, 1, kI1},
-                          ServerRecord{K::kDenied, 1, kI1}, ServerRecord{K::kRequest, 2, kI0},
-                          ServerRecord{K::kGrant, 2, kI0}, ServerRecord{K::kFree, 0, kI1},
-                          ServerRecord{K::kGrant, 1, kI1}, ServerRecord{K::kFree, 3, -1},
-                          ServerRecord{K::kLeaseExpired, 2, kI0},
-                          ServerRecord{K::kLeaseExpired, 1, kI1}));
+  EXPECT_THAT(
+      server.TakeRecords(),
+      ElementsAre(ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kGrant, 0, kI1},
+                  ServerRecord{K::kRequest, 0, kI1}, ServerRecord{K::kRequest, 1, kI1},
+                  ServerRecord{K::kDenied, 1, kI1}, ServerRecord{K::kRequest, 2, kI0},
+                  ServerRecord{K::kGrant, 2, kI0}, ServerRecord{K::kFree, 0, kI1},
+                  ServerRecord{K::kGrant, 1, kI1}, ServerRecord{K::kFree, 3, -1},
+                  ServerRecord{K::kLeaseExpired, 2, kI0}, ServerRecord{K::kLeaseExpired, 1, kI1}));
   EXPECT_THAT(server.TakeRecords(), IsEmpty());  // taken
   const auto c = server.counters();
   EXPECT_EQ(c.requests, 4u);

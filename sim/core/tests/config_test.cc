@@ -118,11 +118,9 @@ TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
   EXPECT_EQ(o.named.at("b").gain, 7.0);
   EXPECT_EQ(o.rgb, (std::array<int, 3>{4, 5, 6}));
   EXPECT_THAT(ErrorOf("{}", {"inner.gian=1"}), HasSubstr("--set inner.gian: unknown key 'gian'"));
-  EXPECT_THAT(ErrorOf("{}", {"inner.gain=-2"}),
-              HasSubstr("--set inner.gain: gain must be >= 0"));
+  EXPECT_THAT(ErrorOf("{}", {"inner.gain=-2"}), HasSubstr("--set inner.gain: gain must be >= 0"));
   EXPECT_THAT(ErrorOf("items: []\n", {"items[0].gain=1"}), HasSubstr("index 0 is out of range"));
-  EXPECT_THAT(ErrorOf("{}", {"flag.x=1"}),
-              HasSubstr("--set flag.x: flag: expected true or false"));
+  EXPECT_THAT(ErrorOf("{}", {"flag.x=1"}), HasSubstr("--set flag.x: flag: expected true or false"));
   EXPECT_THAT(ErrorOf("flag: true\n", {"flag.x=1"}), HasSubstr("'flag' is not a mapping"));
 }
 

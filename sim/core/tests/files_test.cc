@@ -1,8 +1,6 @@
 // Atomic files and folders: a reader finds the old content or the new, and nothing is left behind.
 #include "sim/core/files.h"
 
-#include "sim/core/config.h"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "sim/core/config.h"
 
 namespace autonomsim::sim {
 namespace {

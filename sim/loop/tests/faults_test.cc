@@ -1,7 +1,9 @@
-// Faults on purpose (sim/loop/faults.h), each in a run: the default scenario (two stack-driven cars)
-// shortened, with one fault, against the same run without it. In that run (seed 42) car 1 is
+// Faults on purpose (sim/loop/faults.h), each in a run: the default scenario (two stack-driven
+// cars) shortened, with one fault, against the same run without it. In that run (seed 42) car 1 is
 // granted intersection 0 at 7.72 s and goes at 7.8 s, car 0 waits for it from 9.3 s, car 1 crosses
 // from 11.3 s to 16.2 s and frees it at 16.9 s; car 0 is granted then.
+#include "sim/loop/faults.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +13,6 @@
 #include <vector>
 
 #include "sim/core/config.h"
-#include "sim/loop/faults.h"
 #include "sim/loop/simulation.h"
 #include "sim/scenario/run_record.h"
 
@@ -21,7 +22,7 @@ namespace {
 constexpr const char* kScenario = "scenarios/lab_two_cars.yaml";
 
 RunRecord RunWithFaults(const std::string& faults, double duration_s = 25.0,
-              std::vector<std::string> more = {}) {
+                        std::vector<std::string> more = {}) {
   std::vector<std::string> overrides = {"duration_s=" + std::to_string(duration_s), "expect=[]",
                                         "faults=" + faults};
   overrides.insert(overrides.end(), more.begin(), more.end());
@@ -166,7 +167,8 @@ TEST(Faults, APartitionLosesTheGrantAndTheClientAsksAgain) {
 }
 
 TEST(Faults, AnUplinkPartitionLosesOnlyWhatTheCarSends) {
-  const RunRecord record = RunWithFaults("[{v2i_partition: {car: 0, direction: up, at_s: 5, for_s: 10}}]");
+  const RunRecord record =
+      RunWithFaults("[{v2i_partition: {car: 0, direction: up, at_s: 5, for_s: 10}}]");
   int up = 0;
   for (const Event& e : EventsOf(record, "v2i_lost", 0)) {
     EXPECT_TRUE(e.detail.starts_with("/vtl/request") || e.detail.starts_with("/vtl/free"))
@@ -177,7 +179,8 @@ TEST(Faults, AnUplinkPartitionLosesOnlyWhatTheCarSends) {
 }
 
 TEST(Faults, ALossBurstLosesSomeMessagesOfItsCar) {
-  const RunRecord record = RunWithFaults("[{v2i_loss_burst: {car: 1, loss: 0.5, at_s: 0, for_s: 25}}]");
+  const RunRecord record =
+      RunWithFaults("[{v2i_loss_burst: {car: 1, loss: 0.5, at_s: 0, for_s: 25}}]");
   const int lost = LostWithCause(record, "v2i_loss_burst", 1);
   EXPECT_GT(lost, 0);
   EXPECT_LT(static_cast<std::uint64_t>(lost), record.v2i.sent / 2);  // car 1's half at most
@@ -265,7 +268,9 @@ TEST(Faults, ABlackedOutCameraSeesNoLane) {
       RunWithFaults("[{camera_blackout: {car: 0, camera: color, at_s: 5, for_s: 2}}]");
   const PerceptionMetrics& dark = *record.cars[0].perception;
   const PerceptionMetrics& before = *Baseline().cars[0].perception;
-  const auto invalid = [](const PerceptionMetrics& m) { return m.lane_frames - m.lane_valid_frames; };
+  const auto invalid = [](const PerceptionMetrics& m) {
+    return m.lane_frames - m.lane_valid_frames;
+  };
   // 2 s at 30 fps: ≈ 60 more frames without a lane
   EXPECT_GE(invalid(dark), invalid(before) + 50);
 }

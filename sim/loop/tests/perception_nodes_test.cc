@@ -16,8 +16,9 @@ constexpr const char* kDefault = "scenarios/lab_two_cars_oracle.yaml";
 
 // (and no expectations: the runs are shorter than the scenarios' deadlines)
 std::vector<std::string> WithPerception(std::vector<std::string> overrides, int car_index = 0) {
-  overrides.insert(overrides.begin(),
-                   {"cars[" + std::to_string(car_index) + "].perception.enabled=true", "expect=[]"});
+  overrides.insert(
+      overrides.begin(),
+      {"cars[" + std::to_string(car_index) + "].perception.enabled=true", "expect=[]"});
   return overrides;
 }
 

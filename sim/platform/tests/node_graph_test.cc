@@ -361,7 +361,7 @@ TEST(NodeGraph, DeterministicWithThePlatformAndJitterOn) {
   const std::vector<double> second = JitteredRun(7);
   ASSERT_EQ(first.size(), 3u * 6u);
   EXPECT_GT(first[0] + first[6] + first[12], 150.0);  // timed jobs of the three nodes
-  EXPECT_EQ(first, second);  // bit for bit
+  EXPECT_EQ(first, second);                           // bit for bit
   EXPECT_NE(first, JitteredRun(8));
 }
 

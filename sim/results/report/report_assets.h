@@ -4,11 +4,11 @@
 
 namespace autonomsim::sim::report_assets {
 
-extern const char kHtml[];      // report.html: the template (placeholders /*@...@*/ and @...@)
-extern const char kCss[];       // report.css
-extern const char kJs[];        // report.js
-extern const char kUplotJs[];   // vendor/uplot/uPlot.iife.min.js
-extern const char kUplotCss[];  // vendor/uplot/uPlot.min.css
+extern const char kHtml[];       // report.html: the template (placeholders /*@...@*/ and @...@)
+extern const char kCss[];        // report.css
+extern const char kJs[];         // report.js
+extern const char kUplotJs[];    // vendor/uplot/uPlot.iife.min.js
+extern const char kUplotCss[];   // vendor/uplot/uPlot.min.css
 extern const char kIndexHtml[];  // sweep_index.html: a sweep's index.html template
 
 }  // namespace autonomsim::sim::report_assets

@@ -153,10 +153,10 @@ TEST(ExpectationsTest, MinThroughputCountsEntriesPerMinutePerIntersection) {
   r.events = {At(1, "request", 0, 1)};
   for (int k = 0; k < 5; ++k) r.events.push_back(Enter(10.0 + k, k % 2, 0, true));
   // intersection 0: 5 in 100 s = 3/min; intersection 1: asked for, never entered
-  EXPECT_TRUE(Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.0}), r)
-                  .passed);
-  EXPECT_FALSE(Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.1}), r)
-                   .passed);
+  EXPECT_TRUE(
+      Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.0}), r).passed);
+  EXPECT_FALSE(
+      Judge(Clause("min_throughput", ExpectArgs{.intersection = 0, .per_minute = 3.1}), r).passed);
   const ExpectationResult all = Judge(Clause("min_throughput", ExpectArgs{.per_minute = 1.0}), r);
   EXPECT_FALSE(all.passed);
   EXPECT_THAT(all.detail, HasSubstr("intersection 1: 0 crossings"));

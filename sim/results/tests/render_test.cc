@@ -7,8 +7,8 @@
 #include <unistd.h>
 
 #include <cstring>
-#include <map>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 
 #include "sim/loop/simulation.h"
@@ -51,8 +51,7 @@ TEST(RenderTest, TheSnapshotIsTheFullRunsWorldAtThatInstant) {
 
 TEST(RenderTest, SeveralSnapshotsFromOneRunAreEachInstantsOwn) {
   const LoadedScenario scenario = LoadScenario(kObstacleScenario);
-  const std::vector<Time> times{kZeroTime, FromSeconds(3.0), FromSeconds(12.0),
-                                FromSeconds(13.35)};
+  const std::vector<Time> times{kZeroTime, FromSeconds(3.0), FromSeconds(12.0), FromSeconds(13.35)};
   const std::vector<WorldSnapshot> snapshots = SnapshotsAt(scenario, times);
   ASSERT_EQ(snapshots.size(), times.size());
   for (std::size_t k = 0; k < times.size(); ++k) {
@@ -200,7 +199,8 @@ TEST(RenderTest, TheDepthPreviewCarriesAColourBar) {
   depth.width = 64;
   depth.height = 200;
   depth.mm.assign(64 * 200, 0);
-  for (std::size_t i = 0; i < depth.mm.size(); ++i) depth.mm[i] = static_cast<std::uint16_t>(600 + i);
+  for (std::size_t i = 0; i < depth.mm.size(); ++i)
+    depth.mm[i] = static_cast<std::uint16_t>(600 + i);
   const cv::Mat out = DepthPreviewWithColourBar(depth, 0.6, 8.0);
   ASSERT_EQ(out.type(), CV_8UC3);
   ASSERT_EQ(out.cols, 64 + kColourBarPanelWidthPx);

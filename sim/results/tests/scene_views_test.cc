@@ -17,10 +17,10 @@ constexpr const char* kViewsScenario = "scenarios/static_obstacle.yaml";
 // How many pixels of `image` have one of the colours of car `id`'s faces.
 int PixelsOfCar(const cv::Mat& image, const Scenario& scenario, const CarBody& car) {
   const cv::Scalar c = CarColourBgr(scenario, car.id);
-  const vehicle::Prism prism{world::OrientedBox{car.pose, car.length_m, car.width_m}, car.height_m,
-                             vehicle::Bgr{static_cast<std::uint8_t>(c[0]),
-                                          static_cast<std::uint8_t>(c[1]),
-                                          static_cast<std::uint8_t>(c[2])}};
+  const vehicle::Prism prism{
+      world::OrientedBox{car.pose, car.length_m, car.width_m}, car.height_m,
+      vehicle::Bgr{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]),
+                   static_cast<std::uint8_t>(c[2])}};
   const std::array<vehicle::Bgr, 7> faces = vehicle::PrismFaceColours(prism);
   int n = 0;
   for (int v = 0; v < image.rows; ++v) {
@@ -50,9 +50,9 @@ TEST(SceneViewsTest, TheChaseCameraSeesItsCarFromBehindAndTheOverviewEveryCar) {
     const int own = PixelsOfCar(chase, scenario.scenario, car);
     EXPECT_GT(own, size.area() / 20) << "car " << car.id;
     const cv::Vec3b centre = chase.at<cv::Vec3b>(size.height * 2 / 3, size.width / 2);
-    const int centre_is_car = PixelsOfCar(cv::Mat(1, 1, CV_8UC3, cv::Scalar(centre[0], centre[1],
-                                                                            centre[2])),
-                                          scenario.scenario, car);
+    const int centre_is_car =
+        PixelsOfCar(cv::Mat(1, 1, CV_8UC3, cv::Scalar(centre[0], centre[1], centre[2])),
+                    scenario.scenario, car);
     EXPECT_EQ(centre_is_car, 1) << "car " << car.id;
   }
   const cv::Mat overview = views.Overview(snapshot, size);

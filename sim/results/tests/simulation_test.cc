@@ -5,17 +5,16 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <map>
-#include <set>
-
 #include <algorithm>
 #include <array>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
-#include "sim/results/expectations.h"
 #include "sim/mqtt/mqtt_process.h"  // TempDir
+#include "sim/results/expectations.h"
 #include "sim/results/outputs.h"
 #include "vehicle/tests/gl_available.h"
 
@@ -85,8 +84,7 @@ TEST(SimulationTest, TheGlCameraBackendGivesTheSameResultTwiceAndOnTwoThreads) {
 // A run streamed into its folder (RunFolder, what `run`, `check --out` and sweeps do) gives the
 // same files, hash and verdicts as the same run kept in memory.
 TEST(SimulationTest, AStreamedRunWritesWhatARunInMemoryWrites) {
-  const LoadedScenario scenario =
-      LoadScenario("scenarios/static_obstacle.yaml", {"v2i.loss=0.2"});
+  const LoadedScenario scenario = LoadScenario("scenarios/static_obstacle.yaml", {"v2i.loss=0.2"});
   const TempDir dir("simulation_test");
   const RunRecord memory = RunScenario(scenario);
   WriteRunFolder(scenario, memory, EvaluateExpectations(scenario.scenario, memory), 0.0,
@@ -102,7 +100,8 @@ TEST(SimulationTest, AStreamedRunWritesWhatARunInMemoryWrites) {
   const auto verdicts = EvaluateExpectations(scenario.scenario, streamed);
   const auto expected = EvaluateExpectations(scenario.scenario, memory);
   ASSERT_EQ(verdicts.size(), expected.size());
-  for (std::size_t i = 0; i < verdicts.size(); ++i) EXPECT_EQ(verdicts[i].detail, expected[i].detail);
+  for (std::size_t i = 0; i < verdicts.size(); ++i)
+    EXPECT_EQ(verdicts[i].detail, expected[i].detail);
   folder.Complete(scenario, streamed, verdicts, 0.0);
   for (const char* file : {"trajectory.csv", "events.jsonl", "track.png"}) {
     EXPECT_EQ(ReadFile(dir.path() / "streamed" / file), ReadFile(dir.path() / "memory" / file))
@@ -161,9 +160,8 @@ TEST(SimulationTest, LostMessagesDelayCarsButNeverBreakTheIntersectionRules) {
 
 TEST(SimulationTest, TheServerCountersAreWhatItsEventsAddUpTo) {
   // a lossy link and a short lease: lost keepalives let leases expire
-  const RunRecord record = RunScenario(
-      LoadScenario(kDefault, {"v2i.loss=0.5", "traffic_lights.lease_s=1.5", "duration_s=120",
-                              "expect=[]"}));
+  const RunRecord record = RunScenario(LoadScenario(
+      kDefault, {"v2i.loss=0.5", "traffic_lights.lease_s=1.5", "duration_s=120", "expect=[]"}));
   std::map<std::string, std::uint64_t> count;
   std::set<int> intersections;
   ForEachEvent(record, [&](const Event& e) {
@@ -302,10 +300,9 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
 TEST(SimulationStackTest, WithoutThePoseFixTheEstimateDrifts) {
   const RunRecord fixed =
       RunScenario(LoadScenario("scenarios/stack_obstacle.yaml", {"duration_s=40", "expect=[]"}));
-  const RunRecord drifting =
-      RunScenario(LoadScenario("scenarios/stack_obstacle.yaml",
-                               {"duration_s=40", "expect=[]",
-                                "cars[0].stack.localization.use_pose_fix=false"}));
+  const RunRecord drifting = RunScenario(LoadScenario(
+      "scenarios/stack_obstacle.yaml",
+      {"duration_s=40", "expect=[]", "cars[0].stack.localization.use_pose_fix=false"}));
   ASSERT_TRUE(fixed.cars[0].stack && drifting.cars[0].stack);
   EXPECT_LT(fixed.cars[0].stack->final_localization_error_m, 0.06);
   EXPECT_GT(drifting.cars[0].stack->final_localization_error_m,

@@ -145,7 +145,8 @@ TEST(Summary, WhatIsWrittenReadsBackAsTheSameFile) {
   EXPECT_EQ(SummaryJson(ParseSummary(nlohmann::json::parse(written.dump()))), written);
 
   // a real run with boards, perception and stack metrics
-  const LoadedScenario loaded = LoadScenario("scenarios/lab_two_cars.yaml", {"duration_s=1", "expect=[]"});
+  const LoadedScenario loaded =
+      LoadScenario("scenarios/lab_two_cars.yaml", {"duration_s=1", "expect=[]"});
   Simulation simulation(loaded);
   simulation.Run();
   const nlohmann::json run = SummaryJson(Summarize(loaded, simulation.record(), {}, 0.0));

@@ -34,8 +34,7 @@ int Identity(const int&, const int& in, void*) { return in; }
 
 // A source every 100 ms into "work" (jobs never overlap), on a board built from `config`;
 // returns the turnaround statistics of "work"'s jobs, in ms.
-Stats WorkTurnarounds(const PlatformConfig& config, std::uint64_t seed = 1,
-                                    int* cores = nullptr) {
+Stats WorkTurnarounds(const PlatformConfig& config, std::uint64_t seed = 1, int* cores = nullptr) {
   Kernel kernel;
   RngStreams rng(seed);
   PlatformConfig c = config;
@@ -93,7 +92,8 @@ TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
   EXPECT_LE(a.max, 20.0 + 1e-6);
   EXPECT_GT(a.max - a.min, 5.0);
   const Stats again = WorkTurnarounds(uniform, 7);  // same seed, same draws
-  EXPECT_EQ(std::tie(a.min, a.p50, a.max, a.mean), std::tie(again.min, again.p50, again.max, again.mean));
+  EXPECT_EQ(std::tie(a.min, a.p50, a.max, a.mean),
+            std::tie(again.min, again.p50, again.max, again.mean));
   EXPECT_NE(a.mean, WorkTurnarounds(uniform, 8).mean);
 
   PlatformConfig lognormal;

@@ -26,16 +26,30 @@ std::string Read(const std::filesystem::path& file) {
 // negative and tiny numbers, every optional event field, and text that JSON must escape.
 RunRecord HandMadeRecord() {
   RunRecord r;
-  r.trajectory = {
-      {.t = milliseconds(0), .car = 0, .x_m = 0.1, .y_m = -2.2750000000000004, .yaw_rad = 3.14159,
-       .speed_mps = 1e-300, .steering_rad = -0.0, .throttle = 0.25},
-      {.t = std::chrono::nanoseconds(86'399'999'999'999), .car = 9, .x_m = -1.0 / 3.0,
-       .y_m = 2.5, .lateral_error_m = 0.172, .route_progress_m = 12345.678}};
-  r.events = {{.t = milliseconds(1500), .type = "request", .car = 1, .intersection = 0},
-              {.t = milliseconds(1750), .type = "enter", .car = 1, .intersection = 0,
-               .granted = false},
-              {.t = milliseconds(2000), .type = "collision", .car = 1, .other_car = 2,
-               .obstacle = "box \"a\"", .lap = 3, .detail = "ü\n\t"}};
+  r.trajectory = {{.t = milliseconds(0),
+                   .car = 0,
+                   .x_m = 0.1,
+                   .y_m = -2.2750000000000004,
+                   .yaw_rad = 3.14159,
+                   .speed_mps = 1e-300,
+                   .steering_rad = -0.0,
+                   .throttle = 0.25},
+                  {.t = std::chrono::nanoseconds(86'399'999'999'999),
+                   .car = 9,
+                   .x_m = -1.0 / 3.0,
+                   .y_m = 2.5,
+                   .lateral_error_m = 0.172,
+                   .route_progress_m = 12345.678}};
+  r.events = {
+      {.t = milliseconds(1500), .type = "request", .car = 1, .intersection = 0},
+      {.t = milliseconds(1750), .type = "enter", .car = 1, .intersection = 0, .granted = false},
+      {.t = milliseconds(2000),
+       .type = "collision",
+       .car = 1,
+       .other_car = 2,
+       .obstacle = "box \"a\"",
+       .lap = 3,
+       .detail = "ü\n\t"}};
   return r;
 }
 

@@ -4,12 +4,12 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 
@@ -229,16 +229,17 @@ TEST(Sweep, ParallelForRunsEveryIndexOnce) {
 }
 
 TEST(SweepPlots, TheScriptDrawsEachSeriesFromItsBlockWithItsColourAndName) {
-  const PlotSpec spec{.title = "Largest lateral error, against v2i.latency_s",
-                      .subtitle = "One run at each value.",
-                      .x_label = "v2i.latency_s",
-                      .y_label = "lateral error (m)",
-                      .series = {PlotSeries{.label = "car0", .x = {0, 1, 2}, .y = {0.1, 0.3, 0.2},
-                                            .colour = "#00a0ff"},
-                                 PlotSeries{.label = "car1's runs", .x = {0, 1}, .y = {0.2, NAN},
-                                            .dots = true, .line = false}},
-                      .categories = {"lab", "safe"},
-                      .log_x = false};
+  const PlotSpec spec{
+      .title = "Largest lateral error, against v2i.latency_s",
+      .subtitle = "One run at each value.",
+      .x_label = "v2i.latency_s",
+      .y_label = "lateral error (m)",
+      .series =
+          {PlotSeries{.label = "car0", .x = {0, 1, 2}, .y = {0.1, 0.3, 0.2}, .colour = "#00a0ff"},
+           PlotSeries{
+               .label = "car1's runs", .x = {0, 1}, .y = {0.2, NAN}, .dots = true, .line = false}},
+      .categories = {"lab", "safe"},
+      .log_x = false};
   const std::string data = GnuplotData(spec);
   EXPECT_THAT(data, HasSubstr("# series 0: car0\n0 0.1\n1 0.3\n2 0.2\n"));
   EXPECT_THAT(data, ::testing::EndsWith("# series 1: car1's runs\n0 0.2\n"));  // no NaN line
@@ -254,14 +255,15 @@ TEST(SweepPlots, TheScriptDrawsEachSeriesFromItsBlockWithItsColourAndName) {
 }
 
 TEST(SweepPlots, ManyLongCategoryNamesAreSlantedAndGivenRoomBelow) {
-  PlotSpec spec{.title = "Collisions, against faults", .x_label = "faults", .y_label = "collisions"};
+  PlotSpec spec{
+      .title = "Collisions, against faults", .x_label = "faults", .y_label = "collisions"};
   spec.series = {PlotSeries{.label = "all cars", .x = {0, 1}, .y = {0, 1}}};
   spec.categories = {"lab", "safe"};
   EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"), ::testing::Not(HasSubstr("rotate")));
   // the faults study's twelve kinds do not fit side by side
-  spec.categories = {"none",        "v2i_partition", "v2i_loss_burst", "server_restart",
-                     "broker_outage", "car_stall",   "node_crash",     "node_hang",
-                     "camera_freeze", "camera_blackout", "imu_bias_step", "localization_jump"};
+  spec.categories = {"none",          "v2i_partition",   "v2i_loss_burst", "server_restart",
+                     "broker_outage", "car_stall",       "node_crash",     "node_hang",
+                     "camera_freeze", "camera_blackout", "imu_bias_step",  "localization_jump"};
   const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
   EXPECT_THAT(gp, HasSubstr("'localization_jump' 11) rotate by 30 right"));
   EXPECT_THAT(gp, HasSubstr("set bmargin 7"));  // 2 lines + 0.3 of a line per character
@@ -284,8 +286,8 @@ TEST(SweepRun, APlotSaysWhatItsLinesAverageAndShowsEachRun) {
   spec.overrides = {"duration_s=3", "expect=[]"};
   spec.axes = {ParseVary("v2i.latency_s=0,1")};
   spec.repeat = 2;
-  RunSweep(spec, SweepOptions{.out_dir = dir.path, .jobs = 2, .shard = {}, .plots = true,
-                              .progress = {}});
+  RunSweep(spec, SweepOptions{
+                     .out_dir = dir.path, .jobs = 2, .shard = {}, .plots = true, .progress = {}});
   const std::string gp = ReadText(dir.path / "plots" / "laps_vs_v2i_latency_s.gp");
   EXPECT_THAT(gp, HasSubstr("Lines: the mean of the 2 runs at each point (over 2 seeds); dots: "
                             "each run."));
@@ -347,7 +349,8 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   shard2.shard = {2, 2};
   EXPECT_EQ(RunSweep(spec, shard1).selected, 2u);
   EXPECT_EQ(RunSweep(spec, shard2).selected, 2u);
-  EXPECT_EQ(MergeSweeps({dir.path / "s1", dir.path / "s2"}, dir.path / "merged", false).missing, 0u);
+  EXPECT_EQ(MergeSweeps({dir.path / "s1", dir.path / "s2"}, dir.path / "merged", false).missing,
+            0u);
   EXPECT_EQ(ReadText(dir.path / "merged" / "results.csv"), table);
   // one shard alone is incomplete, and says so
   EXPECT_EQ(MergeSweeps({dir.path / "s1"}, dir.path / "half", false).missing, 2u);
