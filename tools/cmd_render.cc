@@ -44,7 +44,7 @@ int RenderCommand(const RenderArgs& a) {
   }
   const sim::Scenario& scenario = loaded->scenario;
   const sim::CameraBackend camera_backend =
-      sim::ParseCameraBackend(a.backend.value_or(scenario.camera_backend));
+      a.backend ? sim::ParseCameraBackend(*a.backend) : scenario.camera_backend;
   const sim::CarConfig* car = scenario.FindCar(a.car);
   if (car == nullptr) {
     std::string ids;
@@ -96,7 +96,7 @@ int RenderCommand(const RenderArgs& a) {
     fmt::print("{} instants: {}/t_*/\n", rendered.size(), a.out);
   }
   fmt::print("car {} at {} instant(s) of {} rendered ({}{}) in {:.2f} s wall\n", a.car,
-             rendered.size(), scenario.name, sim::CameraBackendName(camera_backend),
+             rendered.size(), scenario.name, ToName(camera_backend),
              a.labels ? ", with labels" : "", WallSecondsSince(start));
   return kExitOk;
 }

@@ -34,7 +34,9 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
     const sim::V2IConfig& v2i = loaded->scenario.v2i;
     fmt::print(stderr, "autonomsim: running {} ({} cars, {:.0f} s simulated{}, seed {})\n",
                scenario_file, loaded->scenario.cars.size(), duration_s,
-               v2i.link == "realtime" ? " in real time against broker " + v2i.mqtt.broker : "",
+               v2i.link == sim::V2ILinkKind::kRealtime
+                   ? " in real time against broker " + v2i.mqtt.broker
+                   : "",
                loaded->scenario.seed);
   }
   Progress progress(duration_s, quiet);

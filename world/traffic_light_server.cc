@@ -168,31 +168,6 @@ std::vector<ServerRecord> TrafficLightServer::TakeRecords() {
   return taken;
 }
 
-namespace {
-constexpr std::array<std::pair<ServerRecord::Kind, const char*>, 6> kRecordNames{{
-    {ServerRecord::Kind::kRequest, "request"},
-    {ServerRecord::Kind::kFree, "free"},
-    {ServerRecord::Kind::kGrant, "grant"},
-    {ServerRecord::Kind::kDenied, "denied"},
-    {ServerRecord::Kind::kLeaseExpired, "lease_expired"},
-    {ServerRecord::Kind::kQueueDrop, "queue_drop"},
-}};
-}  // namespace
-
-const char* ToString(ServerRecord::Kind kind) {
-  for (const auto& [k, name] : kRecordNames) {
-    if (k == kind) return name;
-  }
-  return "?";
-}
-
-std::optional<ServerRecord::Kind> ServerRecordKindFromString(const std::string& name) {
-  for (const auto& [k, n] : kRecordNames) {
-    if (name == n) return k;
-  }
-  return std::nullopt;
-}
-
 std::optional<Time> TrafficLightServer::NextDeadline() const {
   if (!fifo_) return std::nullopt;
   std::optional<Time> earliest;

@@ -71,8 +71,6 @@ struct ServerRecord {
   std::vector<int> also_released;  // kFree only
   friend bool operator==(const ServerRecord&, const ServerRecord&) = default;
 };
-const char* ToString(ServerRecord::Kind kind);  // "request", "free", ... as the events name them
-std::optional<ServerRecord::Kind> ServerRecordKindFromString(const std::string& name);
 
 class TrafficLightServer {
  public:

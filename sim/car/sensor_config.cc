@@ -85,24 +85,14 @@ void SensorSuiteParams::Validate() const {
   });
 }
 
-std::optional<CameraBackend> CameraBackendNamed(const std::string& name) {
-  if (name == "raycast") return CameraBackend::kRayCast;
-  if (name == "gl") return CameraBackend::kGl;
-  return std::nullopt;
-}
-
 CameraBackend ParseCameraBackend(const std::string& name) {
-  const std::optional<CameraBackend> backend = CameraBackendNamed(name);
+  const std::optional<CameraBackend> backend = FromName<CameraBackend>(name);
   Require(backend.has_value(), [&] {
     return "camera_backend must be 'raycast' (the ray caster) or 'gl' (OpenGL ES through EGL), "
            "got '" +
            name + "'";
   });
   return *backend;
-}
-
-const char* CameraBackendName(CameraBackend backend) {
-  return backend == CameraBackend::kGl ? "gl" : "raycast";
 }
 
 }  // namespace autonomsim::sim

@@ -12,6 +12,7 @@
 #include "vehicle/ray_caster.h"
 #include "vehicle/ultrasonic.h"
 #include "vehicle/wheel_encoder.h"
+#include "world/enum_names.h"
 
 namespace autonomsim::sim {
 
@@ -109,10 +110,16 @@ struct SensorSuiteParams {
 // rasteriser in an offscreen OpenGL ES context (vehicle/gl_camera.h). A scenario names it
 // `camera_backend: raycast | gl`.
 enum class CameraBackend { kRayCast, kGl };
-// The backend a name means ("raycast", "gl"); nullopt for any other.
-std::optional<CameraBackend> CameraBackendNamed(const std::string& name);
-// The same, std::invalid_argument naming the choices for any other.
+// The backend a name means, std::invalid_argument naming the choices for any other (a command
+// line's --backend; a scenario's camera_backend is read as the enum).
 CameraBackend ParseCameraBackend(const std::string& name);
-const char* CameraBackendName(CameraBackend backend);
 
 }  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::CameraBackend> {
+  static constexpr std::array<std::pair<sim::CameraBackend, std::string_view>, 2> kEntries{
+      {{sim::CameraBackend::kRayCast, "raycast"}, {sim::CameraBackend::kGl, "gl"}}};
+};
+}  // namespace autonomsim

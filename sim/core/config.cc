@@ -100,22 +100,32 @@ std::string Describe(const YAML::Node& node) {
   }
 }
 
+std::string ClosestName(const std::string& key, const std::vector<std::string>& candidates) {
+  std::string closest;
+  std::size_t best = std::numeric_limits<std::size_t>::max();
+  for (const std::string& candidate : candidates) {
+    const std::size_t d = EditDistance(key, candidate);
+    if (d < best) {
+      best = d;
+      closest = candidate;
+    }
+  }
+  return best <= std::max<std::size_t>(2, key.size() / 3) ? closest : std::string();
+}
+
+std::string LastKey(const std::string& path) {
+  const std::size_t dot = path.rfind('.');
+  return dot == std::string::npos ? path : path.substr(dot + 1);
+}
+
 void CheckKeys(const YAML::Node& node, const std::vector<std::string>& known,
                const std::string& path, const ConfigSource& source) {
   for (const auto& item : node) {
     const std::string key = item.first.Scalar();
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
     std::string message = "unknown key '" + key + "'";
-    std::string closest;
-    std::size_t best = std::numeric_limits<std::size_t>::max();
-    for (const std::string& candidate : known) {
-      const std::size_t d = EditDistance(key, candidate);
-      if (d < best) {
-        best = d;
-        closest = candidate;
-      }
-    }
-    if (!closest.empty() && best <= std::max<std::size_t>(2, key.size() / 3)) {
+    const std::string closest = ClosestName(key, known);
+    if (!closest.empty()) {
       message += " (did you mean '" + closest + "'?)";
     } else {
       std::string list;

@@ -18,8 +18,10 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <variant>
 #include <vector>
 
+#include "world/enum_names.h"
 #include "world/time.h"
 
 namespace autonomsim::sim {
@@ -57,6 +59,21 @@ void BreakAliases(YAML::Node& root);
 // for anything but `name(.name|[N])*`.
 std::vector<std::string> ParseOverridePath(const std::string& key);
 
+// A key a struct must have: `v("car", car, kRequired);` in its Describe. The reader refuses a
+// mapping without it ("car_stall needs car"); the writer and the reference treat it as any key.
+struct RequiredKey {};
+inline constexpr RequiredKey kRequired{};
+
+// A closed set of kinds read as a one-key mapping, the key naming the kind: a `std::variant` of
+// structs each with `static constexpr E kKind` (E a NamedEnum, sim/core/../world/enum_names.h),
+// e.g. `- car_stall: {car: 1, at_s: 20}`. NameTable<E> also gives `kClause`, the sentence that
+// opens the error for a mapping that names no kind or several ("a faults entry names exactly one
+// fault, e.g. ...").
+template <class T>
+struct IsKindVariant : std::false_type {};
+template <class... Ts>
+struct IsKindVariant<std::variant<Ts...>> : std::true_type {};
+
 namespace detail {
 
 template <class T>
@@ -78,6 +95,10 @@ struct IsOptional<std::optional<T>> : std::true_type {};
 
 std::string JoinPath(const std::string& parent, const std::string& key);
 std::string JoinIndex(const std::string& parent, std::size_t index);
+// The last key of a path ("faults[0].car_stall" -> "car_stall").
+std::string LastKey(const std::string& path);
+// The candidate closest to `key` by edit distance if it is close enough to be a typo, else "".
+std::string ClosestName(const std::string& key, const std::vector<std::string>& candidates);
 // "file:line:col: path: " or "--set path: " when the value came from the command line.
 std::string Where(const YAML::Node& node, const std::string& path, const ConfigSource& source);
 [[noreturn]] void Fail(const YAML::Node& node, const std::string& path, const ConfigSource& source,
@@ -116,6 +137,11 @@ class YamlFieldReader {
     const YAML::Node child = node_[key];
     if (child) Read(child, value, JoinPath(path_, key), source_);
   }
+  template <class T>
+  void operator()(const char* key, T& value, RequiredKey) {
+    if (!node_[key]) Fail(node_, path_, source_, LastKey(path_) + " needs " + key);
+    (*this)(key, value);
+  }
   const std::vector<std::string>& known() const { return known_; }
 
  private:
@@ -125,9 +151,66 @@ class YamlFieldReader {
   std::vector<std::string> known_;
 };
 
+template <NamedEnum E>
+void ReadEnum(const YAML::Node& node, E& out, const std::string& path, const ConfigSource& source) {
+  std::string name;
+  ReadScalar(node, name, path, source);
+  if (const std::optional<E> value = FromName<E>(name)) {
+    out = *value;
+    return;
+  }
+  std::vector<std::string> names;
+  for (const auto& entry : NameTable<E>::kEntries) names.emplace_back(entry.second);
+  const std::string closest = ClosestName(name, names);
+  Fail(node, path, source,
+       LastKey(path) + " must be " + NameList<E>() + ", got '" + name + "'" +
+           (closest.empty() ? "" : " (did you mean '" + closest + "'?)"));
+}
+
+template <class Variant, std::size_t I = 0>
+bool ReadAlternative(const std::string& kind, const YAML::Node& node, Variant& out,
+                     const std::string& path, const ConfigSource& source) {
+  if constexpr (I == std::variant_size_v<Variant>) {
+    return false;
+  } else {
+    using Alternative = std::variant_alternative_t<I, Variant>;
+    if (ToName(Alternative::kKind) != kind) {
+      return ReadAlternative<Variant, I + 1>(kind, node, out, path, source);
+    }
+    Alternative value{};
+    Read(node, value, JoinPath(path, kind), source);
+    out = std::move(value);
+    return true;
+  }
+}
+
+template <class Variant>
+void ReadKindVariant(const YAML::Node& node, Variant& out, const std::string& path,
+                     const ConfigSource& source) {
+  using Kind = std::remove_cv_t<decltype(std::variant_alternative_t<0, Variant>::kKind)>;
+  if (!node.IsMap() || node.size() != 1) {
+    Fail(node, path, source,
+         std::string(NameTable<Kind>::kClause) + "; got " +
+             (node.IsMap() ? std::to_string(node.size()) + " keys" : Describe(node)));
+  }
+  const auto item = node.begin();
+  if (!item->first.IsScalar()) {
+    Fail(item->first, path, source, "expected a name as key, got " + Describe(item->first));
+  }
+  const std::string kind = item->first.Scalar();
+  if (ReadAlternative(kind, item->second, out, path, source)) return;
+  std::vector<std::string> kinds;
+  for (const auto& entry : NameTable<Kind>::kEntries) kinds.emplace_back(entry.second);
+  CheckKeys(node, kinds, path, source);  // names the closest kind, or lists them all
+}
+
 template <class T>
 void Read(const YAML::Node& node, T& out, const std::string& path, const ConfigSource& source) {
-  if constexpr (IsOptional<T>::value) {
+  if constexpr (NamedEnum<T>) {
+    ReadEnum(node, out, path, source);
+  } else if constexpr (IsKindVariant<T>::value) {
+    ReadKindVariant(node, out, path, source);
+  } else if constexpr (IsOptional<T>::value) {
     typename T::value_type value{};
     Read(node, value, path, source);
     out = std::move(value);
@@ -196,6 +279,10 @@ class JsonFieldWriter {
     }
     json_[key] = ToJsonValue(value);
   }
+  template <class T>
+  void operator()(const char* key, const T& value, RequiredKey) {
+    (*this)(key, value);
+  }
   nlohmann::json take() { return std::move(json_); }
 
  private:
@@ -204,7 +291,15 @@ class JsonFieldWriter {
 
 template <class T>
 nlohmann::json ToJsonValue(const T& value) {
-  if constexpr (IsOptional<T>::value) {
+  if constexpr (NamedEnum<T>) {
+    return std::string(ToName(value));
+  } else if constexpr (IsKindVariant<T>::value) {
+    return std::visit(
+        [](const auto& alternative) {
+          return nlohmann::json{{std::string(ToName(alternative.kKind)), ToJsonValue(alternative)}};
+        },
+        value);
+  } else if constexpr (IsOptional<T>::value) {
     return value ? ToJsonValue(*value) : nlohmann::json();
   } else if constexpr (IsVector<T>::value || IsArray<T>::value) {
     nlohmann::json array = nlohmann::json::array();

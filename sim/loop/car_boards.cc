@@ -51,9 +51,9 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
   try {
     board->Finish(kZeroTime);
   } catch (const UnknownPlatformName& e) {  // a typo in the scenario: say where
-    if (!loaded.error_at) throw;
-    throw loaded.error_at({"cars", agent_index.at(config.id), "platform", e.field, e.name},
-                          e.detail);
+    throw loaded.ErrorAt("cars[" + std::to_string(agent_index.at(config.id)) + "].platform." +
+                             e.field + "." + e.name,
+                         e.detail);
   }
   return board;
 }
@@ -99,7 +99,7 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
             if (out.mode != agent->behavior_mode) {
               agent->behavior_mode = out.mode;
               Emit(Event{.t = kernel.Now(),
-                         .type = "behavior",
+                         .type = EventKind::kBehavior,
                          .car = id,
                          .detail = std::string(stack::ToString(out.mode)) +
                                    (out.mode == stack::BehaviorMode::kRecovery

@@ -46,10 +46,7 @@
 
 namespace autonomsim::sim {
 
-// The fault_begin event's detail: the fault's arguments in words, e.g. "node lane_planner for 2 s".
-std::string DescribeFault(const FaultClause& fault);
-
-// Whether the fault, without for_s, lasts to the run's end (true) or is done at once (false).
-bool LastsWithoutEnd(const FaultClause& fault);
+// Each kind's arguments, checks and detail: sim/scenario/fault_kinds.h. Scheduling them into a
+// run: Simulation::Impl::ScheduleFaults (sim/loop/faults.cc), one overload per kind.
 
 }  // namespace autonomsim::sim

@@ -36,7 +36,7 @@ std::unique_ptr<TrafficLightEndpoint> MakeServerEndpoint(const LoadedScenario& l
   std::vector<int> ids;
   for (const world::IntersectionSpec& i : loaded.track.spec().intersections) ids.push_back(i.id);
   const Scenario& scenario = loaded.scenario;
-  if (scenario.v2i.link == "mqtt") {
+  if (scenario.v2i.link == V2ILinkKind::kMqtt) {
     return MakeMqttEndpoint(scenario.v2i.mqtt, scenario.traffic_lights, std::move(ids));
   }
   return std::make_unique<EmbeddedTrafficLightEndpoint>(scenario.traffic_lights, std::move(ids));
@@ -71,16 +71,17 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario, std::shared_ptr<Re
 void Simulation::Impl::AddCars() {
   agents.reserve(scenario.cars.size());
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
-    const CarConfig& config = scenario.cars[i];
+    const LoadedCar& loaded_car = loaded.cars[i];
+    const CarConfig& config = *loaded_car.config;
+    const world::Pose2& start = loaded_car.start_pose;
     CarAgent agent;
     agent.config = &config;
-    agent.route = &loaded.routes[i];
-    agent.car = &physics.AddCar(config.id, config.vehicle, loaded.start_poses[i]);
-    agent.route_s_m = loaded.start_s_m[i];
-    const world::Vec2 heading = loaded.start_poses[i].heading();
+    agent.route = &loaded_car.route;
+    agent.car = &physics.AddCar(config.id, config.vehicle, start);
+    agent.route_s_m = loaded_car.start_s_m;
     agent.driver.rear_axle_s_m =
         agent.route->path
-            .Project(loaded.start_poses[i].position() - 0.5 * config.vehicle.wheelbase_m * heading)
+            .Project(start.position() - 0.5 * config.vehicle.wheelbase_m * start.heading())
             .s_m;
     agent.metrics.id = config.id;
     agent.metrics.route = agent.route->name;
@@ -94,7 +95,7 @@ void Simulation::Impl::AddSensorsAndBoards() {
   floor = world::RasterizeFloor(loaded.track);
   try {  // the GL backend's context and each camera's renderer
     sensor_world = std::make_unique<SensorEnvironment>(&physics, floor, scenario.appearance,
-                                                       ParseCameraBackend(scenario.camera_backend));
+                                                       scenario.camera_backend);
     for (const CarAgent& agent : agents) {
       const CarConfig& config = *agent.config;
       // On a board the cameras are the graph's source nodes, which capture the frames.
@@ -108,7 +109,7 @@ void Simulation::Impl::AddSensorsAndBoards() {
   }
   for (std::size_t i = 0; i < agents.size(); ++i) {
     boards.push_back(agents[i].config->has_board()
-                         ? MakeBoard(&agents[i], *loaded.profiles[i], sensors[i].get())
+                         ? MakeBoard(&agents[i], *loaded.cars[i].profile, sensors[i].get())
                          : nullptr);
   }
 }
@@ -116,7 +117,7 @@ void Simulation::Impl::AddSensorsAndBoards() {
 void Simulation::Impl::ConnectServer() {
   std::vector<int> car_ids;
   for (const CarAgent& agent : agents) car_ids.push_back(agent.config->id);
-  if (scenario.v2i.link == "realtime") {
+  if (scenario.v2i.link == V2ILinkKind::kRealtime) {
     // the server is outside the run; the one in process is given no link and never answers
     realtime_link = ConnectRealTimeLink(
         scenario.v2i.mqtt, &kernel, car_ids,
@@ -130,7 +131,7 @@ void Simulation::Impl::ConnectServer() {
       [this](int car_id, const world::V2IMessage& m) { ReceiveAtCar(car_id, m); },
       [this](int car_id, const world::V2IMessage& m, const std::string& cause) {
         Emit(Event{.t = kernel.Now(),
-                   .type = "v2i_lost",
+                   .type = EventKind::kV2iLost,
                    .car = car_id,
                    .detail = m.topic + " '" + m.payload + "'" +
                              (cause.empty() ? "" : " (" + cause + ")")});
@@ -148,7 +149,7 @@ void Simulation::Impl::AddObstacles() {
     auto set = [this, index, name = o.name](bool enabled) {
       physics.SetObstacleEnabled(index, enabled);
       Emit(Event{.t = kernel.Now(),
-                 .type = enabled ? "obstacle_appear" : "obstacle_disappear",
+                 .type = enabled ? EventKind::kObstacleAppear : EventKind::kObstacleDisappear,
                  .obstacle = name});
     };
     kernel.ScheduleAt(
@@ -219,10 +220,14 @@ bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
   if (!was_waiting && agent->waiting) {
     agent->wait_started = kernel.Now();
     agent->waiting_for = out.waiting_for.value_or(-1);
-    Emit(Event{.t = kernel.Now(), .type = "wait", .car = id, .intersection = agent->waiting_for});
+    Emit(Event{.t = kernel.Now(),
+               .type = EventKind::kWait,
+               .car = id,
+               .intersection = agent->waiting_for});
   }
   if (was_waiting && !agent->waiting) {
-    Emit(Event{.t = kernel.Now(), .type = "go", .car = id, .intersection = agent->waiting_for});
+    Emit(Event{
+        .t = kernel.Now(), .type = EventKind::kGo, .car = id, .intersection = agent->waiting_for});
   }
   if (was_waiting && !agent->waiting && agent->wait_started) {
     const double wait_s = ToSeconds(kernel.Now() - *agent->wait_started);
@@ -281,7 +286,7 @@ void Simulation::Impl::StepWorld() {
 
 void Simulation::Impl::RecordContacts(Time t) {
   for (const vehicle::ContactEvent& contact : physics.TakeContacts()) {
-    Event event{.t = t, .type = "collision", .car = contact.car_id};
+    Event event{.t = t, .type = EventKind::kCollision, .car = contact.car_id};
     ++agents[agent_index.at(contact.car_id)].metrics.collisions;
     if (contact.with_car) {
       event.other_car = contact.other_car_id;
@@ -341,15 +346,15 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
     while (agent->progress_m >= (agent->metrics.laps + 1) * length) {
       ++agent->metrics.laps;
       agent->metrics.lap_times_s.push_back(ToSeconds(t));
-      Emit(Event{.t = t, .type = "lap", .car = id, .lap = agent->metrics.laps});
+      Emit(Event{.t = t, .type = EventKind::kLap, .car = id, .lap = agent->metrics.laps});
       if (!agent->parked && agent->config->laps && agent->metrics.laps >= *agent->config->laps) {
         agent->parked = true;
-        Emit(Event{.t = t, .type = "parked", .car = id, .detail = "laps done"});
+        Emit(Event{.t = t, .type = EventKind::kParked, .car = id, .detail = "laps done"});
       }
     }
   } else if (!agent->parked && agent->route_s_m >= length - kArrivalMargin_m) {
     agent->parked = true;
-    Emit(Event{.t = t, .type = "parked", .car = id, .detail = "route end"});
+    Emit(Event{.t = t, .type = EventKind::kParked, .car = id, .detail = "route end"});
   }
 
   // ground truth: entering and leaving intersection areas
@@ -357,7 +362,7 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
   const int area = inside ? inside->id : -1;
   if (area != agent->area) {
     if (agent->area >= 0) {
-      Emit(Event{.t = t, .type = "exit", .car = id, .intersection = agent->area});
+      Emit(Event{.t = t, .type = EventKind::kExit, .car = id, .intersection = agent->area});
     }
     if (area >= 0) {
       // granted: the server holds the intersection for the car; in real time the server is
@@ -367,7 +372,8 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
           realtime_link ? agent->client.phase == stack::IntersectionClientState::Phase::kHolding &&
                               agent->client.intersection == area
                         : holder.has_value() && *holder == id;
-      Emit(Event{.t = t, .type = "enter", .car = id, .intersection = area, .granted = granted});
+      Emit(Event{
+          .t = t, .type = EventKind::kEnter, .car = id, .intersection = area, .granted = granted});
       ++agent->metrics.intersection_entries;
     }
     agent->area = area;

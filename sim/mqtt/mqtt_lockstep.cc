@@ -168,7 +168,7 @@ std::string EncodeAck(const SimAck& ack) {
   Json records = Json::array();
   for (const world::ServerRecord& r : ack.records) {
     records.push_back(
-        Json::array({world::ToString(r.kind), r.car, r.intersection, r.also_released}));
+        Json::array({static_cast<int>(r.kind), r.car, r.intersection, r.also_released}));
   }
   Json j{{"epoch", ack.epoch},
          {"seq", ack.seq},
@@ -200,10 +200,11 @@ world::Decoded<SimAck> DecodeAck(std::string_view json) {
     }
     ack.counters = CountersFromJson(j.at("counters"));
     for (const Json& r : j.at("records")) {
-      const std::optional<world::ServerRecord::Kind> kind =
-          world::ServerRecordKindFromString(r.at(0).get<std::string>());
-      if (!kind) throw std::invalid_argument("records[][0]: unknown kind " + r.at(0).dump());
-      world::ServerRecord record{.kind = *kind,
+      const int kind = Integer<int>(r.at(0), "records[][0]");
+      if (kind < 0 || kind > static_cast<int>(world::ServerRecord::Kind::kQueueDrop)) {
+        throw std::invalid_argument("records[][0]: unknown kind " + r.at(0).dump());
+      }
+      world::ServerRecord record{.kind = static_cast<world::ServerRecord::Kind>(kind),
                                  .car = Integer<int>(r.at(1), "records[][1]"),
                                  .intersection = Integer<int>(r.at(2), "records[][2]")};
       for (const Json& id : r.at(3)) {

@@ -72,8 +72,10 @@ struct SimAck {
   std::optional<Time> deadline;        // TrafficLightServer::NextDeadline after the step
   std::vector<std::pair<int, std::optional<int>>> holders;  // (intersection, holder)
   world::TrafficLightServer::Counters counters;
-  std::vector<world::ServerRecord> records;  // what the server did in this step, in order
-  std::string error;                         // not empty: the server did not take the step, and why
+  // what the server did in this step, in order; each kind travels as world::ServerRecord::Kind's
+  // value (the simulation and the tlserver it drives come from one build)
+  std::vector<world::ServerRecord> records;
+  std::string error;  // not empty: the server did not take the step, and why
 };
 
 std::string EncodeStepTag(const StepTag& tag);

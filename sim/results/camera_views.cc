@@ -55,7 +55,7 @@ std::string LaneInWords(const stack::LaneDetectionTrace& trace, const stack::Lan
 CarCameraViewer::CarCameraViewer(const world::Track& track, const Scenario& scenario, int car_id)
     : car_id_(car_id),
       cameras_(track, CarOf(scenario, car_id).sensors, scenario.appearance,
-               ParseCameraBackend(scenario.camera_backend)) {
+               scenario.camera_backend) {
   const CarConfig& car = CarOf(scenario, car_id);
   const vehicle::CameraParams& color = car.sensors.color_camera.camera;
   if (car.has_board() && color.width_px == 640 && color.height_px == 480) {

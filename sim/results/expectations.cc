@@ -10,27 +10,8 @@
 namespace autonomsim::sim {
 namespace {
 
-std::string Name(const ExpectClause& clause) {
-  const ExpectArgs& a = clause.args();
-  std::vector<std::string> parts;
-  if (a.car) parts.push_back(fmt::format("car={}", *a.car));
-  if (a.laps) parts.push_back(fmt::format("laps={}", *a.laps));
-  if (a.within_s) parts.push_back(fmt::format("within_s={}", *a.within_s));
-  if (a.max_m) parts.push_back(fmt::format("max_m={}", *a.max_m));
-  if (a.min_m) parts.push_back(fmt::format("min_m={}", *a.min_m));
-  if (a.node) parts.push_back(fmt::format("node={}", *a.node));
-  if (a.min_hz) parts.push_back(fmt::format("min_hz={}", *a.min_hz));
-  if (a.max_hz) parts.push_back(fmt::format("max_hz={}", *a.max_hz));
-  if (a.min_percent) parts.push_back(fmt::format("min_percent={}", *a.min_percent));
-  if (a.max_percent) parts.push_back(fmt::format("max_percent={}", *a.max_percent));
-  if (a.max_s) parts.push_back(fmt::format("max_s={}", *a.max_s));
-  if (a.intersection) parts.push_back(fmt::format("intersection={}", *a.intersection));
-  if (a.per_minute) parts.push_back(fmt::format("per_minute={}", *a.per_minute));
-  return parts.empty() ? clause.kind()
-                       : fmt::format("{}({})", clause.kind(), fmt::join(parts, ", "));
-}
-
-bool Concerns(const ExpectArgs& args, int car) { return !args.car || *args.car == car; }
+// Whether an expectation about `about` (every car when empty) concerns `car`.
+bool Concerns(const std::optional<int>& about, int car) { return !about || *about == car; }
 
 std::string At(const Event& e) { return fmt::format("t={:.3f} s", ToSeconds(e.t)); }
 
@@ -44,13 +25,14 @@ ExpectationResult Failed(std::string detail, const std::optional<Event>& first) 
   return r;
 }
 
-ExpectationResult NoCollision(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const NoCollisionExpect& args, const RunRecord& record) {
   int count = 0;
   std::string first;
   std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type != "collision") return;
-    if (!Concerns(args, e.car) && !(e.other_car >= 0 && Concerns(args, e.other_car))) return;
+    if (e.type != EventKind::kCollision) return;
+    if (!Concerns(args.car, e.car) && !(e.other_car >= 0 && Concerns(args.car, e.other_car)))
+      return;
     if (count++ == 0) {
       first_event = e;
       first = fmt::format("car {} hit {} at {}", e.car,
@@ -64,14 +46,14 @@ ExpectationResult NoCollision(const ExpectArgs& args, const RunRecord& record) {
 }
 
 // Never two cars inside one intersection area: replays the enter/exit events.
-ExpectationResult IntersectionMutex(const RunRecord& record) {
+ExpectationResult Evaluate(const IntersectionMutexExpect&, const RunRecord& record) {
   std::map<int, std::map<int, bool>> inside;  // intersection -> car -> inside
   int violations = 0;
   std::string first;
   std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "exit") inside[e.intersection][e.car] = false;
-    if (e.type != "enter") return;
+    if (e.type == EventKind::kExit) inside[e.intersection][e.car] = false;
+    if (e.type != EventKind::kEnter) return;
     for (const auto& [other, in] : inside[e.intersection]) {
       if (in && other != e.car) {
         if (violations++ == 0) {
@@ -87,13 +69,13 @@ ExpectationResult IntersectionMutex(const RunRecord& record) {
   return Failed(fmt::format("{} violation(s); first: {}", violations, first), first_event);
 }
 
-ExpectationResult NoEntryWithoutGrant(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const NoEntryWithoutGrantExpect& args, const RunRecord& record) {
   int entries = 0;
   int violations = 0;
   std::string first;
   std::optional<Event> first_event;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type != "enter" || !Concerns(args, e.car)) return;
+    if (e.type != EventKind::kEnter || !Concerns(args.car, e.car)) return;
     ++entries;
     if (e.granted.value_or(false)) return;
     if (violations++ == 0) {
@@ -108,14 +90,14 @@ ExpectationResult NoEntryWithoutGrant(const ExpectArgs& args, const RunRecord& r
       first_event);
 }
 
-ExpectationResult Completes(const ExpectArgs& args, const RunRecord& record) {
-  const int laps = *args.laps;
+ExpectationResult Evaluate(const CompletesExpect& args, const RunRecord& record) {
+  const int laps = args.laps;
   const double within_s = args.within_s.value_or(ToSeconds(record.sim_duration));
   std::vector<std::string> misses;
   std::vector<std::string> times;
   std::optional<int> first_miss;
   for (const CarMetrics& car : record.cars) {
-    if (!Concerns(args, car.id)) continue;
+    if (!Concerns(args.car, car.id)) continue;
     if (car.laps >= laps && car.lap_times_s[static_cast<std::size_t>(laps - 1)] <= within_s) {
       times.push_back(fmt::format("car {}: lap {} at {:.1f} s", car.id, laps,
                                   car.lap_times_s[static_cast<std::size_t>(laps - 1)]));
@@ -133,19 +115,19 @@ ExpectationResult Completes(const ExpectArgs& args, const RunRecord& record) {
   return r;
 }
 
-ExpectationResult MaxLateralError(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const MaxLateralErrorExpect& args, const RunRecord& record) {
   bool passed = true;
   std::vector<std::string> parts;
   for (const CarMetrics& car : record.cars) {
-    if (!Concerns(args, car.id)) continue;
-    passed = passed && car.max_lateral_error_m <= *args.max_m;
+    if (!Concerns(args.car, car.id)) continue;
+    passed = passed && car.max_lateral_error_m <= args.max_m;
     parts.push_back(fmt::format("car {}: max {:.3f} m", car.id, car.max_lateral_error_m));
   }
   ExpectationResult r{"", passed,
-                      fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.max_m)};
+                      fmt::format("{} (bound {} m)", fmt::join(parts, "; "), args.max_m)};
   if (!passed) {  // the first sample over the bound
     ForEachSample(record, [&](const TrajectorySample& s) {
-      if (r.at_s || !Concerns(args, s.car) || std::abs(s.lateral_error_m) <= *args.max_m) return;
+      if (r.at_s || !Concerns(args.car, s.car) || std::abs(s.lateral_error_m) <= args.max_m) return;
       r.at_s = ToSeconds(s.t);
       r.car = s.car;
     });
@@ -153,20 +135,20 @@ ExpectationResult MaxLateralError(const ExpectArgs& args, const RunRecord& recor
   return r;
 }
 
-ExpectationResult MinObstacleGap(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const MinObstacleGapExpect& args, const RunRecord& record) {
   bool passed = true;
   std::vector<std::string> parts;
   for (const CarMetrics& car : record.cars) {
-    if (!Concerns(args, car.id)) continue;
+    if (!Concerns(args.car, car.id)) continue;
     if (!car.min_obstacle_gap_m) {
       parts.push_back(
           fmt::format("car {}: no obstacle within {} m", car.id, kObstacleGapHorizon_m));
       continue;
     }
-    passed = passed && *car.min_obstacle_gap_m >= *args.min_m;
+    passed = passed && *car.min_obstacle_gap_m >= args.min_m;
     parts.push_back(fmt::format("car {}: least gap {:.3f} m", car.id, *car.min_obstacle_gap_m));
   }
-  return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), *args.min_m)};
+  return {"", passed, fmt::format("{} (bound {} m)", fmt::join(parts, "; "), args.min_m)};
 }
 
 const BoardReport* BoardOf(const RunRecord& record, int car) {
@@ -181,23 +163,23 @@ bool Within(double value, const std::optional<double>& lo, const std::optional<d
   return (!lo || value >= *lo) && (!hi || value <= *hi);
 }
 
-ExpectationResult NodeRate(const ExpectArgs& args, const RunRecord& record) {
-  const BoardReport* board = BoardOf(record, *args.car);
-  const NodeReport* node = board ? board->report.FindNode(*args.node) : nullptr;
+ExpectationResult Evaluate(const NodeRateExpect& args, const RunRecord& record) {
+  const BoardReport* board = BoardOf(record, args.car);
+  const NodeReport* node = board ? board->report.FindNode(args.node) : nullptr;
   if (!node) {
-    return {"", false, fmt::format("car {} runs no node '{}'", *args.car, *args.node)};
+    return {"", false, fmt::format("car {} runs no node '{}'", args.car, args.node)};
   }
   return {"", Within(node->rate_hz, args.min_hz, args.max_hz),
-          fmt::format("car {}: {} at {:.1f} Hz, {} dropped", *args.car, *args.node, node->rate_hz,
+          fmt::format("car {}: {} at {:.1f} Hz, {} dropped", args.car, args.node, node->rate_hz,
                       node->drops)};
 }
 
-ExpectationResult CpuDemand(const ExpectArgs& args, const RunRecord& record) {
-  const BoardReport* board = BoardOf(record, *args.car);
-  if (!board) return {"", false, fmt::format("car {} has no board", *args.car)};
+ExpectationResult Evaluate(const CpuDemandExpect& args, const RunRecord& record) {
+  const BoardReport* board = BoardOf(record, args.car);
+  if (!board) return {"", false, fmt::format("car {} has no board", args.car)};
   const MetricsReport& r = board->report;
   return {"", Within(r.cpu_demand_percent, args.min_percent, args.max_percent),
-          fmt::format("car {}: CPU demand {:.0f} %, load {:.0f} % of {} cores", *args.car,
+          fmt::format("car {}: CPU demand {:.0f} %, load {:.0f} % of {} cores", args.car,
                       r.cpu_demand_percent, r.cpu_percent, r.cores)};
 }
 
@@ -213,10 +195,10 @@ std::vector<Wait> Waits(const RunRecord& record) {
   std::vector<Wait> waits;
   std::map<int, std::size_t> open;  // car -> its open wait
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "wait") {
+    if (e.type == EventKind::kWait) {
       open[e.car] = waits.size();
       waits.push_back({e.car, e.intersection, e.t, record.sim_duration});
-    } else if (e.type == "go") {
+    } else if (e.type == EventKind::kGo) {
       if (auto it = open.find(e.car); it != open.end()) {
         waits[it->second].end = e.t;
         open.erase(it);
@@ -228,7 +210,7 @@ std::vector<Wait> Waits(const RunRecord& record) {
 
 // A fault of the run, from its fault_begin and fault_end events (sim/loop/faults.h).
 struct FaultSpan {
-  std::string kind;
+  FaultKind kind{FaultKind::kCarStall};
   int car{-1};  // the car it strikes; -1: none in particular
   Time begin{0};
   std::optional<Time> end;  // none: it lasted to the run's end
@@ -237,10 +219,11 @@ struct FaultSpan {
 std::vector<FaultSpan> Faults(const RunRecord& record) {
   std::vector<FaultSpan> faults;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "fault_begin") faults.push_back({e.fault, e.car, e.t, std::nullopt});
-    if (e.type != "fault_end") return;
+    if (!e.fault) return;
+    if (e.type == EventKind::kFaultBegin) faults.push_back({*e.fault, e.car, e.t, std::nullopt});
+    if (e.type != EventKind::kFaultEnd) return;
     for (FaultSpan& f : faults) {  // the earliest open one of its kind and car
-      if (!f.end && f.kind == e.fault && f.car == e.car) {
+      if (!f.end && f.kind == *e.fault && f.car == e.car) {
         f.end = e.t;
         break;
       }
@@ -249,20 +232,20 @@ std::vector<FaultSpan> Faults(const RunRecord& record) {
   return faults;
 }
 
-ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const MaxWaitExpect& args, const RunRecord& record) {
   std::optional<Wait> longest;
   std::optional<Wait> first_over;
   int over = 0;
   int count = 0;
   std::string first;
   for (const Wait& w : Waits(record)) {
-    if (!Concerns(args, w.car) || (args.intersection && *args.intersection != w.intersection)) {
+    if (!Concerns(args.car, w.car) || (args.intersection && *args.intersection != w.intersection)) {
       continue;
     }
     ++count;
     const double s = ToSeconds(w.end - w.start);
     if (!longest || s > ToSeconds(longest->end - longest->start)) longest = w;
-    if (s > *args.max_s && over++ == 0) {
+    if (s > args.max_s && over++ == 0) {
       first_over = w;
       first = fmt::format("car {} waited {:.1f} s at intersection {} from t={:.3f} s", w.car, s,
                           w.intersection, ToSeconds(w.start));
@@ -277,19 +260,20 @@ ExpectationResult MaxWait(const ExpectArgs& args, const RunRecord& record) {
   }
   ExpectationResult r{
       "", false,
-      fmt::format("{} of {} waits over {} s; first: {}", over, count, *args.max_s, first)};
-  r.at_s = ToSeconds(first_over->start) + *args.max_s;  // when the wait passed its bound
+      fmt::format("{} of {} waits over {} s; first: {}", over, count, args.max_s, first)};
+  r.at_s = ToSeconds(first_over->start) + args.max_s;  // when the wait passed its bound
   r.car = first_over->car;
   return r;
 }
 
 // Crossings (enter events) per minute of the run, per intersection: the one given, or each one a
 // car entered or asked for.
-ExpectationResult MinThroughput(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const MinThroughputExpect& args, const RunRecord& record) {
   std::map<int, int> crossings;  // intersection -> enter events
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "enter") ++crossings[e.intersection];
-    if (e.type == "request" && e.intersection >= 0) crossings.try_emplace(e.intersection, 0);
+    if (e.type == EventKind::kEnter) ++crossings[e.intersection];
+    if (e.type == EventKind::kRequest && e.intersection >= 0)
+      crossings.try_emplace(e.intersection, 0);
   });
   const double minutes = ToSeconds(record.sim_duration) / 60.0;
   bool passed = true;
@@ -302,12 +286,12 @@ ExpectationResult MinThroughput(const ExpectArgs& args, const RunRecord& record)
   }
   for (int id : ids) {
     const double rate = crossings[id] / minutes;
-    passed = passed && rate >= *args.per_minute;
+    passed = passed && rate >= args.per_minute;
     parts.push_back(
         fmt::format("intersection {}: {} crossings, {:.2f}/min", id, crossings[id], rate));
   }
-  if (parts.empty()) return {"", *args.per_minute <= 0.0, "no crossings"};
-  return {"", passed, fmt::format("{} (bound {}/min)", fmt::join(parts, "; "), *args.per_minute)};
+  if (parts.empty()) return {"", args.per_minute <= 0.0, "no crossings"};
+  return {"", passed, fmt::format("{} (bound {}/min)", fmt::join(parts, "; "), args.per_minute)};
 }
 
 // no_gridlock: a car stands still (trajectory speed below kStillSpeed_mps) for longer than max_s,
@@ -319,17 +303,17 @@ ExpectationResult MinThroughput(const ExpectArgs& args, const RunRecord& record)
 constexpr double kStillSpeed_mps = 0.02;  // assumed: 2 cm/s, below any driving speed
 constexpr double kDefaultGridlock_s = 30.0;
 
-ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
+ExpectationResult Evaluate(const NoGridlockExpect& args, const RunRecord& record) {
   const double bound_s = args.max_s.value_or(kDefaultGridlock_s);
   // the holder timeline of each intersection, and the parked instants
   std::map<int, std::vector<std::pair<Time, int>>> holders;  // intersection -> (since, holder)
   std::map<int, Time> parked;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "grant") holders[e.intersection].emplace_back(e.t, e.car);
-    if ((e.type == "free" && e.intersection >= 0) || e.type == "lease_expired") {
+    if (e.type == EventKind::kGrant) holders[e.intersection].emplace_back(e.t, e.car);
+    if ((e.type == EventKind::kFree && e.intersection >= 0) || e.type == EventKind::kLeaseExpired) {
       holders[e.intersection].emplace_back(e.t, -1);
     }
-    if (e.type == "parked" && !parked.count(e.car)) parked[e.car] = e.t;
+    if (e.type == EventKind::kParked && !parked.count(e.car)) parked[e.car] = e.t;
   });
   // per car, the intervals in which it is excused, in time order
   std::map<int, std::vector<std::pair<Time, Time>>> excused;
@@ -356,7 +340,7 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
   for (const auto& [car, t] : parked) excused[car].emplace_back(t, record.sim_duration);
   // a car whose motor a fault killed cannot move: that is car_stall's effect, not a gridlock
   for (const FaultSpan& f : Faults(record)) {
-    if (f.kind == "car_stall")
+    if (f.kind == FaultKind::kCarStall)
       excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
   }
   for (auto& [car, intervals] : excused) std::sort(intervals.begin(), intervals.end());
@@ -371,7 +355,7 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
   std::string first;
   std::optional<std::pair<Time, int>> first_at;
   ForEachSample(record, [&](const TrajectorySample& s) {
-    if (!Concerns(args, s.car)) return;
+    if (!Concerns(args.car, s.car)) return;
     Still& c = still[s.car];
     const auto& intervals = excused[s.car];
     while (c.next < intervals.size() && intervals[c.next].second <= s.t) ++c.next;
@@ -407,8 +391,8 @@ ExpectationResult NoGridlock(const ExpectArgs& args, const RunRecord& record) {
 // must be over within max_s of the fault's end (of its own start, if it starts later). A fault that
 // lasts to the run's end is judged from its begin, and the car it strikes is not judged for it (a
 // dead motor, a crashed node). Standstills after a car parked do not count.
-ExpectationResult RecoversWithin(const ExpectArgs& args, const RunRecord& record) {
-  const double bound_s = *args.max_s;
+ExpectationResult Evaluate(const RecoversWithinExpect& args, const RunRecord& record) {
+  const double bound_s = args.max_s;
   const std::vector<FaultSpan> faults = Faults(record);
   if (faults.empty()) return {"", true, "no fault in the run"};
   struct Standstill {
@@ -418,7 +402,7 @@ ExpectationResult RecoversWithin(const ExpectArgs& args, const RunRecord& record
   std::map<int, std::vector<Standstill>> standstills;
   std::map<int, std::optional<Time>> since;  // car -> the open standstill's start
   ForEachSample(record, [&](const TrajectorySample& s) {
-    if (!Concerns(args, s.car)) return;
+    if (!Concerns(args.car, s.car)) return;
     std::optional<Time>& open = since[s.car];
     standstills[s.car];  // every judged car has an entry
     if (std::abs(s.speed_mps) < kStillSpeed_mps) {
@@ -433,7 +417,7 @@ ExpectationResult RecoversWithin(const ExpectArgs& args, const RunRecord& record
   }
   std::map<int, Time> parked;
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "parked" && !parked.count(e.car)) parked[e.car] = e.t;
+    if (e.type == EventKind::kParked && !parked.count(e.car)) parked[e.car] = e.t;
   });
 
   double slowest_s = 0.0;
@@ -460,7 +444,7 @@ ExpectationResult RecoversWithin(const ExpectArgs& args, const RunRecord& record
                         still.end >= record.sim_duration
                             ? std::string("the run's end")
                             : fmt::format("t={:.1f} s", ToSeconds(still.end)),
-                        bound_s, f.kind, f.end ? "ended" : "began", ToSeconds(from))};
+                        bound_s, ToName(f.kind), f.end ? "ended" : "began", ToSeconds(from))};
         r.at_s = ToSeconds(counted_from);
         r.car = car;
         return r;
@@ -479,22 +463,9 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
                                                     const RunRecord& record) {
   std::vector<ExpectationResult> results;
   for (const ExpectClause& clause : scenario.expect) {
-    const std::string kind = clause.kind();
-    const ExpectArgs& args = clause.args();
-    ExpectationResult result;
-    if (kind == "no_collision") result = NoCollision(args, record);
-    if (kind == "intersection_mutex") result = IntersectionMutex(record);
-    if (kind == "no_entry_without_grant") result = NoEntryWithoutGrant(args, record);
-    if (kind == "completes") result = Completes(args, record);
-    if (kind == "max_lateral_error") result = MaxLateralError(args, record);
-    if (kind == "min_obstacle_gap") result = MinObstacleGap(args, record);
-    if (kind == "node_rate") result = NodeRate(args, record);
-    if (kind == "cpu_demand") result = CpuDemand(args, record);
-    if (kind == "no_gridlock") result = NoGridlock(args, record);
-    if (kind == "max_wait") result = MaxWait(args, record);
-    if (kind == "min_throughput") result = MinThroughput(args, record);
-    if (kind == "recovers_within") result = RecoversWithin(args, record);
-    result.name = Name(clause);
+    ExpectationResult result =
+        std::visit([&](const auto& expectation) { return Evaluate(expectation, record); }, clause);
+    result.name = ExpectationName(clause);
     results.push_back(std::move(result));
   }
   return results;

@@ -79,8 +79,10 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
   }
   std::vector<WorldSnapshot> out;
   if (times.empty()) return out;
+  std::vector<world::Pose2> start_poses;
+  for (const LoadedCar& car : scenario.cars) start_poses.push_back(car.start_pose);
   if (times.back() == kZeroTime) {
-    return {SnapshotWithPoses(scenario.scenario, scenario.start_poses, kZeroTime)};
+    return {SnapshotWithPoses(scenario.scenario, start_poses, kZeroTime)};
   }
   LoadedScenario cut = scenario;
   cut.scenario.duration = times.back();
@@ -90,7 +92,7 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
   Simulation simulation(cut);
   simulation.Run();
   for (const Time t : times) {
-    std::vector<world::Pose2> poses = scenario.start_poses;
+    std::vector<world::Pose2> poses = start_poses;
     for (std::size_t i = 0; i < cut.scenario.cars.size() && t > kZeroTime; ++i) {
       const int id = cut.scenario.cars[i].id;
       const auto& samples = simulation.record().trajectory;

@@ -140,7 +140,7 @@ json CarsJson(const FinishedRun& run) {
               {"length_m", car.vehicle.length_m},
               {"width_m", car.vehicle.width_m},
               {"route", car.route ? json(*car.route) : json()},
-              {"driver", car.driver},
+              {"driver", ToName(car.driver)},
               {"has_board", car.has_board()},
               {"preset", car.stack.preset ? json(*car.stack.preset) : json()}};
     for (const CarMetrics& m : run.summary.cars) {

@@ -148,7 +148,8 @@ int DrawTrackLegend(cv::Mat& image, const Scenario& scenario, int legend_x, bool
     } else {
       cv::rectangle(image, cv::Rect(legend_x + 4, y - 12, 18, 12), colour, cv::FILLED);
     }
-    Text(image, fmt::format("car {}: {}, {}", car.id, car.route.value_or("lanes"), car.driver),
+    Text(image,
+         fmt::format("car {}: {}, {}", car.id, car.route.value_or("lanes"), ToName(car.driver)),
          {legend_x + 34, y}, 0.45);
     y += 24;
   }
@@ -202,7 +203,7 @@ cv::Mat DrawTrackFigure(const LoadedScenario& loaded, const RunRecord& record) {
   // collisions: where the car was at the first sample at or after each
   std::map<int, std::vector<Time>> collisions;  // car -> instants, in order
   ForEachEvent(record, [&](const Event& e) {
-    if (e.type == "collision") collisions[e.car].push_back(e.t);
+    if (e.type == EventKind::kCollision) collisions[e.car].push_back(e.t);
   });
   std::vector<cv::Point> collision_points;
 

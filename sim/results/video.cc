@@ -51,11 +51,13 @@ std::map<int, IntersectionTimeline> IntersectionTimelines(const FinishedRun& run
     const auto it = out.find(e.intersection);
     if (it == out.end()) continue;
     IntersectionState next = it->second.states.back();
-    if (e.type == "grant") next.holder = e.car;
-    if ((e.type == "free" && next.holder == e.car) || e.type == "lease_expired") next.holder = -1;
+    if (e.type == EventKind::kGrant) next.holder = e.car;
+    if ((e.type == EventKind::kFree && next.holder == e.car) || e.type == EventKind::kLeaseExpired)
+      next.holder = -1;
     auto& q = next.queue;
-    if (e.type == "wait" && std::find(q.begin(), q.end(), e.car) == q.end()) q.push_back(e.car);
-    if (e.type == "go" || e.type == "enter")
+    if (e.type == EventKind::kWait && std::find(q.begin(), q.end(), e.car) == q.end())
+      q.push_back(e.car);
+    if (e.type == EventKind::kGo || e.type == EventKind::kEnter)
       q.erase(std::remove(q.begin(), q.end(), e.car), q.end());
     it->second.since.push_back(e.t);
     it->second.states.push_back(std::move(next));
@@ -158,7 +160,7 @@ void WriteVideo(const FinishedRun& run, const VideoOptions& options, const fs::p
   const auto timelines = IntersectionTimelines(run);
   std::vector<std::pair<Time, int>> collisions;  // (t, car)
   for (const Event& e : run.record.events) {
-    if (e.type == "collision") collisions.emplace_back(e.t, e.car);
+    if (e.type == EventKind::kCollision) collisions.emplace_back(e.t, e.car);
   }
 
   const fs::path partial =

@@ -87,34 +87,44 @@ TrajectorySample ParseTrajectoryCsvLine(std::string_view line) {
 std::string EventJsonLine(const Event& e) { return EventJson(e).dump() + "\n"; }
 
 nlohmann::json EventJson(const Event& e) {
-  nlohmann::json j = {{"t_s", ToSeconds(e.t)}, {"type", e.type}};
+  nlohmann::json j = {{"t_s", ToSeconds(e.t)}, {"type", ToName(e.type)}};
   if (e.car >= 0) j["car"] = e.car;
   if (e.intersection >= 0) j["intersection"] = e.intersection;
   if (e.other_car >= 0) j["other_car"] = e.other_car;
   if (!e.obstacle.empty()) j["obstacle"] = e.obstacle;
   if (e.granted) j["granted"] = *e.granted;
   if (e.lap > 0) j["lap"] = e.lap;
-  if (!e.fault.empty()) j["fault"] = e.fault;
+  if (e.fault) j["fault"] = ToName(*e.fault);
   if (!e.detail.empty()) j["detail"] = e.detail;
   return j;
 }
+
+namespace {
+template <NamedEnum E>
+E ParseName(const std::string& name, const char* key) {
+  if (const std::optional<E> value = FromName<E>(name)) return *value;
+  throw std::invalid_argument(std::string("unknown ") + key + " '" + name +
+                              "' (known: " + NameList<E>() + ")");
+}
+}  // namespace
 
 Event ParseEventJsonLine(std::string_view line) {
   try {
     const nlohmann::json j = nlohmann::json::parse(line);
     Event e;
     e.t = FromSeconds(j.at("t_s").get<double>());
-    e.type = j.at("type").get<std::string>();
+    e.type = ParseName<EventKind>(j.at("type").get<std::string>(), "type");
     e.car = j.value("car", -1);
     e.intersection = j.value("intersection", -1);
     e.other_car = j.value("other_car", -1);
     e.obstacle = j.value("obstacle", std::string());
     if (j.contains("granted")) e.granted = j.at("granted").get<bool>();
     e.lap = j.value("lap", 0);
-    e.fault = j.value("fault", std::string());
+    if (j.contains("fault"))
+      e.fault = ParseName<FaultKind>(j.at("fault").get<std::string>(), "fault");
     e.detail = j.value("detail", std::string());
     return e;
-  } catch (const nlohmann::json::exception& error) {
+  } catch (const std::exception& error) {
     throw std::invalid_argument("not an events.jsonl line (" + std::string(error.what()) + "): '" +
                                 std::string(line) + "'");
   }

@@ -12,12 +12,14 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/core/vocabulary.h"
 #include "sim/platform/node_metrics.h"
 #include "world/time.h"
 
 namespace autonomsim::sim {
 
-// One line of events.jsonl. Types:
+// One line of events.jsonl: its kind (`type`, sim/core/vocabulary.h; docs/outputs.md#events
+// says what each kind means) and the fields it has (-1, empty or 0: absent from the line):
 //   request, free, grant, denied, lease_expired, queue_drop: what the traffic-light server
 //     received and did, with the intersection (world::ServerRecord): one event per count of
 //     summary.json's server counters; a renewal is a request, not a grant; a free names the
@@ -32,14 +34,14 @@ namespace autonomsim::sim {
 //     if one) began or ended (sim/loop/faults.h); a fault without fault_end lasts to the run's end.
 struct Event {
   Time t{0};
-  std::string type;
+  EventKind type{EventKind::kRequest};
   int car{-1};
   int intersection{-1};
   int other_car{-1};
   std::string obstacle;
   std::optional<bool> granted;
   int lap{0};
-  std::string fault;  // fault_begin, fault_end: the fault's kind
+  std::optional<FaultKind> fault;  // fault_begin, fault_end: the fault's kind
   std::string detail;
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -54,11 +55,7 @@ void CarConfig::Validate() const {
   Require(route.has_value() != lanes.has_value(), "give exactly one of route or lanes");
   Require(!(start.has_value() && start_s_m.has_value()), "give at most one of start or start_s_m");
   Require(!laps || *laps >= 1, "laps must be >= 1, got " + std::to_string(laps.value_or(0)));
-  Require(driver == "oracle" || driver == "stack",
-          "driver must be 'oracle' (ground-truth lane following) or 'stack' (the AutonomROS "
-          "stack on the car's board), got '" +
-              driver + "'");
-  Require(driver != "stack" || perception.enabled,
+  Require(driver != Driver::kStack || perception.enabled,
           "driver 'stack' drives on the perception nodes' lanes and obstacles: set "
           "perception.enabled: true");
 }
@@ -79,9 +76,7 @@ void ObstacleConfig::Validate() const {
 }
 
 void V2IConfig::Validate() const {
-  Require(link == "embedded" || link == "mqtt" || link == "realtime",
-          "link must be 'embedded', 'mqtt' or 'realtime', got '" + link + "'");
-  Require(link != "realtime" || !mqtt.broker.empty(),
+  Require(link != V2ILinkKind::kRealtime || !mqtt.broker.empty(),
           "link 'realtime' needs mqtt.broker, the HOST:PORT of the broker its traffic-light "
           "server listens on (autonomsim run --realtime --broker HOST:PORT): a real-time run "
           "starts no broker or server of its own");
@@ -94,177 +89,6 @@ void OutputConfig::Validate() const {
   Require(trajectory_period > kZeroTime, "trajectory_period_s must be > 0");
 }
 
-std::string ExpectClause::kind() const {
-  if (no_collision) return "no_collision";
-  if (intersection_mutex) return "intersection_mutex";
-  if (no_entry_without_grant) return "no_entry_without_grant";
-  if (completes) return "completes";
-  if (max_lateral_error) return "max_lateral_error";
-  if (node_rate) return "node_rate";
-  if (cpu_demand) return "cpu_demand";
-  if (no_gridlock) return "no_gridlock";
-  if (max_wait) return "max_wait";
-  if (min_throughput) return "min_throughput";
-  if (recovers_within) return "recovers_within";
-  return "min_obstacle_gap";
-}
-
-const ExpectArgs& ExpectClause::args() const {
-  for (const auto* args : {&no_collision, &intersection_mutex, &no_entry_without_grant, &completes,
-                           &max_lateral_error, &min_obstacle_gap, &node_rate, &cpu_demand,
-                           &no_gridlock, &max_wait, &min_throughput, &recovers_within}) {
-    if (args->has_value()) return **args;
-  }
-  throw std::logic_error("ExpectClause::args on an empty clause");
-}
-
-void ExpectClause::Validate() const {
-  const int count = no_collision.has_value() + intersection_mutex.has_value() +
-                    no_entry_without_grant.has_value() + completes.has_value() +
-                    max_lateral_error.has_value() + min_obstacle_gap.has_value() +
-                    node_rate.has_value() + cpu_demand.has_value() + no_gridlock.has_value() +
-                    max_wait.has_value() + min_throughput.has_value() + recovers_within.has_value();
-  Require(count == 1,
-          "an expect entry names exactly one expectation, e.g. '- no_collision: {}'; "
-          "got " +
-              std::to_string(count));
-  const std::string k = kind();
-  const ExpectArgs& a = args();
-  auto forbid = [&](bool present, const char* key) {
-    Require(!present, "'" + k + "' takes no key '" + key + "'");
-  };
-  forbid((k == "intersection_mutex" || k == "min_throughput") && a.car.has_value(), "car");
-  forbid(k != "no_gridlock" && k != "max_wait" && k != "recovers_within" && a.max_s.has_value(),
-         "max_s");
-  forbid(k != "max_wait" && k != "min_throughput" && a.intersection.has_value(), "intersection");
-  forbid(k != "min_throughput" && a.per_minute.has_value(), "per_minute");
-  forbid(k != "completes" && a.laps.has_value(), "laps");
-  forbid(k != "completes" && a.within_s.has_value(), "within_s");
-  forbid(k != "max_lateral_error" && a.max_m.has_value(), "max_m");
-  forbid(k != "min_obstacle_gap" && a.min_m.has_value(), "min_m");
-  forbid(k != "node_rate" && a.node.has_value(), "node");
-  forbid(k != "node_rate" && a.min_hz.has_value(), "min_hz");
-  forbid(k != "node_rate" && a.max_hz.has_value(), "max_hz");
-  forbid(k != "cpu_demand" && a.min_percent.has_value(), "min_percent");
-  forbid(k != "cpu_demand" && a.max_percent.has_value(), "max_percent");
-  if (k == "node_rate") {
-    Require(a.car.has_value() && a.node.has_value(), "node_rate needs car and node");
-    Require(a.min_hz.has_value() || a.max_hz.has_value(), "node_rate needs min_hz or max_hz");
-  }
-  if (k == "cpu_demand") {
-    Require(a.car.has_value(), "cpu_demand needs car");
-    Require(a.min_percent.has_value() || a.max_percent.has_value(),
-            "cpu_demand needs min_percent or max_percent");
-  }
-  if (k == "completes") {
-    Require(a.laps.has_value() && *a.laps >= 1, "completes needs laps >= 1");
-    Require(!a.within_s || *a.within_s > 0.0, "within_s must be > 0");
-  }
-  if (k == "max_lateral_error") {
-    Require(a.max_m.has_value() && *a.max_m > 0.0, "max_lateral_error needs max_m > 0");
-  }
-  if (k == "min_obstacle_gap") {
-    Require(a.min_m.has_value() && *a.min_m >= 0.0, "min_obstacle_gap needs min_m >= 0");
-  }
-  if (k == "no_gridlock") Require(!a.max_s || *a.max_s > 0.0, "max_s must be > 0");
-  if (k == "max_wait") Require(a.max_s.has_value() && *a.max_s > 0.0, "max_wait needs max_s > 0");
-  if (k == "recovers_within") {
-    Require(a.max_s.has_value() && *a.max_s > 0.0, "recovers_within needs max_s > 0");
-  }
-  if (k == "min_throughput") {
-    Require(a.per_minute.has_value() && *a.per_minute >= 0.0,
-            "min_throughput needs per_minute >= 0");
-  }
-  Require(!a.intersection || (*a.intersection >= 0 && *a.intersection <= 9),
-          "intersection must be an id 0..9");
-}
-
-namespace {
-// The clause's entries as Describe lists them (read only: the visitors do not write).
-template <class Visit>
-void ForEachFaultKind(const FaultClause& clause, Visit visit) {
-  auto each = [&](const char* key, const std::optional<FaultArgs>& args) { visit(key, args); };
-  const_cast<FaultClause&>(clause).Describe(each);
-}
-}  // namespace
-
-std::string FaultClause::kind() const {
-  std::string found;
-  ForEachFaultKind(*this, [&](const char* key, const std::optional<FaultArgs>& args) {
-    if (found.empty() && args.has_value()) found = key;
-  });
-  if (found.empty()) throw std::logic_error("FaultClause::kind on an empty clause");
-  return found;
-}
-
-const FaultArgs& FaultClause::args() const {
-  const FaultArgs* found = nullptr;
-  ForEachFaultKind(*this, [&](const char*, const std::optional<FaultArgs>& args) {
-    if (found == nullptr && args.has_value()) found = &*args;
-  });
-  if (found == nullptr) throw std::logic_error("FaultClause::args on an empty clause");
-  return *found;
-}
-
-void FaultClause::Validate() const {
-  int count = 0;
-  ForEachFaultKind(
-      *this, [&](const char*, const std::optional<FaultArgs>& args) { count += args.has_value(); });
-  Require(count == 1,
-          "a faults entry names exactly one fault, e.g. '- car_stall: {car: 1, at_s: 20}'; got " +
-              std::to_string(count));
-  const std::string k = kind();
-  const FaultArgs& a = args();
-  auto forbid = [&](bool present, const char* key) {
-    Require(!present, "'" + k + "' takes no key '" + key + "'");
-  };
-  const bool on_link = k == "v2i_partition" || k == "v2i_loss_burst";
-  const bool fleet_wide = k == "server_restart" || k == "broker_outage";
-  const bool on_node = k == "node_crash" || k == "node_hang";
-  const bool on_camera = k == "camera_freeze" || k == "camera_blackout";
-  forbid(fleet_wide && a.car.has_value(), "car");
-  forbid(k == "node_crash" && a.for_s.has_value(),
-         "for_s' (a crashed node stays down; node_hang has for_s");
-  forbid(k == "localization_jump" && a.for_s.has_value(), "for_s' (a jump is instantaneous");
-  forbid(k != "v2i_partition" && a.direction.has_value(), "direction");
-  forbid(k != "v2i_loss_burst" && a.loss.has_value(), "loss");
-  forbid(!on_node && a.node.has_value(), "node");
-  forbid(!on_camera && a.camera.has_value(), "camera");
-  forbid(k != "imu_bias_step" && a.gyro_bias_rad_per_s.has_value(), "gyro_bias_rad_per_s");
-  forbid(k != "localization_jump" && a.dx_m.has_value(), "dx_m");
-  forbid(k != "localization_jump" && a.dy_m.has_value(), "dy_m");
-  forbid(k != "localization_jump" && a.dyaw_deg.has_value(), "dyaw_deg");
-  Require(std::isfinite(a.at_s) && a.at_s >= 0.0, "at_s must be >= 0, got " + Num(a.at_s));
-  Require(!a.for_s || (std::isfinite(*a.for_s) && *a.for_s > 0.0),
-          "for_s must be > 0 (leave it out for a fault that lasts to the end of the run)");
-  if (!on_link && !fleet_wide) Require(a.car.has_value(), k + " needs car");
-  if (on_node) Require(a.node.has_value() && !a.node->empty(), k + " needs node");
-  if (a.direction) {
-    Require(*a.direction == "up" || *a.direction == "down" || *a.direction == "both",
-            "direction must be 'up' (car to server), 'down' or 'both', got '" + *a.direction + "'");
-  }
-  if (k == "v2i_loss_burst") {
-    Require(a.loss.has_value() && *a.loss > 0.0 && *a.loss <= 1.0,
-            "v2i_loss_burst needs loss in (0, 1]");
-  }
-  if (a.camera) {
-    Require(*a.camera == "color" || *a.camera == "depth",
-            "camera must be 'color' or 'depth', got '" + *a.camera + "'");
-  }
-  if (k == "imu_bias_step") {
-    Require(a.gyro_bias_rad_per_s.has_value() && std::isfinite(*a.gyro_bias_rad_per_s) &&
-                *a.gyro_bias_rad_per_s != 0.0,
-            "imu_bias_step needs gyro_bias_rad_per_s, finite and not 0");
-  }
-  if (k == "localization_jump") {
-    Require(a.dx_m || a.dy_m || a.dyaw_deg,
-            "localization_jump needs at least one of dx_m, dy_m, dyaw_deg");
-    for (const auto& v : {a.dx_m, a.dy_m, a.dyaw_deg}) {
-      Require(!v || std::isfinite(*v), "the jump must be finite");
-    }
-  }
-}
-
 void Scenario::Validate() const {
   Require(duration > kZeroTime && duration <= std::chrono::hours(24),
           "duration_s must be in (0, 86400] s, got " + Num(ToSeconds(duration)));
@@ -273,7 +97,6 @@ void Scenario::Validate() const {
   for (const CarConfig& car : cars) {
     Require(ids.insert(car.id).second, "duplicate car id " + std::to_string(car.id));
   }
-  ParseCameraBackend(camera_backend);
   std::set<std::string> names;
   for (const ObstacleConfig& obstacle : obstacles) {
     Require(names.insert(obstacle.name).second, "duplicate obstacle name '" + obstacle.name + "'");
@@ -348,16 +171,10 @@ std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i
 }
 
 // Car `i`'s route, start and board profile, checked against the track and the server's lease.
-struct ResolvedCar {
-  world::Route route;
-  double start_s_m{0.0};
-  world::Pose2 start_pose;
-  std::optional<PlatformProfile> profile;
-};
-ResolvedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track& track,
-                       const std::filesystem::path& folder, const ScenarioSite& site) {
+LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track& track,
+                     const std::filesystem::path& folder, const ScenarioSite& site) {
   const CarConfig& car = scenario.cars[i];
-  ResolvedCar resolved;
+  LoadedCar resolved{.config = &car};
   try {
     resolved.route = car.route ? track.RouteByName(*car.route)
                                : world::MakeRoute(track.road_graph(),
@@ -433,7 +250,156 @@ void CheckObstaclesOnFloor(const Scenario& scenario, double floor_size_m,
   }
 }
 
+// Each expectation's car and intersection exist, and its deadline is within the run.
+void CheckExpectations(const LoadedScenario& loaded, const std::set<int>& car_ids,
+                       const ScenarioSite& site) {
+  const Scenario& scenario = loaded.scenario;
+  const auto& crossings = loaded.track.spec().intersections;
+  for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
+    const ExpectClause& expectation = scenario.expect[i];
+    const std::string kind(ToName(KindOf(expectation)));
+    const std::optional<int> car = ExpectedCar(expectation);
+    if (car && car_ids.count(*car) == 0) {
+      FailAt(site.root, site.source, {"expect", i}, "no car with id " + std::to_string(*car));
+    }
+    const std::optional<int> intersection = ExpectedIntersection(expectation);
+    if (intersection &&
+        std::none_of(crossings.begin(), crossings.end(),
+                     [&](const world::IntersectionSpec& x) { return x.id == *intersection; })) {
+      FailAt(site.root, site.source, {"expect", i, kind, "intersection"},
+             "the track has no intersection " + std::to_string(*intersection));
+    }
+    // a deadline past the run's end could never be judged (it would fail, or pass, on less time)
+    const std::optional<double> within_s = ExpectedWithin_s(expectation);
+    if (within_s && *within_s > ToSeconds(scenario.duration)) {
+      FailAt(site.root, site.source, {"expect", i, kind, "within_s"},
+             "within_s " + Num(*within_s) + " s is past duration_s " +
+                 Num(ToSeconds(scenario.duration)) +
+                 " s: the run ends before it can be judged; lower within_s, raise duration_s, "
+                 "or drop the expectation (e.g. --set 'expect=[]')");
+    }
+  }
+}
+
+// What a fault acts on: the modeled link and server (not with a real-time link), a car's stack
+// (localization, IMU), a car's board (nodes, cameras).
+bool ActsOnModeledLink(FaultKind kind) {
+  return kind == FaultKind::kV2iPartition || kind == FaultKind::kV2iLossBurst ||
+         kind == FaultKind::kServerRestart || kind == FaultKind::kBrokerOutage;
+}
+bool NeedsStack(FaultKind kind) {
+  return kind == FaultKind::kLocalizationJump || kind == FaultKind::kImuBiasStep;
+}
+bool NeedsBoard(FaultKind kind) {
+  return kind == FaultKind::kNodeCrash || kind == FaultKind::kNodeHang ||
+         kind == FaultKind::kCameraFreeze || kind == FaultKind::kCameraBlackout;
+}
+
+// Each fault's car exists and has what the fault strikes, and the fault starts within the run.
+void CheckFaults(const Scenario& scenario, const std::set<int>& car_ids, const ScenarioSite& site) {
+  for (std::size_t i = 0; i < scenario.faults.size(); ++i) {
+    const FaultKind kind = KindOf(scenario.faults[i]);
+    const std::string name(ToName(kind));
+    const std::optional<int> car_id = FaultCar(scenario.faults[i]);
+    const double at_s = FaultStart_s(scenario.faults[i]);
+    const auto fail = [&](const std::string& key, const std::string& message) {
+      LoadedScenario::KeyPath path{"faults", i, name};
+      if (!key.empty()) path.emplace_back(key);
+      FailAt(site.root, site.source, path, message);
+    };
+    if (car_id && car_ids.count(*car_id) == 0) {
+      fail("car", "no car with id " + std::to_string(*car_id));
+    }
+    if (at_s >= ToSeconds(scenario.duration)) {
+      fail("at_s", "at_s " + Num(at_s) + " s is not before the run's end (duration_s " +
+                       Num(ToSeconds(scenario.duration)) + " s): the fault would never strike");
+    }
+    if (scenario.v2i.link == V2ILinkKind::kRealtime && ActsOnModeledLink(kind)) {
+      fail("", name +
+                   " acts on the modeled V2I link and the server in the run; with v2i.link: "
+                   "realtime (run --realtime) both are real and outside the run");
+    }
+    const CarConfig* car = car_id ? scenario.FindCar(*car_id) : nullptr;
+    if (car && NeedsStack(kind) && !car->drives_by_stack()) {
+      fail("car", "car " + std::to_string(*car_id) +
+                      " does not drive by its stack (driver: oracle drives on ground truth), so "
+                      "nothing reads its localization or IMU");
+    }
+    if (car && NeedsBoard(kind) && !car->has_board()) {
+      fail("car",
+           "car " + std::to_string(*car_id) + " runs no nodes (perception.enabled is false)");
+    }
+  }
+}
+
+// Where each key that names a node or topic of a car's board stands in the file, for the errors
+// found when the board is built (LoadedScenario::ErrorAt).
+std::map<std::string, std::string> BoardNameLocations(const Scenario& scenario,
+                                                      const ScenarioSite& site) {
+  std::map<std::string, std::string> where;
+  const auto add = [&](const LoadedScenario::KeyPath& keys) {
+    const ConfigError located = ErrorAt(site.root, site.source, keys, "");
+    std::string path;
+    for (const auto& key : keys) {
+      path = std::holds_alternative<std::string>(key)
+                 ? detail::JoinPath(path, std::get<std::string>(key))
+                 : detail::JoinIndex(path, std::get<std::size_t>(key));
+    }
+    where[path] = located.what();
+  };
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const PlatformConfig& p = scenario.cars[i].platform;
+    for (const auto& [name, mapping] : p.mapping) add({"cars", i, "platform", "mapping", name});
+    for (const auto& [name, t] : p.transport) add({"cars", i, "platform", "transport", name});
+    for (const auto& [name, c] : p.cost_scale) add({"cars", i, "platform", "cost_scale", name});
+    for (const auto& [name, c] : p.cost_override) {
+      add({"cars", i, "platform", "cost_override", name});
+    }
+  }
+  for (std::size_t i = 0; i < scenario.faults.size(); ++i) {
+    add({"faults", i, std::string(ToName(KindOf(scenario.faults[i]))), "node"});
+  }
+  return where;
+}
+
+// The scenario, its track and its boards' profiles with every default: what the run's
+// scenario.resolved.json holds and its scenario_sha256 hashes.
+void Resolve(LoadedScenario* loaded) {
+  loaded->resolved = {{"scenario", ToJson(loaded->scenario)},
+                      {"track", ToJson(loaded->track.spec())}};
+  for (const LoadedCar& car : loaded->cars) {  // a board's profile is in the run
+    if (car.profile) {
+      loaded->resolved["platforms"]["car" + std::to_string(car.config->id)] = ToJson(*car.profile);
+    }
+  }
+  loaded->sha256 = Sha256Hex(loaded->resolved.dump());
+}
+
 }  // namespace
+
+LoadedScenario::LoadedScenario(std::filesystem::path file_, Scenario scenario_, world::Track track_)
+    : file(std::move(file_)), scenario(std::move(scenario_)), track(std::move(track_)) {}
+
+LoadedScenario::LoadedScenario(const LoadedScenario& other)
+    : file(other.file),
+      scenario(other.scenario),
+      track(other.track),
+      cars(other.cars),
+      sha256(other.sha256),
+      resolved(other.resolved),
+      key_locations(other.key_locations) {
+  for (std::size_t i = 0; i < cars.size(); ++i) cars[i].config = &scenario.cars[i];
+}
+
+LoadedScenario& LoadedScenario::operator=(const LoadedScenario& other) {
+  if (this != &other) *this = LoadedScenario(other);
+  return *this;
+}
+
+ConfigError LoadedScenario::ErrorAt(const std::string& key_path, const std::string& message) const {
+  const auto where = key_locations.find(key_path);
+  return ConfigError((where != key_locations.end() ? where->second : key_path + ": ") + message);
+}
 
 LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides,
@@ -452,89 +418,20 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   Scenario read = ReadConfig<Scenario>(root, source);
   if (read.name.empty()) read.name = file.stem().string();
   world::Track track = LoadScenarioTrack(read, file.parent_path(), site);
-  LoadedScenario loaded{.file = file, .scenario = std::move(read), .track = std::move(track)};
+  LoadedScenario loaded(file, std::move(read), std::move(track));
   const Scenario& scenario = loaded.scenario;
 
   std::set<int> car_ids;
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
     car_ids.insert(scenario.cars[i].id);
-    ResolvedCar car = ResolveCar(scenario, i, loaded.track, file.parent_path(), site);
-    loaded.routes.push_back(std::move(car.route));
-    loaded.start_s_m.push_back(car.start_s_m);
-    loaded.start_poses.push_back(car.start_pose);
-    loaded.profiles.push_back(std::move(car.profile));
+    loaded.cars.push_back(ResolveCar(scenario, i, loaded.track, file.parent_path(), site));
   }
   CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
   CheckPlatformSettingsApply(scenario, site);
-  for (std::size_t i = 0; i < scenario.expect.size(); ++i) {
-    const ExpectArgs& args = scenario.expect[i].args();
-    if (args.car && car_ids.count(*args.car) == 0) {
-      FailAt(root, source, {"expect", i}, "no car with id " + std::to_string(*args.car));
-    }
-    const auto& crossings = loaded.track.spec().intersections;
-    if (args.intersection &&
-        std::none_of(crossings.begin(), crossings.end(), [&](const world::IntersectionSpec& x) {
-          return x.id == *args.intersection;
-        })) {
-      FailAt(root, source, {"expect", i, scenario.expect[i].kind(), "intersection"},
-             "the track has no intersection " + std::to_string(*args.intersection));
-    }
-    // a deadline past the run's end could never be judged (it would fail, or pass, on less time)
-    if (args.within_s && *args.within_s > ToSeconds(scenario.duration)) {
-      FailAt(root, source, {"expect", i, scenario.expect[i].kind(), "within_s"},
-             "within_s " + Num(*args.within_s) + " s is past duration_s " +
-                 Num(ToSeconds(scenario.duration)) +
-                 " s: the run ends before it can be judged; lower within_s, raise duration_s, "
-                 "or drop the expectation (e.g. --set 'expect=[]')");
-    }
-  }
-
-  for (std::size_t i = 0; i < scenario.faults.size(); ++i) {
-    const std::string kind = scenario.faults[i].kind();
-    const FaultArgs& args = scenario.faults[i].args();
-    if (args.car && car_ids.count(*args.car) == 0) {
-      FailAt(root, source, {"faults", i, kind, "car"},
-             "no car with id " + std::to_string(*args.car));
-    }
-    if (args.at_s >= ToSeconds(scenario.duration)) {
-      FailAt(root, source, {"faults", i, kind, "at_s"},
-             "at_s " + Num(args.at_s) + " s is not before the run's end (duration_s " +
-                 Num(ToSeconds(scenario.duration)) + " s): the fault would never strike");
-    }
-    if (scenario.v2i.link == "realtime" &&
-        (kind.starts_with("v2i_") || kind == "server_restart" || kind == "broker_outage")) {
-      FailAt(root, source, {"faults", i, kind},
-             kind +
-                 " acts on the modeled V2I link and the server in the run; with v2i.link: "
-                 "realtime (run --realtime) both are real and outside the run");
-    }
-    const CarConfig* car = args.car ? scenario.FindCar(*args.car) : nullptr;
-    const bool needs_stack = kind == "localization_jump" || kind == "imu_bias_step";
-    const bool needs_board = args.node || kind.starts_with("camera_");
-    if (car && needs_stack && !car->drives_by_stack()) {
-      FailAt(root, source, {"faults", i, kind, "car"},
-             "car " + std::to_string(*args.car) +
-                 " does not drive by its stack (driver: oracle drives on ground truth), so "
-                 "nothing reads its localization or IMU");
-    }
-    if (car && needs_board && !car->has_board()) {
-      FailAt(root, source, {"faults", i, kind, "car"},
-             "car " + std::to_string(*args.car) + " runs no nodes (perception.enabled is false)");
-    }
-  }
-
-  loaded.resolved = {{"scenario", ToJson(scenario)}, {"track", ToJson(loaded.track.spec())}};
-  for (std::size_t i = 0; i < loaded.profiles.size(); ++i) {  // a board's profile is in the run
-    if (loaded.profiles[i]) {
-      loaded.resolved["platforms"]["car" + std::to_string(scenario.cars[i].id)] =
-          ToJson(*loaded.profiles[i]);
-    }
-  }
-  loaded.sha256 = Sha256Hex(loaded.resolved.dump());
-  loaded.error_at = [root, source](const LoadedScenario::KeyPath& keys,
-                                   const std::string& message) {
-    return ErrorAt(root, source, keys, message);
-  };
+  CheckExpectations(loaded, car_ids, site);
+  CheckFaults(scenario, car_ids, site);
+  loaded.key_locations = BoardNameLocations(scenario, site);
+  Resolve(&loaded);
   return loaded;
 }
 

@@ -50,7 +50,7 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
   if (!decoded) {
     ++malformed_;
     sink_(Event{.t = kernel_->Now(),
-                .type = "v2i_malformed",
+                .type = EventKind::kV2iMalformed,
                 .car = from_car,
                 .detail = message.topic + " '" + message.payload + "': " + decoded.error()});
     return;
@@ -68,7 +68,7 @@ void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message)
           // A response sent to the server is not for it: count it as malformed traffic.
           ++malformed_;
           sink_(Event{.t = now,
-                      .type = "v2i_malformed",
+                      .type = EventKind::kV2iMalformed,
                       .car = from_car,
                       .detail = "a response was sent to the server"});
         }
@@ -82,7 +82,7 @@ void TrafficLightNode::Publish(const std::vector<world::Response>& responses) {
   if (link_ == nullptr) throw std::logic_error("TrafficLightNode: no V2I link set");
   for (world::ServerRecord& record : endpoint_->TakeRecords()) {
     Event event{.t = kernel_->Now(),
-                .type = world::ToString(record.kind),
+                .type = EventKindOf(record.kind),
                 .car = record.car,
                 .intersection = record.intersection};
     for (int id : record.also_released) {

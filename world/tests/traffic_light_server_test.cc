@@ -189,9 +189,6 @@ TEST(TrafficLightServerTest, TheRecordsAddUpToTheCountersAndNameTheIntersection)
   EXPECT_EQ(c.denials, 1u);
   EXPECT_EQ(c.frees, 2u);
   EXPECT_EQ(c.lease_expiries, 2u);
-  EXPECT_STREQ(ToString(K::kLeaseExpired), "lease_expired");
-  EXPECT_EQ(ServerRecordKindFromString("queue_drop"), K::kQueueDrop);
-  EXPECT_EQ(ServerRecordKindFromString("renewal"), std::nullopt);
 }
 
 TEST(TrafficLightServerTest, ExpiryIsAppliedByAnyCallEvenWithoutATick) {

@@ -37,7 +37,7 @@ const RunRecord& Baseline(double duration_s = 25.0) {
   return it->second;
 }
 
-std::vector<Event> EventsOf(const RunRecord& record, const std::string& type, int car = -2) {
+std::vector<Event> EventsOf(const RunRecord& record, EventKind type, int car = -2) {
   std::vector<Event> out;
   ForEachEvent(record, [&](const Event& e) {
     if (e.type == type && (car == -2 || e.car == car)) out.push_back(e);
@@ -45,7 +45,7 @@ std::vector<Event> EventsOf(const RunRecord& record, const std::string& type, in
   return out;
 }
 
-std::optional<double> FirstAt(const RunRecord& record, const std::string& type, int car,
+std::optional<double> FirstAt(const RunRecord& record, EventKind type, int car,
                               double after_s = 0.0) {
   for (const Event& e : EventsOf(record, type, car)) {
     if (ToSeconds(e.t) >= after_s) return ToSeconds(e.t);
@@ -79,7 +79,7 @@ double MaxSpeed(const RunRecord& record, int car, double from_s, double to_s) {
 
 int LostWithCause(const RunRecord& record, const std::string& cause, int car = -2) {
   int n = 0;
-  for (const Event& e : EventsOf(record, "v2i_lost", car)) {
+  for (const Event& e : EventsOf(record, EventKind::kV2iLost, car)) {
     if (e.detail.find("(" + cause + ")") != std::string::npos) ++n;
   }
   return n;
@@ -87,17 +87,17 @@ int LostWithCause(const RunRecord& record, const std::string& cause, int car = -
 
 TEST(Faults, AreEventsWithTheirKindAndCar) {
   const RunRecord record = RunWithFaults("[{car_stall: {car: 1, at_s: 9, for_s: 5}}]");
-  const std::vector<Event> begin = EventsOf(record, "fault_begin");
-  const std::vector<Event> end = EventsOf(record, "fault_end");
+  const std::vector<Event> begin = EventsOf(record, EventKind::kFaultBegin);
+  const std::vector<Event> end = EventsOf(record, EventKind::kFaultEnd);
   ASSERT_EQ(begin.size(), 1u);
   ASSERT_EQ(end.size(), 1u);
-  EXPECT_EQ(begin[0].fault, "car_stall");
+  EXPECT_EQ(begin[0].fault, FaultKind::kCarStall);
   EXPECT_EQ(begin[0].car, 1);
   EXPECT_DOUBLE_EQ(ToSeconds(begin[0].t), 9.0);
   EXPECT_EQ(begin[0].detail, "for 5 s");
   EXPECT_DOUBLE_EQ(ToSeconds(end[0].t), 14.0);
   // a fault's events go through events.jsonl and back
-  EXPECT_EQ(ParseEventJsonLine(EventJsonLine(begin[0])).fault, "car_stall");
+  EXPECT_EQ(ParseEventJsonLine(EventJsonLine(begin[0])).fault, FaultKind::kCarStall);
 }
 
 TEST(Faults, CarStallStopsTheCarUntilItEnds) {
@@ -121,13 +121,13 @@ TEST(Faults, ADeadCarHoldingAGrantIsFreedByTheLease) {
   const RunRecord record = RunWithFaults(
       "[{car_stall: {car: 1, at_s: 9}}, {node_crash: {car: 1, node: vehicle_communication, "
       "at_s: 9}}]");
-  const std::vector<Event> expired = EventsOf(record, "lease_expired", 1);
+  const std::vector<Event> expired = EventsOf(record, EventKind::kLeaseExpired, 1);
   ASSERT_EQ(expired.size(), 1u);
   EXPECT_NEAR(ToSeconds(expired[0].t), 13.7, 0.1);  // last keepalive ≈ 8.7 s, + 5 s
-  const std::optional<double> granted = FirstAt(record, "grant", 0);
+  const std::optional<double> granted = FirstAt(record, EventKind::kGrant, 0);
   ASSERT_TRUE(granted.has_value());
   EXPECT_DOUBLE_EQ(*granted, ToSeconds(expired[0].t));
-  EXPECT_TRUE(EventsOf(record, "fault_end").empty());  // both last to the run's end
+  EXPECT_TRUE(EventsOf(record, EventKind::kFaultEnd).empty());  // both last to the run's end
 }
 
 TEST(Faults, ACarWhoseV2IClientDiedDrivesOnAStaleFreeUnlessTheBehaviourTimesItOut) {
@@ -136,7 +136,7 @@ TEST(Faults, ACarWhoseV2IClientDiedDrivesOnAStaleFreeUnlessTheBehaviourTimesItOu
   const std::string fault = "[{node_crash: {car: 1, node: vehicle_communication, at_s: 9}}]";
   const auto ungranted = [](const RunRecord& r) {
     int n = 0;
-    for (const Event& e : EventsOf(r, "enter", 1)) n += e.granted == false;
+    for (const Event& e : EventsOf(r, EventKind::kEnter, 1)) n += e.granted == false;
     return n;
   };
   const RunRecord lab = RunWithFaults(fault, 60.0, {"stack.preset=lab"});
@@ -145,10 +145,10 @@ TEST(Faults, ACarWhoseV2IClientDiedDrivesOnAStaleFreeUnlessTheBehaviourTimesItOu
   const RunRecord fixed = RunWithFaults(
       fault, 60.0, {"stack.preset=lab", "cars[1].stack.behavior.intersection_free_timeout_s=1"});
   EXPECT_EQ(ungranted(fixed), 0);
-  EXPECT_TRUE(EventsOf(fixed, "collision").empty());
+  EXPECT_TRUE(EventsOf(fixed, EventKind::kCollision).empty());
   // it was still in its stop zone when the permission went stale: it waits there, granted or not
   // (a client that cannot renew loses the grant to the lease)
-  EXPECT_TRUE(EventsOf(fixed, "enter", 1).empty());
+  EXPECT_TRUE(EventsOf(fixed, EventKind::kEnter, 1).empty());
 }
 
 TEST(Faults, APartitionLosesTheGrantAndTheClientAsksAgain) {
@@ -157,10 +157,10 @@ TEST(Faults, APartitionLosesTheGrantAndTheClientAsksAgain) {
       RunWithFaults("[{v2i_partition: {car: 1, direction: down, at_s: 7.6, for_s: 1.5}}]");
   EXPECT_GE(LostWithCause(record, "v2i_partition", 1), 1);
   EXPECT_EQ(LostWithCause(record, "v2i_partition", 0), 0);  // car 0's link is untouched
-  ASSERT_TRUE(FirstAt(Baseline(), "go", 1).has_value());
-  EXPECT_NEAR(*FirstAt(Baseline(), "go", 1), 7.8, 1e-9);
+  ASSERT_TRUE(FirstAt(Baseline(), EventKind::kGo, 1).has_value());
+  EXPECT_NEAR(*FirstAt(Baseline(), EventKind::kGo, 1), 7.8, 1e-9);
   // the client's retry (1 s) after the partition is answered: it goes later
-  const std::optional<double> go = FirstAt(record, "go", 1);
+  const std::optional<double> go = FirstAt(record, EventKind::kGo, 1);
   ASSERT_TRUE(go.has_value());
   EXPECT_GT(*go, 9.1);
   EXPECT_LT(*go, 11.0);
@@ -170,7 +170,7 @@ TEST(Faults, AnUplinkPartitionLosesOnlyWhatTheCarSends) {
   const RunRecord record =
       RunWithFaults("[{v2i_partition: {car: 0, direction: up, at_s: 5, for_s: 10}}]");
   int up = 0;
-  for (const Event& e : EventsOf(record, "v2i_lost", 0)) {
+  for (const Event& e : EventsOf(record, EventKind::kV2iLost, 0)) {
     EXPECT_TRUE(e.detail.starts_with("/vtl/request") || e.detail.starts_with("/vtl/free"))
         << e.detail;
     ++up;
@@ -192,7 +192,7 @@ TEST(Faults, ABrokerOutageLosesEveryonesMessages) {
   const RunRecord record = RunWithFaults("[{broker_outage: {at_s: 9, for_s: 3}}]");
   EXPECT_GE(LostWithCause(record, "broker_outage", 0), 1);  // car 0 asks from 9.3 s
   EXPECT_GE(LostWithCause(record, "broker_outage", 1), 1);  // car 1's keepalives
-  for (const Event& e : EventsOf(record, "v2i_lost")) {
+  for (const Event& e : EventsOf(record, EventKind::kV2iLost)) {
     EXPECT_GE(ToSeconds(e.t), 9.0);
     EXPECT_LE(ToSeconds(e.t), 12.0 + 0.05);  // sent before 12 s, cut in flight at most
   }
@@ -202,24 +202,25 @@ TEST(Faults, AServerRestartForgetsTheHolder) {
   // car 1 holds intersection 0 and is inside it (11.3 s to 16.2 s) when the server restarts: the
   // new server grants it to car 0, which asks again every second (the default client)
   const RunRecord record = RunWithFaults("[{server_restart: {at_s: 12}}]");
-  const std::optional<double> granted = FirstAt(record, "grant", 0);
+  const std::optional<double> granted = FirstAt(record, EventKind::kGrant, 0);
   ASSERT_TRUE(granted.has_value());
   EXPECT_GT(*granted, 12.0);
   EXPECT_LT(*granted, 13.1);
-  EXPECT_GT(*FirstAt(Baseline(), "grant", 0), 16.0);  // without the restart: after car 1 freed
+  EXPECT_GT(*FirstAt(Baseline(), EventKind::kGrant, 0),
+            16.0);  // without the restart: after car 1 freed
   // the restart is instantaneous: its end is its begin
-  ASSERT_EQ(EventsOf(record, "fault_end").size(), 1u);
-  EXPECT_DOUBLE_EQ(ToSeconds(EventsOf(record, "fault_end")[0].t), 12.0);
+  ASSERT_EQ(EventsOf(record, EventKind::kFaultEnd).size(), 1u);
+  EXPECT_DOUBLE_EQ(ToSeconds(EventsOf(record, EventKind::kFaultEnd)[0].t), 12.0);
   // the counters go on across the restart: car 1's grant before it, car 0's after
-  EXPECT_EQ(record.server.grants, EventsOf(record, "grant").size());
-  EXPECT_EQ(record.server.requests, EventsOf(record, "request").size());
+  EXPECT_EQ(record.server.grants, EventsOf(record, EventKind::kGrant).size());
+  EXPECT_EQ(record.server.requests, EventsOf(record, EventKind::kRequest).size());
   EXPECT_GE(record.server.grants, 2u);
 }
 
 TEST(Faults, AServerDownLosesWhatReachesIt) {
   const RunRecord record = RunWithFaults("[{server_restart: {at_s: 9, for_s: 2}}]");
   EXPECT_GE(LostWithCause(record, "server down"), 2);  // car 0's request, car 1's keepalives
-  for (const Event& e : EventsOf(record, "v2i_lost")) {
+  for (const Event& e : EventsOf(record, EventKind::kV2iLost)) {
     EXPECT_GE(ToSeconds(e.t), 9.0);
     EXPECT_LE(ToSeconds(e.t), 11.0);
   }
@@ -318,7 +319,7 @@ TEST(Faults, EveryKindAtOnceGivesTheSameResultTwice) {
       " {localization_jump: {car: 1, dy_m: 0.1, dyaw_deg: 3, at_s: 10}}]";
   const RunRecord a = RunWithFaults(all, 20.0);
   const RunRecord b = RunWithFaults(all, 20.0);
-  EXPECT_EQ(EventsOf(a, "fault_begin").size(), 11u);
+  EXPECT_EQ(EventsOf(a, EventKind::kFaultBegin).size(), 11u);
   EXPECT_EQ(ResultSha256(a), ResultSha256(b));
   EXPECT_NE(ResultSha256(a), ResultSha256(RunWithFaults("[]", 20.0)));
 }

@@ -44,7 +44,7 @@ TEST(RenderTest, TheSnapshotIsTheFullRunsWorldAtThatInstant) {
   EXPECT_EQ(SnapshotAt(scenario, FromSeconds(25.0)).obstacles.size(), 0u);
   // at 0: the start poses, no simulation needed
   const WorldSnapshot start = SnapshotAt(scenario, kZeroTime);
-  EXPECT_EQ(start.cars[0].pose.x_m, scenario.start_poses[0].x_m);
+  EXPECT_EQ(start.cars[0].pose.x_m, scenario.cars[0].start_pose.x_m);
   EXPECT_THROW(SnapshotAt(scenario, FromSeconds(91.0)), std::invalid_argument);
   EXPECT_THROW(SnapshotAt(scenario, FromSeconds(-1.0)), std::invalid_argument);
 }

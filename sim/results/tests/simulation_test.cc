@@ -124,7 +124,7 @@ TEST(SimulationTest, TheDefaultScenarioDrivesBothCarsThroughBothIntersections) {
     EXPECT_GE(car.laps, 3) << "car " << car.id;
     std::set<int> crossed;
     for (const Event& e : record.events) {
-      if (e.type == "enter" && e.car == car.id) crossed.insert(e.intersection);
+      if (e.type == EventKind::kEnter && e.car == car.id) crossed.insert(e.intersection);
     }
     EXPECT_EQ(crossed, (std::set<int>{0, 1})) << "car " << car.id;
   }
@@ -137,8 +137,9 @@ TEST(SimulationTest, TheDefaultScenarioDrivesBothCarsThroughBothIntersections) {
 
 TEST(SimulationTest, ACarParksAfterItsLaps) {
   const RunRecord record = RunScenario(LoadScenario(kDefault, {"cars[1].laps=1"}));
-  const auto parked = std::find_if(record.events.begin(), record.events.end(),
-                                   [](const Event& e) { return e.type == "parked" && e.car == 1; });
+  const auto parked = std::find_if(record.events.begin(), record.events.end(), [](const Event& e) {
+    return e.type == EventKind::kParked && e.car == 1;
+  });
   ASSERT_NE(parked, record.events.end());
   EXPECT_EQ(record.cars[1].laps, 1);
   const TrajectorySample& last = record.trajectory.back();
@@ -162,21 +163,21 @@ TEST(SimulationTest, TheServerCountersAreWhatItsEventsAddUpTo) {
   // a lossy link and a short lease: lost keepalives let leases expire
   const RunRecord record = RunScenario(LoadScenario(
       kDefault, {"v2i.loss=0.5", "traffic_lights.lease_s=1.5", "duration_s=120", "expect=[]"}));
-  std::map<std::string, std::uint64_t> count;
+  std::map<EventKind, std::uint64_t> count;
   std::set<int> intersections;
   ForEachEvent(record, [&](const Event& e) {
     ++count[e.type];
-    if (e.type == "grant" || e.type == "denied" || e.type == "lease_expired" ||
-        e.type == "request") {
+    if (e.type == EventKind::kGrant || e.type == EventKind::kDenied ||
+        e.type == EventKind::kLeaseExpired || e.type == EventKind::kRequest) {
       EXPECT_GE(e.intersection, 0) << EventJsonLine(e);
       intersections.insert(e.intersection);
     }
   });
-  EXPECT_EQ(count["request"], record.server.requests);
-  EXPECT_EQ(count["grant"], record.server.grants);
-  EXPECT_EQ(count["denied"], record.server.denials);
-  EXPECT_EQ(count["free"], record.server.frees);
-  EXPECT_EQ(count["lease_expired"], record.server.lease_expiries);
+  EXPECT_EQ(count[EventKind::kRequest], record.server.requests);
+  EXPECT_EQ(count[EventKind::kGrant], record.server.grants);
+  EXPECT_EQ(count[EventKind::kDenied], record.server.denials);
+  EXPECT_EQ(count[EventKind::kFree], record.server.frees);
+  EXPECT_EQ(count[EventKind::kLeaseExpired], record.server.lease_expiries);
   // the run exercised all of them, at both intersections
   EXPECT_GT(record.server.lease_expiries, 0u);
   EXPECT_GT(record.server.denials, 0u);
@@ -225,9 +226,9 @@ namespace {
 TEST(SimulationBoardTest, OnlyACarWithNodesToRunGetsABoardAndItsCamerasPublishAtTheirRate) {
   const LoadedScenario scenario =
       LoadScenario(kDefault, {"cars[1].perception.enabled=true", "duration_s=6", "expect=[]"});
-  ASSERT_FALSE(scenario.profiles[0].has_value());
-  ASSERT_TRUE(scenario.profiles[1].has_value());
-  EXPECT_EQ(scenario.profiles[1]->name, "zcu104");
+  ASSERT_FALSE(scenario.cars[0].profile.has_value());
+  ASSERT_TRUE(scenario.cars[1].profile.has_value());
+  EXPECT_EQ(scenario.cars[1].profile->name, "zcu104");
   EXPECT_TRUE(scenario.resolved.contains("platforms"));
   const RunRecord record = RunScenario(scenario);
   ASSERT_EQ(record.boards.size(), 1u);

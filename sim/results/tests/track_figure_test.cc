@@ -22,7 +22,7 @@ RunRecord StraightRunWithACollision() {
   }
   Event collision;
   collision.t = Milliseconds(2500);
-  collision.type = "collision";
+  collision.type = EventKind::kCollision;
   collision.car = 0;
   collision.other_car = 1;
   record.events.push_back(collision);

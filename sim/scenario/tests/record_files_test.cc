@@ -40,16 +40,19 @@ RunRecord HandMadeRecord() {
                    .y_m = 2.5,
                    .lateral_error_m = 0.172,
                    .route_progress_m = 12345.678}};
-  r.events = {
-      {.t = milliseconds(1500), .type = "request", .car = 1, .intersection = 0},
-      {.t = milliseconds(1750), .type = "enter", .car = 1, .intersection = 0, .granted = false},
-      {.t = milliseconds(2000),
-       .type = "collision",
-       .car = 1,
-       .other_car = 2,
-       .obstacle = "box \"a\"",
-       .lap = 3,
-       .detail = "ü\n\t"}};
+  r.events = {{.t = milliseconds(1500), .type = EventKind::kRequest, .car = 1, .intersection = 0},
+              {.t = milliseconds(1750),
+               .type = EventKind::kEnter,
+               .car = 1,
+               .intersection = 0,
+               .granted = false},
+              {.t = milliseconds(2000),
+               .type = EventKind::kCollision,
+               .car = 1,
+               .other_car = 2,
+               .obstacle = "box \"a\"",
+               .lap = 3,
+               .detail = "ü\n\t"}};
   return r;
 }
 
@@ -90,7 +93,7 @@ TEST(RecordFiles, WhatIsAppendedReadsBackEqualWithTheSameTextAndHash) {
 TEST(RecordFiles, ReadingBeforeCloseIsAnError) {
   const TempDir dir("record_files_test");
   RecordFiles files(dir.path());
-  files.Append(Event{.type = "lap", .car = 0});
+  files.Append(Event{.type = EventKind::kLap, .car = 0});
   EXPECT_THROW(files.ForEachEvent([](const Event&) {}), std::logic_error);
 }
 

@@ -46,11 +46,11 @@ TEST(ScenarioTest, AValidFileResolvesRoutesStartsAndHash) {
   const LoadedScenario loaded = LoadScenario(file.path());
   EXPECT_EQ(loaded.scenario.name, "valid");
   EXPECT_EQ(loaded.scenario.seed, 3u);
-  ASSERT_EQ(loaded.routes.size(), 2u);
-  EXPECT_EQ(loaded.routes[0].name, "south_loop");
-  EXPECT_TRUE(loaded.routes[1].cyclic);
-  EXPECT_NEAR(loaded.start_poses[0].x_m, 0.96, 1e-12);  // the named pose, reference §1
-  EXPECT_NEAR(loaded.start_s_m[1], 2.0, 1e-12);
+  ASSERT_EQ(loaded.cars.size(), 2u);
+  EXPECT_EQ(loaded.cars[0].route.name, "south_loop");
+  EXPECT_TRUE(loaded.cars[1].route.cyclic);
+  EXPECT_NEAR(loaded.cars[0].start_pose.x_m, 0.96, 1e-12);  // the named pose, reference §1
+  EXPECT_NEAR(loaded.cars[1].start_s_m, 2.0, 1e-12);
   EXPECT_EQ(loaded.sha256.size(), 64u);
   // every default is in the resolved form
   EXPECT_TRUE(loaded.resolved["scenario"]["cars"][0]["vehicle"].contains("mass_kg"));
@@ -246,8 +246,8 @@ TEST(ScenarioTest, AScenarioAnywhereFindsTheShippedTrackAndProfile) {
   std::ofstream(file) << kValid;
   const LoadedScenario loaded =
       LoadScenario(file, {"cars[0].perception.enabled=true", "duration_s=5"});
-  EXPECT_EQ(loaded.routes.size(), 2u);
-  EXPECT_TRUE(loaded.profiles[0].has_value());
+  EXPECT_EQ(loaded.cars.size(), 2u);
+  EXPECT_TRUE(loaded.cars[0].profile.has_value());
   try {
     LoadScenario(file, {"track=tracks/nope.yaml"});
     FAIL() << "no error";

@@ -34,8 +34,9 @@ inline constexpr std::uint64_t kScriptSeed = 7;
 class ScriptedCars {
  public:
   ScriptedCars(std::unique_ptr<TrafficLightEndpoint> endpoint, std::uint64_t seed)
-      : streams_(seed),
-        node_(&kernel_, std::move(endpoint), [this](Event e) { Note(e.t, "event " + e.type); }) {
+      : streams_(seed), node_(&kernel_, std::move(endpoint), [this](Event e) {
+          Note(e.t, "event " + std::string(ToName(e.type)));
+        }) {
     V2IConfig v2i;
     v2i.latency = std::chrono::milliseconds(20);
     v2i.jitter = std::chrono::milliseconds(5);
