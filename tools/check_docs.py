@@ -29,7 +29,7 @@ PAGES = ["README.md", "CONTRIBUTING.md", "CHANGELOG.md"]
 
 FENCE = re.compile(r"^ {0,3}(```|~~~)")
 HEADING = re.compile(r"^ {0,3}(#{1,6})[ \t]+(.*?)[ \t]*#*[ \t]*$")
-CODE_SPAN = re.compile(r"(`+)(.+?)\1")
+CODE_SPAN = re.compile(r"(`+)((?:(?!\n[ \t]*\n).)+?)\1", re.S)  # not across paragraphs
 INLINE_LINK = re.compile(r"!?\[(?:[^\[\]]|\[[^\]]*\])*\]\(\s*<?([^)\s>]*)>?(?:\s+[\"'(][^)]*)?\)")
 REFERENCE_DEF = re.compile(r"^ {0,3}\[[^\]]+\]:\s*<?(\S+?)>?(?:\s.*)?$")
 HTML_ATTR = re.compile(r"""\b(?:href|src)\s*=\s*["']([^"']+)["']""")
@@ -100,14 +100,17 @@ def check_target(target, anchor, source):
 
 
 def page_links(path):
-    """(line, link) of every link and image in a Markdown page, outside code."""
-    for number, line in markdown_lines(path):
-        text = CODE_SPAN.sub("", line)
-        for link in INLINE_LINK.findall(text):
-            yield number, link
-        for link in HTML_ATTR.findall(text):
-            yield number, link
-        match = REFERENCE_DEF.match(text)
+    """(line, link) of every link and image in a Markdown page, outside code. A link's text may
+    run over several lines; the line reported is the one its target is on."""
+    lines = dict(markdown_lines(path))
+    count = max(lines, default=0)
+    text = "\n".join(lines.get(n, "") for n in range(1, count + 1))
+    text = CODE_SPAN.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+    for pattern in (INLINE_LINK, HTML_ATTR):
+        for match in pattern.finditer(text):
+            yield text.count("\n", 0, match.start(1)) + 1, match.group(1)
+    for number, line in enumerate(text.split("\n"), 1):
+        match = REFERENCE_DEF.match(line)
         if match:
             yield number, match.group(1)
 
