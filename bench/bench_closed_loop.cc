@@ -1,8 +1,8 @@
 // The whole closed loop (issue 19): BM_ClosedLoopDefault runs the default scenario,
 // scenarios/lab_two_cars.yaml (two stack-driven cars, both cameras of both cars at 640×480 and
 // 30 fps), cut to 30 s of simulated time, and reports simulated seconds per wall second
-// (`sim_s_per_wall_s`, the real-time factor) on one thread. The README's speed table uses
-// `autonomsim run` on the whole 200 s (median of 3), which this tracks.
+// (`sim_s_per_wall_s`, the real-time factor) on one thread. docs/performance.md#speed-today
+// times `autonomsim run` on the whole 200 s (medians), which this tracks.
 //
 //     build/bin/bench_closed_loop --benchmark_filter=BM_ClosedLoopDefault
 #include <benchmark/benchmark.h>

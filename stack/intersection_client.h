@@ -1,7 +1,7 @@
 // The car's side of the /vtl/ protocol (reference §7: vehicle communication + intersection_checker)
 // as a pure step, run every tick_period on the car's estimated position. Where it departs from the
 // lab's client, a parameter says so and its other value is the lab's behaviour (stack.preset: lab
-// selects all of them, README "The lab's stack and its fixes"):
+// selects all of them, docs/lab-stack.md#the-options):
 //   re_request          the original requests once and then waits forever; ours asks again after
 //                       a denial or a lost message and keeps a held intersection alive against
 //                       the server's lease;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The fleet study's table (README "The fleet study"): for each stack preset and number of cars,
+"""The fleet study's table (docs/studies/fleet.md): for each stack preset and number of cars,
 in how many runs each failure class happened. Reads a sweep folder's runs (summary.json,
 scenario.resolved.json, events.jsonl) and prints a Markdown table.
 

@@ -5,8 +5,8 @@
 # there are cores. Prints the executions per target; exits 1 when any target finds something (a
 # crash, a sanitizer report, a hang over 10 s, over 2 GB of memory, or an error message that does
 # not say where), with its input in build-fuzz/artifacts/. Corpora grow in
-# build-fuzz/corpus/<target>/ from run to run. Naming targets builds and runs only those. README
-# "Fuzzing" says more.
+# build-fuzz/corpus/<target>/ from run to run. Naming targets builds and runs only those.
+# docs/fuzzing.md says more.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 usage="usage: tools/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]"

@@ -10,7 +10,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libssl-dev libcli11-dev libfmt-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openssl  # the TLS test makes its certificates with it
-  parallel  # GNU parallel: the sweep test runs shards with it, as the README's recipe does
+  parallel  # GNU parallel: the sweep test runs docs/sweeps.md#beyond-one-machine's recipe
   clang libclang-rt-14-dev  # tools/fuzz.sh: libFuzzer and clang's sanitizer runtimes
   clang-format  # .ci/run checks every C++ file against .clang-format before the builds
   chromium  # the replay report's browser test loads it in headless chromium

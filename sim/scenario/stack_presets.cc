@@ -13,7 +13,7 @@ const char* Pick(const std::string& name, const char* lab, const char* safe) {
 }
 
 // Each option's value in the lab's code (reference §5-§7) and with every fix, by its key path in
-// a car entry; README "The lab's stack and its fixes" gives the reasons, in the same order.
+// a car entry; docs/lab-stack.md#the-options gives the reasons, in the same order.
 struct PresetOption {
   const char* key;
   const char* lab;

@@ -1,7 +1,7 @@
 // `stack.preset`: one key that selects the lab's stack as published (`lab`) or every fix this
 // simulator offers (`safe`). A preset is a set of option values beneath what the scenario says:
 // it fills only the keys the scenario (with its --set overrides) leaves out, so single options may
-// still be overridden. README "The lab's stack and its fixes" lists every option, what the lab's
+// still be overridden. docs/lab-stack.md#the-options lists every option, what the lab's
 // code does, what the fix does and why.
 //
 // Where it applies:
@@ -30,7 +30,7 @@ struct FleetStackConfig {
   void Validate() const;
 };
 
-// The names a preset may have, in the order README lists them.
+// The names a preset may have, in the order docs/lab-stack.md#presets lists them.
 const std::vector<std::string>& StackPresetNames();
 
 // The option values a preset sets, as the YAML a car entry (`car`) or the scenario's root
@@ -38,7 +38,7 @@ const std::vector<std::string>& StackPresetNames();
 YAML::Node StackPresetForCar(const std::string& name);
 YAML::Node StackPresetForScenario(const std::string& name);
 
-// Every option a preset sets, as key paths (a car's, then the scenario's), in README's order.
+// Every option a preset sets, as key paths (car's, then scenario's), in docs/lab-stack.md's order.
 std::vector<std::string> StackPresetKeys();
 
 // Fills `root` (a scenario, overrides applied) from its presets, as described above. A preset

@@ -22,7 +22,7 @@ struct PointRecord {
 
 // The rows of results.csv: the points that have a summary, in grid order. Columns: index,
 // run_id, one per axis (its key), repeat, seed, then the metrics taken from each run's
-// summary (sim/results/summary.h; see README "Sweeps" for the list). Metric columns that some runs
+// summary (sim/results/summary.h; list: docs/outputs.md#a-sweeps-folder). Metric columns some runs
 // lack (another mapping has other nodes) are empty for them. Pure: the same inputs give the same
 // bytes.
 struct ResultsTable {

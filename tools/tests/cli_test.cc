@@ -121,7 +121,7 @@ TEST(CliTest, CheckPassesTheShippedScenariosAndWritesJunit) {
   EXPECT_THAT(xml, HasSubstr("<property name=\"seed\" value=\"42\"/>"));
 }
 
-// The fault scenarios (README "Faults") each pass what they expect.
+// The fault scenarios (docs/faults.md#the-shipped-fault-scenarios) each pass what they expect.
 TEST(CliTest, CheckPassesTheShippedFaultScenarios) {
   const Result r = Cli("check scenarios/faults/ --jobs 2");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -1,6 +1,6 @@
 // `autonomsim sweep` as a user and a job scheduler see it: help, errors for bad input, and the
-// README's GNU parallel recipe (shards in separate processes, then `sweep merge`) giving the same
-// results.csv as one process.
+// recipe of docs/sweeps.md#beyond-one-machine (shards run by GNU parallel, then `sweep merge`)
+// giving the same results.csv as one process.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -136,7 +136,7 @@ TEST(SweepCliTest, ShardsRunByGnuParallelMergeToTheSameTable) {
   const std::string table = Read(dir / "one" / "results.csv");
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);  // header + 4 runs
 
-  // The README's recipe: one process per shard, here two at a time, each with one job.
+  // docs/sweeps.md#beyond-one-machine's recipe: one process per shard, two at a time, one job each.
   const Result shards = Shell("parallel --will-cite --halt now,fail=1 -j 2 \"" + Bin() + " " +
                               kSweep + " --jobs 1 --no-plots --shard {}/4 --out " +
                               (dir / "shard{}").string() + "\" ::: 1 2 3 4");

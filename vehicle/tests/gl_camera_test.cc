@@ -191,7 +191,7 @@ double Share(std::size_t part, std::size_t whole) {
   return static_cast<double>(part) / static_cast<double>(whole);
 }
 
-// The figures README "Two renderers" quotes, printed with the test's output.
+// The figures docs/renderers.md#they-agree quotes, printed with the test's output.
 void Print(const char* camera, const Agreement& a) {
   std::printf(
       "%s, %zu pixels away from edges: depth within 1 mm %.4f %%, colour equal %.4f %%, "
