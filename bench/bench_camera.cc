@@ -181,8 +181,8 @@ BENCHMARK(BM_RenderRgbdGl)->Apply(RgbdSizes);
 void BM_RenderColorLaneRegion(benchmark::State& state) {
   const Scene& scene = TheScene();
   vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
-  const stack::LaneDetector detector(stack::LaneDetectionParams{},
-                                     sim::LaneCalibration(color_camera.camera()));
+  const stack::LaneDetectorTables detector(stack::LaneDetectionParams{},
+                                           sim::LaneCalibration(color_camera.camera()));
   const vehicle::RowSpans region = sim::LaneDetectorReads(detector, color_camera.camera().height());
   color_camera.set_common_floor_blocks(state.range(0) != 0);
   vehicle::ColorImage color;
@@ -208,15 +208,18 @@ BENCHMARK(BM_RenderColorLaneRegion)
     ->Unit(benchmark::kMicrosecond);
 
 // The colour camera as the lane nodes render it in the loop now: the line class of each pixel the
-// detector reads (CameraRenderer::RenderLabels), straight into the detector's class buffer.
+// detector reads (CameraRenderer::RenderLabels), straight into the class image the detector hands
+// out (LaneDetector::MutableClassRegion).
 void BM_RenderLaneLabels(benchmark::State& state) {
   const Scene& scene = TheScene();
   vehicle::CameraRenderer color_camera = Renderer(scene.color_rays);
   stack::LaneDetector detector(stack::LaneDetectionParams{},
                                sim::LaneCalibration(color_camera.camera()));
-  const vehicle::RowSpans region = sim::LaneDetectorReads(detector, color_camera.camera().height());
-  const vehicle::ColourLabel line_class = sim::LaneLineClass(detector);
-  const vehicle::LabelView out{detector.source_classes(), stack::LaneDetector::kClassStride};
+  const vehicle::RowSpans region =
+      sim::LaneDetectorReads(*detector.tables(), color_camera.camera().height());
+  const vehicle::ColourLabel line_class = sim::LaneLineClass(detector.tables());
+  const stack::ClassImageRegion classes = detector.MutableClassRegion();
+  const vehicle::LabelView out{classes.pixels.data(), classes.stride};
   for (auto _ : state) {
     color_camera.RenderLabels(scene.pose, scene.prisms, region, line_class, out);
     benchmark::ClobberMemory();

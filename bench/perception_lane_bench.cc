@@ -73,10 +73,11 @@ BENCHMARK(BM_LaneRowSums)->Unit(benchmark::kMicrosecond);
 void BM_LaneRowSumsFromClasses(benchmark::State& state) {
   LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
   const cv::Mat& image = Frame().image;
-  for (const LaneDetector::SourceSpan& span : detector.source_spans()) {
+  const ClassImageRegion classes = detector.MutableClassRegion();
+  for (const LaneDetector::SourceSpan& span : classes.spans) {
     const std::uint8_t* bgr = image.ptr<std::uint8_t>(span.row);
     for (int c = span.col_begin; c < span.col_end; ++c) {
-      detector.source_classes()[span.row * LaneDetector::kClassStride + c] =
+      classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
           detector.ClassOf(bgr[3 * c], bgr[3 * c + 1], bgr[3 * c + 2]);
     }
   }

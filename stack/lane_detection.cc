@@ -7,6 +7,7 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "world/plumb_bob.h"
 #include "world/validation.h"
@@ -323,14 +324,88 @@ std::array<std::uint8_t, 3> BgrToHsv8(std::uint8_t b, std::uint8_t g, std::uint8
 
 }  // namespace detail
 
-LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCalibration& camera)
+namespace {
+
+// OpenCV's bilinear weights, as its own remap (which warpPerspective calls) applies them: for each
+// of the 1024 fractional positions a and each of the 16 ways k the 2×2 neighbours can be 0 or 255,
+// the 8-bit result of its fixed-point sum, at [a · 16 + k]. Pattern k sits at columns 3k, 3k + 1
+// of a 2-row probe image.
+std::vector<std::uint8_t> OpenCvBilinearTable() {
+  cv::Mat probe(2, 3 * 16, CV_8UC1, cv::Scalar(0));
+  cv::Mat map_xy(16, kAlphaCount, CV_16SC2);
+  cv::Mat map_alpha(16, kAlphaCount, CV_16UC1);
+  for (int k = 0; k < 16; ++k) {
+    for (int bit = 0; bit < 4; ++bit) {
+      if ((k >> bit) & 1) probe.at<std::uint8_t>(bit >> 1, 3 * k + (bit & 1)) = 255;
+    }
+    for (int a = 0; a < kAlphaCount; ++a) {
+      map_xy.at<cv::Vec2s>(k, a) = cv::Vec2s(static_cast<short>(3 * k), 0);
+      map_alpha.at<std::uint16_t>(k, a) = static_cast<std::uint16_t>(a);
+    }
+  }
+  cv::Mat out;
+  cv::remap(probe, out, map_xy, map_alpha, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+  std::vector<std::uint8_t> table(kAlphaCount * 16);
+  for (int k = 0; k < 16; ++k) {
+    for (int a = 0; a < kAlphaCount; ++a) table[a * 16 + k] = out.at<std::uint8_t>(k, a);
+  }
+  return table;
+}
+
+}  // namespace
+
+// Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts the
+// matrix with cv::invert, LU) evaluated in doubles in its block order, scaled to 1/32 px and
+// rounded to nearest even (saturate_cast<int>), then split into the integer pixel (saturated to
+// short) and the 5+5 fractional bits.
+struct LaneDetectorTables::WarpSource {
+  explicit WarpSource(const cv::Mat& image_to_birds_eye) {
+    constexpr int W = kLaneImageWidth;
+    constexpr int H = kLaneImageHeight;
+    cv::Mat inverse;
+    cv::invert(image_to_birds_eye, inverse);
+    const double* m = inverse.ptr<double>();
+    int block_h = std::min(kWarpBlockSize / 2, H);
+    const int block_w = std::min(kWarpBlockSize * kWarpBlockSize / block_h, W);
+    block_h = std::min(kWarpBlockSize * kWarpBlockSize / block_w, H);
+    for (int y = 0; y < H; y += block_h) {
+      for (int x = 0; x < W; x += block_w) {
+        for (int y1 = 0; y1 < std::min(block_h, H - y); ++y1) {
+          const double X0 = m[0] * x + m[1] * (y + y1) + m[2];
+          const double Y0 = m[3] * x + m[4] * (y + y1) + m[5];
+          const double W0 = m[6] * x + m[7] * (y + y1) + m[8];
+          for (int x1 = 0; x1 < std::min(block_w, W - x); ++x1) {
+            Set((y + y1) * W + x + x1, X0 + m[0] * x1, Y0 + m[3] * x1, W0 + m[6] * x1);
+          }
+        }
+      }
+    }
+  }
+
+  // Output pixel i from the homogeneous source point (X, Y, w).
+  void Set(int i, double X, double Y, double w) {
+    const auto saturate_short = [](int v) { return std::clamp(v, SHRT_MIN, SHRT_MAX); };
+    w = w != 0.0 ? kInterTabSize / w : 0.0;
+    const double fx = std::max(double{INT_MIN}, std::min(double{INT_MAX}, X * w));
+    const double fy = std::max(double{INT_MIN}, std::min(double{INT_MAX}, Y * w));
+    const int sx_fixed = static_cast<int>(std::lrint(fx));
+    const int sy_fixed = static_cast<int>(std::lrint(fy));
+    sx[i] = saturate_short(sx_fixed >> kInterBits);
+    sy[i] = saturate_short(sy_fixed >> kInterBits);
+    alpha[i] = (sy_fixed & (kInterTabSize - 1)) * kInterTabSize + (sx_fixed & (kInterTabSize - 1));
+  }
+
+  std::vector<int> sx = std::vector<int>(kLaneImageWidth * kLaneImageHeight);
+  std::vector<int> sy = std::vector<int>(kLaneImageWidth * kLaneImageHeight);
+  std::vector<int> alpha = std::vector<int>(kLaneImageWidth * kLaneImageHeight);
+};
+
+LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
+                                       const LaneCameraCalibration& camera)
     : params_(params), camera_(camera) {
   params_.Validate();
   camera_.Validate();
   thresholds_ = LaneThresholdsByName(params_.thresholds);
-  constexpr int W = kLaneImageWidth;
-  constexpr int H = kLaneImageHeight;
-
   // As the real node: cv::getPerspectiveTransform on float points, both ways.
   const auto src = ToCv(params_.warp_source_px);
   const auto dst = ToCv(params_.warp_destination_px);
@@ -342,73 +417,19 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
     sdiv_[i] = static_cast<int>(std::lrint((255 << kHsvShift) / (1.0 * i)));
     hdiv_[i] = static_cast<int>(std::lrint((180 << kHsvShift) / (6.0 * i)));
   }
+  warp_lut_ = OpenCvBilinearTable();
+  IndexActivePixels(WarpSource(image_to_birds_eye_));
+}
 
-  // The bilinear weights are OpenCV's own: remap (which warpPerspective calls) reads off, for each
-  // of the 1024 fractional positions and each of the 16 ways the 2×2 neighbours can be 0 or 255,
-  // the 8-bit result of its fixed-point sum. Pattern k sits at columns 3k, 3k + 1 of a 2-row image.
-  {
-    cv::Mat probe(2, 3 * 16, CV_8UC1, cv::Scalar(0));
-    cv::Mat map_xy(16, kAlphaCount, CV_16SC2);
-    cv::Mat map_alpha(16, kAlphaCount, CV_16UC1);
-    for (int k = 0; k < 16; ++k) {
-      for (int bit = 0; bit < 4; ++bit) {
-        if ((k >> bit) & 1) probe.at<std::uint8_t>(bit >> 1, 3 * k + (bit & 1)) = 255;
-      }
-      for (int a = 0; a < kAlphaCount; ++a) {
-        map_xy.at<cv::Vec2s>(k, a) = cv::Vec2s(static_cast<short>(3 * k), 0);
-        map_alpha.at<std::uint16_t>(k, a) = static_cast<std::uint16_t>(a);
-      }
-    }
-    cv::Mat out;
-    cv::remap(probe, out, map_xy, map_alpha, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
-    warp_lut_.resize(kAlphaCount * 16);
-    for (int k = 0; k < 16; ++k) {
-      for (int a = 0; a < kAlphaCount; ++a) warp_lut_[a * 16 + k] = out.at<std::uint8_t>(k, a);
-    }
-  }
-
-  // Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts
-  // the matrix with cv::invert, LU) evaluated in doubles in its block order, scaled to 1/32 px and
-  // rounded to nearest even (saturate_cast<int>), then split into the integer pixel (saturated to
-  // short) and the 5+5 fractional bits.
-  cv::Mat inverse;
-  cv::invert(image_to_birds_eye_, inverse);
-  const double* m = inverse.ptr<double>();
-  std::vector<int> sx(W * H), sy(W * H), alpha(W * H);
-  int block_h = std::min(kWarpBlockSize / 2, H);
-  const int block_w = std::min(kWarpBlockSize * kWarpBlockSize / block_h, W);
-  block_h = std::min(kWarpBlockSize * kWarpBlockSize / block_w, H);
-  const auto saturate_short = [](int v) { return std::clamp(v, SHRT_MIN, SHRT_MAX); };
-  for (int y = 0; y < H; y += block_h) {
-    for (int x = 0; x < W; x += block_w) {
-      const int bw = std::min(block_w, W - x);
-      const int bh = std::min(block_h, H - y);
-      for (int y1 = 0; y1 < bh; ++y1) {
-        const double X0 = m[0] * x + m[1] * (y + y1) + m[2];
-        const double Y0 = m[3] * x + m[4] * (y + y1) + m[5];
-        const double W0 = m[6] * x + m[7] * (y + y1) + m[8];
-        for (int x1 = 0; x1 < bw; ++x1) {
-          double w = W0 + m[6] * x1;
-          w = w != 0.0 ? kInterTabSize / w : 0.0;
-          const double fx =
-              std::max(double{INT_MIN}, std::min(double{INT_MAX}, (X0 + m[0] * x1) * w));
-          const double fy =
-              std::max(double{INT_MIN}, std::min(double{INT_MAX}, (Y0 + m[3] * x1) * w));
-          const int X = static_cast<int>(std::lrint(fx));
-          const int Y = static_cast<int>(std::lrint(fy));
-          const int i = (y + y1) * W + x + x1;
-          sx[i] = saturate_short(X >> kInterBits);
-          sy[i] = saturate_short(Y >> kInterBits);
-          alpha[i] = (Y & (kInterTabSize - 1)) * kInterTabSize + (X & (kInterTabSize - 1));
-        }
-      }
-    }
-  }
-
+void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
+  constexpr int W = kLaneImageWidth;
+  constexpr int H = kLaneImageHeight;
+  const std::vector<int>& sx = source.sx;
+  const std::vector<int>& sy = source.sy;
   // Active pixels (some of the 2×2 source square inside the image; the rest stay 0, the border
   // value), grouped by output tile, with the source cells each tile reads and the source pixels
   // each row needs.
-  const int padded_w = W + 2;
+  constexpr int padded_w = kClassStride;
   std::vector<int> need_begin(H, W), need_end(H, 0);
   for (int ty = 0; ty < H; ty += kTileSize) {
     for (int tx = 0; tx < W; tx += kTileSize) {
@@ -420,7 +441,7 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
           if (sx[i] >= W || sx[i] + 1 < 0 || sy[i] >= H || sy[i] + 1 < 0) continue;
           pixel_dst_.push_back(static_cast<std::uint32_t>(i));
           pixel_src_.push_back(static_cast<std::uint32_t>((sy[i] + 1) * padded_w + sx[i] + 1));
-          pixel_lut_.push_back(static_cast<std::uint16_t>(alpha[i] * 16));
+          pixel_lut_.push_back(static_cast<std::uint16_t>(source.alpha[i] * 16));
           const int c0 = std::max(sx[i], 0), c1 = std::min(sx[i] + 1, W - 1);
           const int r0 = std::max(sy[i], 0), r1 = std::min(sy[i] + 1, H - 1);
           x_lo = std::min(x_lo, c0);
@@ -445,14 +466,10 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
   for (int r = 0; r < H; ++r) {
     if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
   }
-  classes_.assign(static_cast<std::size_t>(padded_w) * (H + 2), 0);
-  const int cells_x = (W + kCellSize - 1) / kCellSize;
-  const int cells_y = (H + kCellSize - 1) / kCellSize;
-  cell_any_.assign(static_cast<std::size_t>(cells_x) * cells_y, 0);
-  cell_prefix_.assign(static_cast<std::size_t>(cells_x + 1) * (cells_y + 1), 0);
 }
 
-std::uint8_t LaneDetector::ClassOf(std::uint8_t blue, std::uint8_t green, std::uint8_t red) const {
+std::uint8_t LaneDetectorTables::ClassOf(std::uint8_t blue, std::uint8_t green,
+                                         std::uint8_t red) const {
   const int b = blue, g = green, r = red;
   const int v = std::max({b, g, r});
   if (v < v_min_) return 0;
@@ -468,9 +485,33 @@ std::uint8_t LaneDetector::ClassOf(std::uint8_t blue, std::uint8_t green, std::u
                                    (InRange(thresholds_.white, hsv) << 1));
 }
 
+LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCalibration& camera)
+    : LaneDetector(std::make_shared<const LaneDetectorTables>(params, camera)) {}
+
+LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
+    : tables_(std::move(tables)) {
+  Require(tables_ != nullptr, "LaneDetector needs its tables");
+  classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2), 0);
+  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
+  const int cells_y = (kLaneImageHeight + kCellSize - 1) / kCellSize;
+  cell_any_.assign(static_cast<std::size_t>(cells_x) * cells_y, 0);
+  cell_prefix_.assign(static_cast<std::size_t>(cells_x + 1) * (cells_y + 1), 0);
+}
+
+ClassImageRegion LaneDetector::MutableClassRegion() {
+  // from pixel (0, 0) inside the border to the last image pixel
+  constexpr std::size_t kSize = static_cast<std::size_t>(kLaneImageHeight - 1) * kClassStride +
+                                static_cast<std::size_t>(kLaneImageWidth);
+  return ClassImageRegion{.pixels = std::span(classes_.data() + kClassStride + 1, kSize),
+                          .stride = kClassStride,
+                          .spans = tables_->source_spans()};
+}
+
 void LaneDetector::Classify(const cv::Mat& bgr) {
+  const LaneDetectorTables& tables = *tables_;
+  const int v_min = tables.v_min_;
   constexpr int W = kLaneImageWidth;
-  constexpr int padded_w = W + 2;
+  constexpr int padded_w = kClassStride;
   const int cells_x = (W + kCellSize - 1) / kCellSize;
   std::fill(cell_any_.begin(), cell_any_.end(), 0);
   // No pixel darker than both ranges' V bounds is a line pixel: most of the floor is black.
@@ -479,15 +520,15 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
   // of 128 or more only ever follows a byte that already shows). No byte >= v_min: all 8 dark.
   constexpr std::uint64_t kOnes = 0x0101010101010101ull;
   constexpr std::uint64_t kHighBits = 0x8080808080808080ull;
-  const bool word_test = v_min_ >= 1 && v_min_ <= 128;
-  const std::uint64_t add = kOnes * static_cast<std::uint64_t>(127 - (v_min_ - 1));
+  const bool word_test = v_min >= 1 && v_min <= 128;
+  const std::uint64_t add = kOnes * static_cast<std::uint64_t>(127 - (v_min - 1));
   const auto all_dark = [&](const std::uint8_t* eight) {
     std::uint64_t w[3];
     std::memcpy(w, eight, sizeof w);
     return ((((w[0] + add) | w[0]) | ((w[1] + add) | w[1]) | ((w[2] + add) | w[2])) & kHighBits) ==
            0;
   };
-  for (const SourceSpan& span : spans_) {
+  for (const SourceSpan& span : tables.spans_) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(span.row);
     std::uint8_t* out = classes_.data() + (span.row + 1) * padded_w + 1;
     std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
@@ -498,7 +539,7 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
         continue;
       }
       for (const int block_end = std::min(c + 8, span.col_end); c < block_end; ++c) {
-        const std::uint8_t cls = ClassOf(p[3 * c], p[3 * c + 1], p[3 * c + 2]);
+        const std::uint8_t cls = tables.ClassOf(p[3 * c], p[3 * c + 1], p[3 * c + 2]);
         out[c] = cls;
         if (cls != 0) cells[c / kCellSize] = 1;
       }
@@ -508,10 +549,10 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
 }
 
 void LaneDetector::FindLineCells() {
-  constexpr int padded_w = kLaneImageWidth + 2;
+  constexpr int padded_w = kClassStride;
   const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
   std::fill(cell_any_.begin(), cell_any_.end(), 0);
-  for (const SourceSpan& span : spans_) {
+  for (const SourceSpan& span : tables_->spans_) {
     const std::uint8_t* in = classes_.data() + (span.row + 1) * padded_w + 1;
     std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
     static_assert(kCellSize == 8, "a cell's row is one 64-bit word");
@@ -578,18 +619,22 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
 
 template <class Visit>
 void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
+  const LaneDetectorTables& tables = *tables_;
   const std::uint8_t* classes = classes_.data();
-  const std::uint8_t* lut = warp_lut_.data();
-  constexpr int stride = kLaneImageWidth + 2;
-  for (const Tile& tile : tiles_) {
+  const std::uint8_t* lut = tables.warp_lut_.data();
+  const std::uint32_t* pixel_src = tables.pixel_src_.data();
+  const std::uint32_t* pixel_dst = tables.pixel_dst_.data();
+  const std::uint16_t* pixel_lut = tables.pixel_lut_.data();
+  constexpr int stride = kClassStride;
+  for (const Tile& tile : tables.tiles_) {
     if (!AnyLineCell(tile)) continue;
     for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
-      const std::uint8_t* p = classes + pixel_src_[i];
+      const std::uint8_t* p = classes + pixel_src[i];
       const int c0 = p[0], c1 = p[1], c2 = p[stride], c3 = p[stride + 1];
       if ((c0 | c1 | c2 | c3) == 0) continue;
       const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
       const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
-      visit(pixel_dst_[i], lut[pixel_lut_[i] + yellow_bits], lut[pixel_lut_[i] + white_bits]);
+      visit(pixel_dst[i], lut[pixel_lut[i] + yellow_bits], lut[pixel_lut[i] + white_bits]);
     }
   }
 }
@@ -632,6 +677,12 @@ LanePoints LaneDetector::Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* tra
 }
 
 LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace) {
+  return FitLanePoints(*tables_, sums, trace);
+}
+
+LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums& sums,
+                         LaneDetectionTrace* trace) {
+  const LaneDetectionParams& params = tables.params();
   LaneDetectionTrace local;
   LaneDetectionTrace& t = trace != nullptr ? *trace : local;
   t = LaneDetectionTrace{};
@@ -639,12 +690,13 @@ LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* tr
   LanePoints out;
 
   // choose the line: yellow if it has enough pixels, else white, else nothing
-  RowMeans(sums.yellow, &rows_, &cols_, &weights_, &t.yellow_px);
+  std::vector<double> rows, cols, weights;
+  RowMeans(sums.yellow, &rows, &cols, &weights, &t.yellow_px);
   t.line = LaneLine::kYellow;
-  if (t.yellow_px < params_.yellow_min_px) {
-    RowMeans(sums.white, &rows_, &cols_, &weights_, &t.white_px);
+  if (t.yellow_px < params.yellow_min_px) {
+    RowMeans(sums.white, &rows, &cols, &weights, &t.white_px);
     t.line = LaneLine::kWhite;
-    if (t.white_px < params_.line_min_px) {
+    if (t.white_px < params.line_min_px) {
       t.line = LaneLine::kNone;
       return out;
     }
@@ -652,27 +704,27 @@ LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* tr
 
   // col = f(row) over the line's pixels: per row, its pixels' mean column weighted by their count
   // (the same least-squares problem as one equation per pixel)
-  t.line_fit = FitRowPolynomial(rows_, cols_, weights_, 2);
+  t.line_fit = FitRowPolynomial(rows, cols, weights, 2);
   if (!t.line_fit) return out;
 
   // samples moved to the lane centre, and the trajectory through them and the anchors
   std::array<Eigen::Vector2d, LanePoints::kCount> shifted;
   for (int i = 0; i < LanePoints::kCount; ++i) {
-    shifted[i] = ShiftTowardsLaneCentre(*t.line_fit, i * params_.sample_row_step_px, t.line,
-                                        params_.normal_shift_px);
+    shifted[i] = ShiftTowardsLaneCentre(*t.line_fit, i * params.sample_row_step_px, t.line,
+                                        params.normal_shift_px);
   }
-  t.trajectory = FitTrajectory(params_, shifted);
+  t.trajectory = FitTrajectory(params, shifted);
   if (!t.trajectory) return out;
 
   // back into the raw image, and down onto the floor
-  const double* h = birds_eye_to_image_.ptr<double>();
+  const double* h = tables.birds_eye_to_image().ptr<double>();
   for (int i = 0; i < LanePoints::kCount; ++i) {
-    const double row = i * params_.sample_row_step_px;
+    const double row = i * params.sample_row_step_px;
     const double col = (*t.trajectory)(row);
     const double w = h[6] * col + h[7] * row + h[8];
     const double u = (h[0] * col + h[1] * row + h[2]) / w;
     const double v = (h[3] * col + h[4] * row + h[5]) / w;
-    const std::optional<Eigen::Vector2d> p = FloorPointFromPixel(camera_, u, v);
+    const std::optional<Eigen::Vector2d> p = FloorPointFromPixel(tables.camera(), u, v);
     if (!p) return LanePoints{};
     out.points[i] = {static_cast<float>(p->x()), static_cast<float>(p->y())};
   }

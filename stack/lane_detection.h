@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <span>
@@ -220,75 +221,53 @@ struct LaneDetectionTrace {
   std::optional<RowPolynomial> trajectory;
 };
 
-// Params (fixed, validated once) + the precomputed warp tables; Step keeps scratch buffers only,
-// so an output depends on its input image alone. One detector per thread.
-class LaneDetector {
+// The detector's fixed part (params, validated once, and everything computed from them and the
+// camera): the homographies, OpenCV's 8-bit HSV division tables and the warp's per-pixel tables
+// (which source pixels each bird's-eye pixel reads, with which bilinear weights). Immutable after
+// construction, so one instance can be shared read-only by any number of detectors and threads:
+// the lane planner's and the polynomial fit's nodes share one.
+class LaneDetectorTables {
  public:
-  LaneDetector(const LaneDetectionParams& params, const LaneCameraCalibration& camera);
+  LaneDetectorTables(const LaneDetectionParams& params, const LaneCameraCalibration& camera);
 
   const LaneDetectionParams& params() const { return params_; }
+  const LaneCameraCalibration& camera() const { return camera_; }
   const LaneThresholds& thresholds() const { return thresholds_; }
   // 3×3 CV_64F, raw image (col, row) → bird's-eye (col, row), and back.
   const cv::Mat& image_to_birds_eye() const { return image_to_birds_eye_; }
   const cv::Mat& birds_eye_to_image() const { return birds_eye_to_image_; }
 
-  // `bgr`: 640×480 CV_8UC3. Throws std::invalid_argument on another size or type.
-  LanePoints Step(const cv::Mat& bgr, LaneDetectionTrace* trace = nullptr);
-
-  // The pixels of the input image that Step reads (the source pixels of its warp), at most one
-  // span per row, rows ascending: an image whose other pixels hold anything gives the same result.
+  // The pixels of the input image that the detector reads (the source pixels of its warp), at
+  // most one span per row, rows ascending: an image whose other pixels hold anything gives the
+  // same result.
   struct SourceSpan {
     int row, col_begin, col_end;  // [col_begin, col_end)
   };
   const std::vector<SourceSpan>& source_spans() const { return spans_; }
 
-  // The fast mask+warp stage alone: bit-identical to LaneMasksReference.
-  void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
-  // The same stage as the fit reads it: RowSumsOfMasks of ComputeMasks, without writing (or
-  // clearing) the two 640×480 masks.
-  void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums);
   // The class a pixel of this colour gets: bit 0 yellow, bit 1 white (the thresholds' HSV boxes,
   // in OpenCV's 8-bit HSV); a pure function of the colour.
   std::uint8_t ClassOf(std::uint8_t b, std::uint8_t g, std::uint8_t r) const;
-  // For a producer that knows each pixel's class without the colour image (a renderer whose
-  // floor has few colours labels each colour once): it writes ClassOf of the colour of every
-  // source_spans() pixel (u, v) at source_classes()[v · kClassStride + u] (the others are not
-  // read; do not write outside the image), then ComputeRowSumsFromClasses gives ComputeRowSums of
-  // that image.
-  static constexpr int kClassStride = kLaneImageWidth + 2;
-  std::uint8_t* source_classes() { return classes_.data() + kClassStride + 1; }
-  void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums);
-  // The rest, from the bird's-eye masks or their row sums (the same result): Step is
-  // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
-  // planner, polynomial fit).
-  LanePoints Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace = nullptr);
-  LanePoints Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace = nullptr);
 
  private:
+  friend class LaneDetector;
+  // The padded class image's row stride: one zero pixel each side, and a zero row above and below.
+  static constexpr int kClassStride = kLaneImageWidth + 2;
   struct Tile {
     std::uint32_t begin, end;        // into the per-pixel arrays
     std::uint16_t cell_x0, cell_y0;  // source cells read (inclusive)
     std::uint16_t cell_x1, cell_y1;
   };
-
-  // The classes of the source pixels into classes_, and the line cells from them.
-  void Classify(const cv::Mat& bgr);
-  void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
-  void IndexLineCells();  // cell_prefix_ from cell_any_
-  bool AnyLineCell(const Tile& tile) const;
-  // The warp over classes_: visit(output index, yellow value, white value) for each output pixel
-  // that may be non-zero (the others stay 0, the border value).
-  template <class Visit>
-  void ForEachWarpedLinePixel(Visit visit) const;
-  // The row sums of the bird's-eye masks, from classes_.
-  void SumWarpedClasses(BirdsEyeRowSums* sums);
+  struct WarpSource;  // each output pixel's source pixel and bilinear weights (the constructor's)
+  // The active output pixels (whose source square touches the image) by tile, and the source
+  // spans they read.
+  void IndexActivePixels(const WarpSource& source);
 
   LaneDetectionParams params_;
   LaneCameraCalibration camera_;
   LaneThresholds thresholds_;
   cv::Mat image_to_birds_eye_;
   cv::Mat birds_eye_to_image_;
-
   // OpenCV's 8-bit HSV division tables.
   std::array<int, 256> sdiv_{};
   std::array<int, 256> hdiv_{};
@@ -302,13 +281,93 @@ class LaneDetector {
   std::vector<std::uint32_t> pixel_src_;  // top-left neighbour in the padded class image
   std::vector<std::uint16_t> pixel_lut_;  // alpha · 16
   std::vector<SourceSpan> spans_;         // the source pixels the warp reads
+};
+
+// The line classes of a source image (LaneDetectorTables::ClassOf of each pixel's colour), as a
+// detector hands its own class buffer to a producer that knows each pixel's class without the
+// colour image (a renderer whose floor has few colours labels each colour once). The producer
+// writes the class of pixel (u, v) at pixels[v · stride + u] for every pixel of `spans`; the
+// detector reads no other pixel, and `pixels` ends at the image's last pixel.
+struct ClassImageRegion {
+  std::span<std::uint8_t> pixels;
+  std::ptrdiff_t stride{0};
+  std::span<const LaneDetectorTables::SourceSpan> spans;
+};
+
+// The fit stage (what the polynomial fit's slot runs: reference §8), from the bird's-eye masks'
+// row sums: the line, its fit, the shifted samples, the trajectory and the points in base_link.
+// Reads the tables only.
+LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums& sums,
+                         LaneDetectionTrace* trace = nullptr);
+
+// A detector: shared, read-only tables (LaneDetectorTables) plus scratch buffers of its own, so
+// an output depends on its input alone. One detector per thread (and per node); detectors that
+// share tables share no mutable state.
+//
+// Two ways to feed the mask+warp stage: a colour image (ComputeMasks, ComputeRowSums, Step), or
+// line classes a producer writes into the detector's own class image: MutableClassRegion() hands
+// out that region (ClassImageRegion), then ComputeRowSumsFromClasses reads it. The region stays
+// valid as long as the detector; the colour-image calls overwrite it.
+class LaneDetector {
+ public:
+  using SourceSpan = LaneDetectorTables::SourceSpan;
+
+  // With tables of its own.
+  LaneDetector(const LaneDetectionParams& params, const LaneCameraCalibration& camera);
+  // With shared tables (not null).
+  explicit LaneDetector(std::shared_ptr<const LaneDetectorTables> tables);
+
+  const std::shared_ptr<const LaneDetectorTables>& tables() const { return tables_; }
+  const LaneDetectionParams& params() const { return tables_->params(); }
+  const LaneThresholds& thresholds() const { return tables_->thresholds(); }
+  const cv::Mat& image_to_birds_eye() const { return tables_->image_to_birds_eye(); }
+  const cv::Mat& birds_eye_to_image() const { return tables_->birds_eye_to_image(); }
+  const std::vector<SourceSpan>& source_spans() const { return tables_->source_spans(); }
+  std::uint8_t ClassOf(std::uint8_t b, std::uint8_t g, std::uint8_t r) const {
+    return tables_->ClassOf(b, g, r);
+  }
+
+  // `bgr`: 640×480 CV_8UC3. Throws std::invalid_argument on another size or type.
+  LanePoints Step(const cv::Mat& bgr, LaneDetectionTrace* trace = nullptr);
+
+  // The fast mask+warp stage alone: bit-identical to LaneMasksReference.
+  void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
+  // The same stage as the fit reads it: RowSumsOfMasks of ComputeMasks, without writing (or
+  // clearing) the two 640×480 masks.
+  void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums);
+  // The detector's class image for a producer to fill (ClassImageRegion); then
+  // ComputeRowSumsFromClasses gives ComputeRowSums of the image whose classes were written.
+  ClassImageRegion MutableClassRegion();
+  void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums);
+  // The rest, from the bird's-eye masks or their row sums (the same result): Step is
+  // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
+  // planner, polynomial fit). Fit(sums) is FitLanePoints(*tables(), sums).
+  LanePoints Fit(const BirdsEyeMasks& masks, LaneDetectionTrace* trace = nullptr);
+  LanePoints Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace = nullptr);
+
+ private:
+  using Tile = LaneDetectorTables::Tile;
+  static constexpr int kClassStride = LaneDetectorTables::kClassStride;
+
+  // The classes of the source pixels into classes_, and the line cells from them.
+  void Classify(const cv::Mat& bgr);
+  void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
+  void IndexLineCells();  // cell_prefix_ from cell_any_
+  bool AnyLineCell(const Tile& tile) const;
+  // The warp over classes_: visit(output index, yellow value, white value) for each output pixel
+  // that may be non-zero (the others stay 0, the border value).
+  template <class Visit>
+  void ForEachWarpedLinePixel(Visit visit) const;
+  // The row sums of the bird's-eye masks, from classes_.
+  void SumWarpedClasses(BirdsEyeRowSums* sums);
+
+  std::shared_ptr<const LaneDetectorTables> tables_;
   // Scratch: per source pixel bit 0 yellow, bit 1 white, with a 1-pixel zero border; and per
   // source cell whether it holds a line pixel, as an inclusive 2D prefix count.
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint8_t> cell_any_;
   std::vector<int> cell_prefix_;
   BirdsEyeRowSums sums_;
-  std::vector<double> rows_, cols_, weights_;
 };
 
 }  // namespace autonomsim::stack

@@ -111,6 +111,43 @@ void CameraNoiseParams::Validate() const {
           [&] { return "color_stddev must be in [0, 64], got " + std::to_string(color_stddev); });
 }
 
+namespace {
+
+// The cells (kCommonCell texels square, cells_x × cells_y) that hold a texel other than `common`.
+std::vector<std::uint8_t> CellsWithOtherColours(const std::vector<std::uint8_t>& index, int width,
+                                                int height, std::uint8_t common, int cell,
+                                                int cells_x, int cells_y) {
+  std::vector<std::uint8_t> other(static_cast<std::size_t>(cells_x) * cells_y, 0);
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      if (index[static_cast<std::size_t>(row) * width + col] != common) {
+        other[static_cast<std::size_t>(row / cell) * cells_x + col / cell] = 1;
+      }
+    }
+  }
+  return other;
+}
+
+// `marked` grown by one cell (Chebyshev) in every direction.
+std::vector<std::uint8_t> GrowByOneCell(const std::vector<std::uint8_t>& marked, int cells_x,
+                                        int cells_y) {
+  std::vector<std::uint8_t> grown(marked.size());
+  for (int y = 0; y < cells_y; ++y) {
+    for (int x = 0; x < cells_x; ++x) {
+      std::uint8_t any = 0;
+      for (int yy = std::max(0, y - 1); yy <= std::min(cells_y - 1, y + 1); ++yy) {
+        for (int xx = std::max(0, x - 1); xx <= std::min(cells_x - 1, x + 1); ++xx) {
+          any |= marked[static_cast<std::size_t>(yy) * cells_x + xx];
+        }
+      }
+      grown[static_cast<std::size_t>(y) * cells_x + x] = any;
+    }
+  }
+  return grown;
+}
+
+}  // namespace
+
 FloorTexture::FloorTexture(const world::FloorRaster& raster)
     : width_(raster.width_px),
       height_(raster.height_px),
@@ -120,6 +157,16 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
           "FloorTexture: the raster needs a positive size and m_per_px");
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   Require(raster.bgr.size() == 3 * n, "FloorTexture: raster.bgr must hold 3 bytes per pixel");
+  IndexColours(raster);
+  std::vector<std::size_t> uses(palette_.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) ++uses[index_[i]];
+  common_index_ =
+      static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) - uses.begin());
+  IndexCommonCells();
+}
+
+void FloorTexture::IndexColours(const world::FloorRaster& raster) {
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   index_.resize(n + 1);
   std::unordered_map<std::uint32_t, std::uint8_t> seen;
   const auto index_of = [&](const std::uint8_t* bgr) {
@@ -145,42 +192,19 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
     index_[i] = last_index;
   }
   index_[n] = index_of(raster.floor_bgr.data());
+}
 
-  std::vector<std::size_t> uses(palette_.size(), 0);
-  for (std::size_t i = 0; i < n; ++i) ++uses[index_[i]];
-  common_index_ =
-      static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) - uses.begin());
+void FloorTexture::IndexCommonCells() {
   const int cells_x = (width_ + kCommonCell - 1) / kCommonCell;
   const int cells_y = (height_ + kCommonCell - 1) / kCommonCell;
   cells_y_ = static_cast<std::size_t>(cells_y);
   words_per_row_ = static_cast<std::size_t>((cells_x + 63) / 64);
-  // other[y][x]: the cell holds a texel of another colour; near: the same within d, grown by one
-  // cell per level
-  std::vector<std::uint8_t> near(static_cast<std::size_t>(cells_x) * cells_y, 0);
-  for (int row = 0; row < height_; ++row) {
-    for (int col = 0; col < width_; ++col) {
-      if (index_[static_cast<std::size_t>(row) * width_ + col] != common_index_) {
-        near[static_cast<std::size_t>(row / kCommonCell) * cells_x + col / kCommonCell] = 1;
-      }
-    }
-  }
+  // near: the cells with a texel of another colour within d cells, grown by one cell per level
+  std::vector<std::uint8_t> near =
+      CellsWithOtherColours(index_, width_, height_, common_index_, kCommonCell, cells_x, cells_y);
   common_near_.assign((kMaxReachCells + 1) * cells_y_ * words_per_row_, 0);
-  std::vector<std::uint8_t> grown(near.size());
   for (int d = 0; d <= kMaxReachCells; ++d) {
-    if (d > 0) {
-      for (int y = 0; y < cells_y; ++y) {
-        for (int x = 0; x < cells_x; ++x) {
-          std::uint8_t any = 0;
-          for (int yy = std::max(0, y - 1); yy <= std::min(cells_y - 1, y + 1); ++yy) {
-            for (int xx = std::max(0, x - 1); xx <= std::min(cells_x - 1, x + 1); ++xx) {
-              any |= near[static_cast<std::size_t>(yy) * cells_x + xx];
-            }
-          }
-          grown[static_cast<std::size_t>(y) * cells_x + x] = any;
-        }
-      }
-      near.swap(grown);
-    }
+    if (d > 0) near = GrowByOneCell(near, cells_x, cells_y);
     for (int y = 0; y < cells_y; ++y) {
       for (int x = 0; x < cells_x; ++x) {
         if (near[static_cast<std::size_t>(y) * cells_x + x] == 0) {
@@ -194,25 +218,26 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
 
 CameraRays::CameraRays(const CameraModel& camera)
     : camera_(camera), width_(camera.width()), height_(camera.height()) {
-  const CameraParams& params = camera_.params();
-  const Eigen::Isometry3d& X_base_camera = camera_.X_base_camera();
-  origin_base_ = X_base_camera.translation();
+  origin_base_ = camera_.X_base_camera().translation();
   Require(origin_base_.z() > 0.0, [&] {
-    return params.name + ": the camera must be above the floor (mount.z_m > 0), got " +
+    return camera_.params().name + ": the camera must be above the floor (mount.z_m > 0), got " +
            std::to_string(origin_base_.z());
   });
-  const Eigen::Matrix3d R = X_base_camera.linear();
-  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
-  dir_x_.resize(n);
-  dir_y_.resize(n);
-  inv_dir_z_.resize(n);
-  floor_x_.resize(n);
-  floor_y_.resize(n);
-  floor_t_.resize(n);
-  floor_depth_mm_.resize(n);
-  ray_x_.resize(n);
-  ray_y_.resize(n);
+  ComputePixelRays();
+  ComputeRuns();
+  ComputeFloorBlocks();
+  ComputeTiles();
+}
 
+void CameraRays::ComputePixelRays() {
+  const CameraParams& params = camera_.params();
+  const Eigen::Matrix3d R = camera_.X_base_camera().linear();
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  for (std::vector<float>* v :
+       {&dir_x_, &dir_y_, &inv_dir_z_, &floor_x_, &floor_y_, &floor_t_, &ray_x_, &ray_y_}) {
+    v->resize(n);
+  }
+  floor_depth_mm_.resize(n);
   for (int v = 0; v < height_; ++v) {
     for (int u = 0; u < width_; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
@@ -240,7 +265,9 @@ CameraRays::CameraRays(const CameraModel& camera)
       }
     }
   }
+}
 
+void CameraRays::ComputeRuns() {
   for (int v = 0; v < height_; ++v) {
     const int row = v * width_;
     int u = 0;
@@ -254,35 +281,36 @@ CameraRays::CameraRays(const CameraModel& camera)
       u = end;
     }
   }
+}
 
-  // The circle holding the floor points of pixels [u0, u1) × [v0, v1), or a negative radius where
-  // one of them does not see the floor.
-  const auto circle = [&](int u0, int u1, int v0, int v1) {
-    double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
-    for (int v = v0; v < v1; ++v) {
-      for (int u = u0; u < u1; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-        if (!(floor_t_[i] < kInf)) return FloorBlock{};
-        x_lo = std::min(x_lo, double{floor_x_[i]});
-        x_hi = std::max(x_hi, double{floor_x_[i]});
-        y_lo = std::min(y_lo, double{floor_y_[i]});
-        y_hi = std::max(y_hi, double{floor_y_[i]});
-      }
+CameraRays::FloorBlock CameraRays::FloorCircle(int u0, int u1, int v0, int v1) const {
+  double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
+  for (int v = v0; v < v1; ++v) {
+    for (int u = u0; u < u1; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+      if (!(floor_t_[i] < kInf)) return FloorBlock{};
+      x_lo = std::min(x_lo, double{floor_x_[i]});
+      x_hi = std::max(x_hi, double{floor_x_[i]});
+      y_lo = std::min(y_lo, double{floor_y_[i]});
+      y_hi = std::max(y_hi, double{floor_y_[i]});
     }
-    FloorBlock block;
-    block.centre_x = static_cast<float>(0.5 * (x_lo + x_hi));
-    block.centre_y = static_cast<float>(0.5 * (y_lo + y_hi));
-    double radius = 0.0;
-    for (int v = v0; v < v1; ++v) {
-      for (int u = u0; u < u1; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-        radius = std::max(radius, std::hypot(floor_x_[i] - double{block.centre_x},
-                                             floor_y_[i] - double{block.centre_y}));
-      }
+  }
+  FloorBlock block;
+  block.centre_x = static_cast<float>(0.5 * (x_lo + x_hi));
+  block.centre_y = static_cast<float>(0.5 * (y_lo + y_hi));
+  double radius = 0.0;
+  for (int v = v0; v < v1; ++v) {
+    for (int u = u0; u < u1; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+      radius = std::max(radius, std::hypot(floor_x_[i] - double{block.centre_x},
+                                           floor_y_[i] - double{block.centre_y}));
     }
-    block.radius = std::nextafter(static_cast<float>(radius), kInf);  // rounded up
-    return block;
-  };
+  }
+  block.radius = std::nextafter(static_cast<float>(radius), kInf);  // rounded up
+  return block;
+}
+
+void CameraRays::ComputeFloorBlocks() {
   const int blocks = blocks_per_row();
   floor_blocks_.assign(static_cast<std::size_t>(blocks) * height_, FloorBlock{});
   const int groups_high = (height_ + kGroupRows - 1) / kGroupRows;
@@ -292,14 +320,16 @@ CameraRays::CameraRays(const CameraModel& camera)
     const int u1 = u0 + kBlockSize;
     if (u1 > width_) continue;
     for (int v = 0; v < height_; ++v) {
-      floor_blocks_[static_cast<std::size_t>(v) * blocks + k] = circle(u0, u1, v, v + 1);
+      floor_blocks_[static_cast<std::size_t>(v) * blocks + k] = FloorCircle(u0, u1, v, v + 1);
     }
     for (int g = 0; g < groups_high; ++g) {
       floor_block_groups_[static_cast<std::size_t>(g) * blocks + k] =
-          circle(u0, u1, g * kGroupRows, std::min(height_, (g + 1) * kGroupRows));
+          FloorCircle(u0, u1, g * kGroupRows, std::min(height_, (g + 1) * kGroupRows));
     }
   }
+}
 
+void CameraRays::ComputeTiles() {
   for (int v0 = 0; v0 < height_; v0 += kTileSize) {
     for (int u0 = 0; u0 < width_; u0 += kTileSize) {
       Tile tile{u0,
@@ -439,76 +469,50 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
   }
 }
 
-void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
-                                 DepthImage* depth, const RowSpans* color_region,
-                                 DepthRowHistory* history, const LabelOut* labels) {
-  const CameraRays& r = *rays_;
-  if (depth != nullptr) {
-    const std::size_t h = static_cast<std::size_t>(r.height());
-    if (history != nullptr && history->valid_ && history->buffer_ == depth->mm.data() &&
-        history->prism_rows_.size() == h) {
-      // the buffer holds the last frame: only its prisms' rows go back to the floor
-      const std::size_t w = static_cast<std::size_t>(r.width());
-      for (std::size_t v = 0; v < h; ++v) {
-        if (history->prism_rows_[v] == 0) continue;
-        std::memcpy(depth->mm.data() + v * w, r.floor_depth_mm().data() + v * w, w * 2);
-      }
-      history->changed_ = history->prism_rows_;
-    } else {
-      std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
-      if (history != nullptr) history->changed_.assign(h, 1);
+// One frame's colouring of the floor and the surround: where it writes (colour: 3 bytes per pixel
+// at out + 3 · i; labels: one byte at LabelRow(v)[i] for pixel i of row v) and the map from the
+// base frame's (x, y) to the texture's continuous (column, row): column = (x_map - origin_x) / m,
+// row = (origin_y - y_map) / m, with p_map = p_car + R(yaw) · p_base.
+struct CameraRenderer::FloorPass {
+  FloorPass(const CameraRenderer& renderer, const world::Pose2& X_map_car, ColorImage* color,
+            const LabelOut* label_out)
+      : rays(*renderer.rays_),
+        tex(*renderer.floor_),
+        blocks_on(renderer.common_floor_blocks_on_),
+        out(color != nullptr ? color->bgr.data() : nullptr),
+        labels(label_out) {
+    const double c = std::cos(X_map_car.yaw_rad);
+    const double s = std::sin(X_map_car.yaw_rad);
+    const double m = tex.m_per_px();
+    a00 = static_cast<float>(c / m);
+    a01 = static_cast<float>(-s / m);
+    a02 = static_cast<float>((X_map_car.x_m - tex.origin_m().x()) / m);
+    a10 = static_cast<float>(-s / m);
+    a11 = static_cast<float>(-c / m);
+    a12 = static_cast<float>((tex.origin_m().y() - X_map_car.y_m) / m);
+    texels_per_m = static_cast<float>(1.0 / m);
+    for (int k = 0; k < CameraRays::kBlockSize; ++k) {
+      std::memcpy(common_block.data() + 3 * k, &tex.palette()[tex.common_index()], 3);
     }
   }
-  if (color == nullptr && labels == nullptr) return;
-  const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
-  const std::vector<CameraRays::Run>* surround_runs = &r.surround_runs();
-  if (color_region != nullptr) {
-    Intersect(r.floor_runs(), *color_region, r.width(), &floor_in_region_);
-    Intersect(r.surround_runs(), *color_region, r.width(), &surround_in_region_);
-    floor_runs = &floor_in_region_;
-    surround_runs = &surround_in_region_;
-  }
 
-  // Colour: 3 bytes per pixel at out + 3 · i. Labels: one byte, at label_row[i] for pixel i of
-  // row v (label_row is the view's row v shifted back by v · width).
-  const int w = r.width();
-  std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
-  const auto label_row = [&](int v) {
+  std::uint8_t* LabelRow(int v) const {
+    const int w = rays.width();
     return labels->view.origin + static_cast<std::ptrdiff_t>(v) * labels->view.stride -
            static_cast<std::ptrdiff_t>(v) * w;
-  };
-  for (const CameraRays::Run& run : *surround_runs) {
-    if (labels != nullptr) {
-      std::memset(label_row(run.begin / w) + run.begin, labels->surround,
-                  static_cast<std::size_t>(run.end - run.begin));
-      continue;
-    }
-    for (int i = run.begin; i < run.end; ++i) std::memcpy(out + 3 * i, surround_.data(), 3);
   }
 
-  // base frame (x, y) -> texture (column, row), continuous: column = (x_map - origin_x) / m,
-  // row = (origin_y - y_map) / m, with p_map = p_car + R(yaw) · p_base.
-  const FloorTexture& tex = *floor_;
-  const double c = std::cos(X_map_car.yaw_rad);
-  const double s = std::sin(X_map_car.yaw_rad);
-  const double m = tex.m_per_px();
-  const float a00 = static_cast<float>(c / m);
-  const float a01 = static_cast<float>(-s / m);
-  const float a02 = static_cast<float>((X_map_car.x_m - tex.origin_m().x()) / m);
-  const float a10 = static_cast<float>(-s / m);
-  const float a11 = static_cast<float>(-c / m);
-  const float a12 = static_cast<float>((tex.origin_m().y() - X_map_car.y_m) / m);
-  const F4 cols = Splat(static_cast<float>(tex.width()));
-  const F4 rows = Splat(static_cast<float>(tex.height()));
-  const F4 zero = Splat(0.0f);
-  const I4 width = SplatInt(tex.width());
-  const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
-  const std::uint8_t* texel_index = tex.palette_index();
-  const std::uint32_t* palette = tex.palette();
-  const float* fx = r.floor_x().data();
-  const float* fy = r.floor_y().data();
   // Pixels [begin, end) of row v, each looked up.
-  const auto look_up = [&](int v, int begin, int end) {
+  [[gnu::always_inline]] inline void LookUp(int v, int begin, int end) const {
+    const F4 cols = Splat(static_cast<float>(tex.width()));
+    const F4 rows = Splat(static_cast<float>(tex.height()));
+    const F4 zero = Splat(0.0f);
+    const I4 width = SplatInt(tex.width());
+    const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
+    const std::uint8_t* texel_index = tex.palette_index();
+    const std::uint32_t* palette = tex.palette();
+    const float* fx = rays.floor_x().data();
+    const float* fy = rays.floor_y().data();
     for (int i = begin; i < end; i += kLanes) {
       const int n = std::min(kLanes, end - i);
       const F4 x = Load(fx + i, n);
@@ -520,7 +524,7 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
       const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
       const I4 index = inside ? texel_row * width + texel_col : outside;
       if (labels != nullptr) {
-        std::uint8_t* label = label_row(v) + i;
+        std::uint8_t* label = LabelRow(v) + i;
         for (int k = 0; k < n; ++k) label[k] = labels->palette[texel_index[index[k]]];
         continue;
       }
@@ -534,30 +538,98 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
         }
       }
     }
-  };
-  // A whole block whose circle lies on texels of the common colour is that colour: the circle's
-  // texture square, widened by a texel for the float arithmetic (the centre's transform is the
-  // pixels' own, and its error is below 1e-3 texel), must be inside the raster and hold nothing
-  // else. For x >= 0, truncation is floor, and every pixel's texel lies between those of the
-  // square's corners.
-  constexpr int kBlock = CameraRays::kBlockSize;
-  const int blocks_per_row = r.blocks_per_row();
-  const CameraRays::FloorBlock* blocks = r.floor_blocks().data();
-  std::array<std::uint8_t, 3 * kBlock> common_block;
-  for (int k = 0; k < kBlock; ++k) {
-    std::memcpy(common_block.data() + 3 * k, &palette[tex.common_index()], 3);
   }
-  const auto texels_per_m = static_cast<float>(1.0 / m);
-  const auto tex_cols = static_cast<float>(tex.width());
-  const auto tex_rows = static_cast<float>(tex.height());
-  const auto common = [&](const CameraRays::FloorBlock& block) {
-    if (!common_floor_blocks_on_ || block.radius < 0.0f) return false;
+
+  // Whether a whole block whose circle lies on texels of the common colour is that colour: the
+  // circle's texture square, widened by a texel for the float arithmetic (the centre's transform
+  // is the pixels' own, and its error is below 1e-3 texel), must be inside the raster and hold
+  // nothing else. For x >= 0, truncation is floor, and every pixel's texel lies between those of
+  // the square's corners.
+  bool Common(const CameraRays::FloorBlock& block) const {
+    if (!blocks_on || block.radius < 0.0f) return false;
     const float col = a00 * block.centre_x + a01 * block.centre_y + a02;
     const float row = a10 * block.centre_x + a11 * block.centre_y + a12;
     const float reach = block.radius * texels_per_m + 1.0f;
-    return col - reach >= 0.0f && row - reach >= 0.0f && col + reach < tex_cols &&
-           row + reach < tex_rows && tex.CommonWithin(col, row, reach);
-  };
+    return col - reach >= 0.0f && row - reach >= 0.0f &&
+           col + reach < static_cast<float>(tex.width()) &&
+           row + reach < static_cast<float>(tex.height()) && tex.CommonWithin(col, row, reach);
+  }
+
+  // Pixels [i, i + kBlockSize) of row v: the common colour.
+  void FillCommon(int v, int i) const {
+    if (labels != nullptr) {
+      std::memset(LabelRow(v) + i, labels->palette[tex.common_index()], CameraRays::kBlockSize);
+    } else {
+      std::memcpy(out + 3 * i, common_block.data(), common_block.size());
+    }
+  }
+
+  const CameraRays& rays;
+  const FloorTexture& tex;
+  bool blocks_on;
+  std::uint8_t* out;
+  const LabelOut* labels;
+  float a00, a01, a02, a10, a11, a12;
+  float texels_per_m;
+  std::array<std::uint8_t, 3 * CameraRays::kBlockSize> common_block;
+};
+
+void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
+                                 DepthImage* depth, const RowSpans* color_region,
+                                 DepthRowHistory* history, const LabelOut* labels) {
+  const CameraRays& r = *rays_;
+  if (depth != nullptr) RestoreFloorDepth(depth, history);
+  if (color == nullptr && labels == nullptr) return;
+  const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
+  const std::vector<CameraRays::Run>* surround_runs = &r.surround_runs();
+  if (color_region != nullptr) {
+    Intersect(r.floor_runs(), *color_region, r.width(), &floor_in_region_);
+    Intersect(r.surround_runs(), *color_region, r.width(), &surround_in_region_);
+    floor_runs = &floor_in_region_;
+    surround_runs = &surround_in_region_;
+  }
+  const FloorPass pass(*this, X_map_car, color, labels);
+  FillSurround(pass, *surround_runs);
+  FillFloor(pass, *floor_runs);
+}
+
+void CameraRenderer::RestoreFloorDepth(DepthImage* depth, DepthRowHistory* history) const {
+  const CameraRays& r = *rays_;
+  const std::size_t h = static_cast<std::size_t>(r.height());
+  if (history != nullptr && history->valid_ && history->buffer_ == depth->mm.data() &&
+      history->prism_rows_.size() == h) {
+    // the buffer holds the last frame: only its prisms' rows go back to the floor
+    const std::size_t w = static_cast<std::size_t>(r.width());
+    for (std::size_t v = 0; v < h; ++v) {
+      if (history->prism_rows_[v] == 0) continue;
+      std::memcpy(depth->mm.data() + v * w, r.floor_depth_mm().data() + v * w, w * 2);
+    }
+    history->changed_ = history->prism_rows_;
+  } else {
+    std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
+    if (history != nullptr) history->changed_.assign(h, 1);
+  }
+}
+
+void CameraRenderer::FillSurround(const FloorPass& pass,
+                                  const std::vector<CameraRays::Run>& runs) const {
+  const int w = rays_->width();
+  for (const CameraRays::Run& run : runs) {
+    if (pass.labels != nullptr) {
+      std::memset(pass.LabelRow(run.begin / w) + run.begin, pass.labels->surround,
+                  static_cast<std::size_t>(run.end - run.begin));
+      continue;
+    }
+    for (int i = run.begin; i < run.end; ++i) std::memcpy(pass.out + 3 * i, surround_.data(), 3);
+  }
+}
+
+void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRays::Run>& runs) {
+  const CameraRays& r = *rays_;
+  const int w = r.width();
+  constexpr int kBlock = CameraRays::kBlockSize;
+  const int blocks_per_row = r.blocks_per_row();
+  const CameraRays::FloorBlock* blocks = r.floor_blocks().data();
   // A block's group (CameraRays::floor_block_groups) is looked up once per frame, when the first
   // of its blocks is met: 0 not yet, 1 all of the common colour, 2 not known to be.
   const CameraRays::FloorBlock* groups = r.floor_block_groups().data();
@@ -565,28 +637,24 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const auto group_common = [&](int row, int k) {
     const std::size_t g = static_cast<std::size_t>(row / CameraRays::kGroupRows) * blocks_per_row +
                           static_cast<std::size_t>(k);
-    if (group_common_[g] == 0) group_common_[g] = common(groups[g]) ? 1 : 2;
+    if (group_common_[g] == 0) group_common_[g] = pass.Common(groups[g]) ? 1 : 2;
     return group_common_[g] == 1;
   };
-  for (const CameraRays::Run& run : *floor_runs) {
+  for (const CameraRays::Run& run : runs) {
     const int row = run.begin / w;  // a run lies in one row
     int i = run.begin;
     while (i < run.end) {
       const int column = i - row * w;
       if (column % kBlock == 0 && i + kBlock <= run.end &&
           (group_common(row, column / kBlock) ||
-           common(blocks[row * blocks_per_row + column / kBlock]))) {
-        if (labels != nullptr) {
-          std::memset(label_row(row) + i, labels->palette[tex.common_index()], kBlock);
-        } else {
-          std::memcpy(out + 3 * i, common_block.data(), common_block.size());
-        }
+           pass.Common(blocks[row * blocks_per_row + column / kBlock]))) {
+        pass.FillCommon(row, i);
         ++common_floor_blocks_;
         i += kBlock;
         continue;
       }
       const int next = std::min(run.end, row * w + (column / kBlock + 1) * kBlock);
-      look_up(row, i, next);
+      pass.LookUp(row, i, next);
       i = next;
     }
   }
@@ -621,51 +689,63 @@ std::array<Bgr, 7> PrismFaceColours(const Prism& prism) {
   return face_bgr;
 }
 
-void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
-                                 std::size_t index, ColorImage* color, DepthImage* depth,
-                                 const RowSpans* region, const LabelOut* labels) {
-  const CameraRays& r = *rays_;
-  const CameraParams& params = r.camera().params();
-  const world::OrientedBox& box = prism.footprint;
-  const double half_length = 0.5 * box.length_m;
-  const double half_width = 0.5 * box.width_m;
-  const double height = prism.height_m;
-  if (!(half_length > 0.0 && half_width > 0.0 && height > 0.0)) return;
+namespace {
 
-  // the prism in the car's base frame: centre p, yaw psi
+// A prism in the car's base frame: its footprint's centre p_base and yaw psi (as cos, sin), and
+// its half extents and height.
+struct PrismInBase {
+  Eigen::Vector2d p_base;
+  double cp{1.0}, sp{0.0};
+  double half_length{0.0}, half_width{0.0}, height{0.0};
+};
+
+PrismInBase PlaceInBase(const world::Pose2& X_map_car, const Prism& prism) {
+  const world::OrientedBox& box = prism.footprint;
   const double cy = std::cos(X_map_car.yaw_rad);
   const double sy = std::sin(X_map_car.yaw_rad);
   const double rel_x = box.pose.x_m - X_map_car.x_m;
   const double rel_y = box.pose.y_m - X_map_car.y_m;
-  const Eigen::Vector2d p_base(cy * rel_x + sy * rel_y, -sy * rel_x + cy * rel_y);
   const double psi = box.pose.yaw_rad - X_map_car.yaw_rad;
-  const double cp = std::cos(psi);
-  const double sp = std::sin(psi);
+  return PrismInBase{.p_base = Eigen::Vector2d(cy * rel_x + sy * rel_y, -sy * rel_x + cy * rel_y),
+                     .cp = std::cos(psi),
+                     .sp = std::sin(psi),
+                     .half_length = 0.5 * box.length_m,
+                     .half_width = 0.5 * box.width_m,
+                     .height = prism.height_m};
+}
 
-  // cull and bound: the corners in the optical frame, clipped to z >= kProjectionNearZ_m
-  const Eigen::Isometry3d X_camera_base = r.camera().X_base_camera().inverse();
-  std::array<Eigen::Vector3d, 8> corners;
-  double z_min = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 8; ++k) {
-    const double lx = (k & 1) ? half_length : -half_length;
-    const double ly = (k & 2) ? half_width : -half_width;
-    const double lz = (k & 4) ? height : 0.0;
-    const Eigen::Vector3d p(p_base.x() + cp * lx - sp * ly, p_base.y() + sp * lx + cp * ly, lz);
-    corners[k] = X_camera_base * p;
-    z_min = std::min(z_min, corners[k].z());
-  }
-  if (z_min > params.clip_far_m) return;  // wholly beyond the far clip
-  float x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
-  auto include = [&](const Eigen::Vector3d& q) {
+// The bounds of the normalized rays (x/z, y/z in the optical frame) that can meet a prism.
+struct RayBounds {
+  float x_lo{kInf}, x_hi{-kInf}, y_lo{kInf}, y_hi{-kInf};
+  void Include(const Eigen::Vector3d& q) {
     const auto qx = static_cast<float>(q.x() / q.z());
     const auto qy = static_cast<float>(q.y() / q.z());
     x_lo = std::min(x_lo, qx);
     x_hi = std::max(x_hi, qx);
     y_lo = std::min(y_lo, qy);
     y_hi = std::max(y_hi, qy);
-  };
+  }
+};
+
+// Cull and bound: the prism's corners in the optical frame, clipped to z >= kProjectionNearZ_m
+// and projected; nullopt where the prism lies wholly beyond the far clip or behind the camera.
+std::optional<RayBounds> BoundOnImage(const PrismInBase& prism,
+                                      const Eigen::Isometry3d& X_camera_base, double clip_far_m) {
+  std::array<Eigen::Vector3d, 8> corners;
+  double z_min = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 8; ++k) {
-    if (corners[k].z() >= kProjectionNearZ_m) include(corners[k]);
+    const double lx = (k & 1) ? prism.half_length : -prism.half_length;
+    const double ly = (k & 2) ? prism.half_width : -prism.half_width;
+    const double lz = (k & 4) ? prism.height : 0.0;
+    const Eigen::Vector3d p(prism.p_base.x() + prism.cp * lx - prism.sp * ly,
+                            prism.p_base.y() + prism.sp * lx + prism.cp * ly, lz);
+    corners[k] = X_camera_base * p;
+    z_min = std::min(z_min, corners[k].z());
+  }
+  if (z_min > clip_far_m) return std::nullopt;  // wholly beyond the far clip
+  RayBounds bounds;
+  for (int k = 0; k < 8; ++k) {
+    if (corners[k].z() >= kProjectionNearZ_m) bounds.Include(corners[k]);
     for (int bit = 1; bit < 8; bit <<= 1) {  // the box's 12 edges: corners one bit apart
       const int j = k | bit;
       if ((k & bit) != 0) continue;
@@ -673,55 +753,123 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
       const double zb = corners[j].z() - kProjectionNearZ_m;
       if ((za < 0.0) != (zb < 0.0)) {
         const double f = za / (za - zb);
-        include(corners[k] + f * (corners[j] - corners[k]));
+        bounds.Include(corners[k] + f * (corners[j] - corners[k]));
       }
     }
   }
-  if (!(x_lo <= x_hi)) return;  // wholly behind the camera
+  if (!(bounds.x_lo <= bounds.x_hi)) return std::nullopt;  // wholly behind the camera
+  return bounds;
+}
 
-  const std::array<Bgr, 7> face_bgr = PrismFaceColours(prism);
-  std::array<std::uint8_t, 7> face_label{};
-  if (labels != nullptr && !labels->prism_labels.empty()) {
-    face_label.fill(labels->prism_labels[index]);
-  } else if (labels != nullptr) {
-    for (std::size_t f = 0; f < 7; ++f) face_label[f] = (*labels->label)(face_bgr[f]);
+}  // namespace
+
+// The exact ray–prism test of four pixels at a time, in the prism's frame: the ray's origin o and
+// direction R(-psi) · dir, the slabs' bounds relative to o. What a frame writes where it hits.
+struct CameraRenderer::PrismTrace {
+  PrismTrace(const CameraRays& r, const PrismInBase& prism, const RayBounds& bounds)
+      : rays(r),
+        box_x_lo(Splat(bounds.x_lo)),
+        box_x_hi(Splat(bounds.x_hi)),
+        box_y_lo(Splat(bounds.y_lo)),
+        box_y_hi(Splat(bounds.y_hi)),
+        far(Splat(static_cast<float>(r.camera().params().clip_far_m))) {
+    const Eigen::Vector3d& origin = r.origin_base();
+    const double ox_b = origin.x() - prism.p_base.x();
+    const double oy_b = origin.y() - prism.p_base.y();
+    const double ox = prism.cp * ox_b + prism.sp * oy_b;
+    const double oy = -prism.sp * ox_b + prism.cp * oy_b;
+    x_lo_o = Splat(static_cast<float>(-prism.half_length - ox));
+    x_hi_o = Splat(static_cast<float>(prism.half_length - ox));
+    y_lo_o = Splat(static_cast<float>(-prism.half_width - oy));
+    y_hi_o = Splat(static_cast<float>(prism.half_width - oy));
+    z_lo_o = Splat(static_cast<float>(-origin.z()));
+    z_hi_o = Splat(static_cast<float>(prism.height - origin.z()));
+    rc = Splat(static_cast<float>(prism.cp));
+    rs = Splat(static_cast<float>(prism.sp));
   }
 
-  // the ray test in the prism's frame: origin o, direction R(-psi) · dir; the slabs' bounds
-  // relative to o
-  const Eigen::Vector3d& origin = r.origin_base();
-  const double ox_b = origin.x() - p_base.x();
-  const double oy_b = origin.y() - p_base.y();
-  const double ox = cp * ox_b + sp * oy_b;
-  const double oy = -sp * ox_b + cp * oy_b;
-  const F4 x_lo_o = Splat(static_cast<float>(-half_length - ox));
-  const F4 x_hi_o = Splat(static_cast<float>(half_length - ox));
-  const F4 y_lo_o = Splat(static_cast<float>(-half_width - oy));
-  const F4 y_hi_o = Splat(static_cast<float>(half_width - oy));
-  const F4 z_lo_o = Splat(static_cast<float>(-origin.z()));
-  const F4 z_hi_o = Splat(static_cast<float>(height - origin.z()));
-  const F4 rc = Splat(static_cast<float>(cp));
-  const F4 rs = Splat(static_cast<float>(sp));
-  const F4 box_x_lo = Splat(x_lo), box_x_hi = Splat(x_hi);
-  const F4 box_y_lo = Splat(y_lo), box_y_hi = Splat(y_hi);
-  const F4 zero = Splat(0.0f);
-  const F4 one = Splat(1.0f);
-  const F4 far = Splat(static_cast<float>(params.clip_far_m));
-  const float near_m = static_cast<float>(params.clip_near_m);
-  const float far_m = static_cast<float>(params.clip_far_m);
-  const float* ray_x = r.ray_x().data();
-  const float* ray_y = r.ray_y().data();
-  const float* dir_x = r.dir_x().data();
-  const float* dir_y = r.dir_y().data();
-  const float* inv_dir_z = r.inv_dir_z().data();
-  const int w = r.width();
-  std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
-  std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
+  // The slab test's values for the pixels [i, i + n) (n <= kLanes).
+  struct Hits {
+    I4 hit;   // the ray enters the prism, within the far clip, nearer than what it saw
+    F4 t;     // the optical depth it enters at (0: the camera is inside)
+    F4 t_in;  // the largest of the slabs' entries
+    F4 tx_min, ty_min, lx, ly, iz;  // which slab set t_in, and the direction it came from
+  };
+  // False (and `hits` not set) where no pixel of the four is within the prism's bounds or hits it.
+  [[gnu::always_inline]] inline bool Test(int i, int n, const float* nearest_t, Hits* hits) const {
+    // within the prism's bounds on the image?
+    const F4 nx = Load(rays.ray_x().data() + i, n);
+    const F4 ny = Load(rays.ray_y().data() + i, n);
+    const I4 in_box =
+        FirstLanes(n) & (nx >= box_x_lo) & (nx <= box_x_hi) & (ny >= box_y_lo) & (ny <= box_y_hi);
+    if (!Any(in_box)) return false;
+    // slabs: a zero direction gives infinite bounds of the right signs
+    const F4 one = Splat(1.0f);
+    const F4 zero = Splat(0.0f);
+    const F4 dx = Load(rays.dir_x().data() + i, n);
+    const F4 dy = Load(rays.dir_y().data() + i, n);
+    hits->lx = rc * dx + rs * dy;
+    hits->ly = rc * dy - rs * dx;
+    const F4 ix = one / hits->lx;
+    const F4 iy = one / hits->ly;
+    hits->iz = Load(rays.inv_dir_z().data() + i, n);
+    const F4 tx_a = x_lo_o * ix, tx_b = x_hi_o * ix;
+    const F4 ty_a = y_lo_o * iy, ty_b = y_hi_o * iy;
+    const F4 tz_a = z_lo_o * hits->iz, tz_b = z_hi_o * hits->iz;
+    hits->tx_min = Min(tx_a, tx_b);
+    hits->ty_min = Min(ty_a, ty_b);
+    hits->t_in = Max(Max(hits->tx_min, hits->ty_min), Min(tz_a, tz_b));
+    const F4 t_out = Min(Min(Max(tx_a, tx_b), Max(ty_a, ty_b)), Max(tz_a, tz_b));
+    hits->t = Max(hits->t_in, zero);  // 0: the camera is inside the prism
+    const F4 nearest = Load(nearest_t + i, n);
+    hits->hit =
+        in_box & (hits->t_in <= t_out) & (t_out > zero) & (hits->t <= far) & (hits->t < nearest);
+    return Any(hits->hit);
+  }
+
+  // The face lane k enters through (PrismFaceColours' order): the slab that set t_in.
+  static int EntryFace(const Hits& h, int k) {
+    if (!(h.t_in[k] > 0.0f)) return 6;
+    if (h.t_in[k] == h.tx_min[k]) return h.lx[k] > 0.0f ? 0 : 1;
+    if (h.t_in[k] == h.ty_min[k]) return h.ly[k] > 0.0f ? 2 : 3;
+    // the z slab set a finite t_in > 0, so iz is finite and has dz's sign
+    return h.iz[k] > 0.0f ? 5 : 4;
+  }
+
+  const CameraRays& rays;
+  F4 box_x_lo, box_x_hi, box_y_lo, box_y_hi;
+  F4 far;
+  F4 x_lo_o, x_hi_o, y_lo_o, y_hi_o, z_lo_o, z_hi_o;
+  F4 rc, rs;
+  std::array<Bgr, 7> face_bgr;
+  std::array<std::uint8_t, 7> face_label{};
+};
+
+void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
+                                 std::size_t index, ColorImage* color, DepthImage* depth,
+                                 const RowSpans* region, const LabelOut* labels) {
+  const CameraRays& r = *rays_;
+  const PrismInBase placed = PlaceInBase(X_map_car, prism);
+  if (!(placed.half_length > 0.0 && placed.half_width > 0.0 && placed.height > 0.0)) return;
+  const std::optional<RayBounds> bounds =
+      BoundOnImage(placed, r.camera().X_base_camera().inverse(), r.camera().params().clip_far_m);
+  if (!bounds) return;
+
+  PrismTrace trace(r, placed, *bounds);
+  trace.face_bgr = PrismFaceColours(prism);
+  if (labels != nullptr && !labels->prism_labels.empty()) {
+    trace.face_label.fill(labels->prism_labels[index]);
+  } else if (labels != nullptr) {
+    for (std::size_t f = 0; f < 7; ++f) trace.face_label[f] = (*labels->label)(trace.face_bgr[f]);
+  }
 
   const std::vector<CameraRays::Tile>& tiles = r.tiles();
   for (std::size_t ti = 0; ti < tiles.size(); ++ti) {
     const CameraRays::Tile& tile = tiles[ti];
-    if (tile.x_max < x_lo || tile.x_min > x_hi || tile.y_max < y_lo || tile.y_min > y_hi) continue;
+    if (tile.x_max < bounds->x_lo || tile.x_min > bounds->x_hi || tile.y_max < bounds->y_lo ||
+        tile.y_min > bounds->y_hi) {
+      continue;
+    }
     if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
     for (int v = tile.v0; v < tile.v1; ++v) {
       int u_begin = tile.u0, u_end = tile.u1;
@@ -729,62 +877,39 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
         u_begin = std::max(u_begin, region->columns[static_cast<std::size_t>(v)].first);
         u_end = std::min(u_end, region->columns[static_cast<std::size_t>(v)].second);
       }
-      for (int u = u_begin; u < u_end; u += kLanes) {
-        const int i = v * w + u;
-        const int n = std::min(kLanes, u_end - u);
-        // within the prism's bounds on the image?
-        const F4 nx = Load(ray_x + i, n);
-        const F4 ny = Load(ray_y + i, n);
-        const I4 in_box = FirstLanes(n) & (nx >= box_x_lo) & (nx <= box_x_hi) & (ny >= box_y_lo) &
-                          (ny <= box_y_hi);
-        if (!Any(in_box)) continue;
-        // slabs: a zero direction gives infinite bounds of the right signs
-        const F4 dx = Load(dir_x + i, n);
-        const F4 dy = Load(dir_y + i, n);
-        const F4 lx = rc * dx + rs * dy;
-        const F4 ly = rc * dy - rs * dx;
-        const F4 ix = one / lx;
-        const F4 iy = one / ly;
-        const F4 iz = Load(inv_dir_z + i, n);
-        const F4 tx_a = x_lo_o * ix, tx_b = x_hi_o * ix;
-        const F4 ty_a = y_lo_o * iy, ty_b = y_hi_o * iy;
-        const F4 tz_a = z_lo_o * iz, tz_b = z_hi_o * iz;
-        const F4 tx_min = Min(tx_a, tx_b), ty_min = Min(ty_a, ty_b), tz_min = Min(tz_a, tz_b);
-        const F4 t_in = Max(Max(tx_min, ty_min), tz_min);
-        const F4 t_out = Min(Min(Max(tx_a, tx_b), Max(ty_a, ty_b)), Max(tz_a, tz_b));
-        const F4 t = Max(t_in, zero);  // 0: the camera is inside the prism
-        const F4 nearest = Load(nearest_t_.data() + i, n);
-        const I4 hit = in_box & (t_in <= t_out) & (t_out > zero) & (t <= far) & (t < nearest);
-        if (!Any(hit)) continue;
-        for (int k = 0; k < n; ++k) {
-          if (!hit[k]) continue;
-          // the face it enters through: the slab that set t_in
-          int face = 6;
-          if (t_in[k] > 0.0f) {
-            if (t_in[k] == tx_min[k]) {
-              face = lx[k] > 0.0f ? 0 : 1;
-            } else if (t_in[k] == ty_min[k]) {
-              face = ly[k] > 0.0f ? 2 : 3;
-            } else {
-              // the z slab set a finite t_in > 0, so iz is finite and has dz's sign
-              face = iz[k] > 0.0f ? 5 : 4;
-            }
-          }
-          const std::size_t p = static_cast<std::size_t>(i + k);
-          nearest_t_[p] = t[k];
-          if (out != nullptr)
-            std::memcpy(out + 3 * p, face_bgr[static_cast<std::size_t>(face)].data(), 3);
-          if (labels != nullptr) {
-            labels->view.origin[static_cast<std::ptrdiff_t>(v) * labels->view.stride + u + k] =
-                face_label[static_cast<std::size_t>(face)];
-          }
-          if (depth_mm != nullptr) {
-            depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
-            depth_mm[p] = t[k] >= near_m && t[k] <= far_m
-                              ? static_cast<std::uint16_t>(t[k] * 1000.0f + 0.5f)
-                              : std::uint16_t{0};
-          }
-        }
+      TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
+    }
+  }
+}
+
+void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end,
+                                   ColorImage* color, DepthImage* depth, const LabelOut* labels) {
+  const CameraParams& params = rays_->camera().params();
+  const float near_m = static_cast<float>(params.clip_near_m);
+  const float far_m = static_cast<float>(params.clip_far_m);
+  const int w = rays_->width();
+  std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
+  std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
+  PrismTrace::Hits hits;
+  for (int u = u_begin; u < u_end; u += kLanes) {
+    const int i = v * w + u;
+    const int n = std::min(kLanes, u_end - u);
+    if (!trace.Test(i, n, nearest_t_.data(), &hits)) continue;
+    for (int k = 0; k < n; ++k) {
+      if (!hits.hit[k]) continue;
+      const auto face = static_cast<std::size_t>(PrismTrace::EntryFace(hits, k));
+      const std::size_t p = static_cast<std::size_t>(i + k);
+      const float t = hits.t[k];
+      nearest_t_[p] = t;
+      if (out != nullptr) std::memcpy(out + 3 * p, trace.face_bgr[face].data(), 3);
+      if (labels != nullptr) {
+        labels->view.origin[static_cast<std::ptrdiff_t>(v) * labels->view.stride + u + k] =
+            trace.face_label[face];
+      }
+      if (depth_mm != nullptr) {
+        depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
+        depth_mm[p] = t >= near_m && t <= far_m ? static_cast<std::uint16_t>(t * 1000.0f + 0.5f)
+                                                : std::uint16_t{0};
       }
     }
   }

@@ -155,6 +155,8 @@ class FloorTexture {
   }
 
  private:
+  void IndexColours(const world::FloorRaster& raster);  // index_ and palette_
+  void IndexCommonCells();                              // common_near_ from index_
   int width_;
   int height_;
   double m_per_px_;
@@ -234,6 +236,14 @@ class CameraRays {
   const std::vector<FloorBlock>& floor_block_groups() const { return floor_block_groups_; }
 
  private:
+  // The constructor's steps, in order: each pixel's ray and floor hit, the floor and surround
+  // runs, the floor blocks (FloorCircle of each block and group), the tiles.
+  void ComputePixelRays();
+  void ComputeRuns();
+  FloorBlock FloorCircle(int u0, int u1, int v0, int v1) const;  // pixels [u0, u1) × [v0, v1)
+  void ComputeFloorBlocks();
+  void ComputeTiles();
+
   CameraModel camera_;
   int width_;
   int height_;
@@ -353,11 +363,22 @@ class CameraRenderer {
   // Colour (or, with `labels`, labels) and depth of the floor and the surround.
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
                    const RowSpans* color_region, DepthRowHistory* history, const LabelOut* labels);
+  // RenderFloor's steps: the bare floor's depth (only the rows `history` says can differ), then
+  // the surround's colour and the floor's, texel by texel or a block of the common colour at once.
+  struct FloorPass;
+  void RestoreFloorDepth(DepthImage* depth, DepthRowHistory* history) const;
+  void FillSurround(const FloorPass& pass, const std::vector<CameraRays::Run>& runs) const;
+  void FillFloor(const FloorPass& pass, const std::vector<CameraRays::Run>& runs);
   // `region`: only its pixels (colour alone), or null: all of the prism's.
   // `index`: the prism's place in the frame's list (its entry of LabelOut::prism_labels).
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, std::size_t index,
                    ColorImage* color, DepthImage* depth, const RowSpans* region,
                    const LabelOut* labels);
+  // RenderPrism's per-pixel step: the exact ray test of pixels [u_begin, u_end) of row v, and
+  // the nearest surface's colour, label and depth where the prism is nearer than what they saw.
+  struct PrismTrace;
+  void TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end, ColorImage* color,
+                     DepthImage* depth, const LabelOut* labels);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;

@@ -44,9 +44,6 @@ struct DepthScratch {
   vehicle::DepthRowHistory history;  // the renderer rewrites only rows that can have changed
   stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the rows that changed
 };
-struct ColorScratch {
-  vehicle::ColorImage color;
-};
 
 stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch) {
   frame.RenderDepth(&scratch->depth, &scratch->history);
@@ -54,10 +51,10 @@ stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratc
 }
 
 // The colour image where `reads` says its consumer reads it (demand-driven sensing).
-cv::Mat RenderColor(const CameraFrame& frame, ColorScratch* scratch,
+cv::Mat RenderColor(const CameraFrame& frame, vehicle::ColorImage* color,
                     const vehicle::RowSpans& reads) {
-  frame.Render(&scratch->color, nullptr, reads);
-  return cv::Mat(scratch->color.height, scratch->color.width, CV_8UC3, scratch->color.bgr.data());
+  frame.Render(color, nullptr, reads);
+  return cv::Mat(color->height, color->width, CV_8UC3, color->bgr.data());
 }
 
 // The input-independent part of a perception step: the component's params and the camera data.
@@ -116,26 +113,37 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
   return obstacles;
 }
 
+// The lane nodes' fixed part: the detector's tables, read-only and shared by the nodes (each node
+// that computes row sums has a detector of its own on them, LaneScratch), and what the renderer
+// is asked for.
 struct LaneParams {
-  std::shared_ptr<stack::LaneDetector> detector;   // its tables are shared by the lane nodes
+  std::shared_ptr<const stack::LaneDetectorTables> tables;
   std::shared_ptr<const vehicle::RowSpans> reads;  // the image pixels the detector reads
-  vehicle::ColourLabel line_class;                 // LaneLineClass(*detector)
+  vehicle::ColourLabel line_class;                 // LaneLineClass(tables)
   std::function<void(const stack::LanePoints&, Time)> hook;
+};
+
+// What a node that computes the bird's-eye row sums keeps between frames: scratch only.
+struct LaneScratch {
+  explicit LaneScratch(std::shared_ptr<const stack::LaneDetectorTables> tables)
+      : detector(std::move(tables)) {}
+  stack::LaneDetector detector;  // its class image and cell index
+  vehicle::ColorImage color;
 };
 
 // The bird's-eye row sums of a frame. The detector reads a function of each pixel's colour alone,
 // its line class, so the renderer labels the pixels it reads with their colour's class (a few
-// colours in view) instead of drawing them for the detector to classify one by one; with colour
-// noise on, the colour image it is.
-void LaneRowSums(const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch,
+// colours in view) in the class image the detector hands out, instead of drawing them for the
+// detector to classify one by one; with colour noise on, the colour image it is.
+void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch,
                  stack::BirdsEyeRowSums* sums) {
-  stack::LaneDetector& detector = *p.detector;
-  if (frame.RenderLabels(
-          *p.reads, p.line_class,
-          vehicle::LabelView{detector.source_classes(), stack::LaneDetector::kClassStride})) {
+  stack::LaneDetector& detector = scratch->detector;
+  const stack::ClassImageRegion classes = detector.MutableClassRegion();
+  if (frame.RenderLabels(*p.reads, p.line_class,
+                         vehicle::LabelView{classes.pixels.data(), classes.stride})) {
     detector.ComputeRowSumsFromClasses(sums);
   } else {
-    detector.ComputeRowSums(RenderColor(frame, scratch, *p.reads), sums);
+    detector.ComputeRowSums(RenderColor(frame, &scratch->color, *p.reads), sums);
   }
 }
 
@@ -150,13 +158,13 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                                         std::function<void(const stack::LanePoints&, Time)> hook) {
   const auto lanes =
       graph.AddTopic<stack::LanePoints>({.name = kLanePointsTopic, .type = msg::LanePoints()});
-  LaneParams params{.detector = std::make_shared<stack::LaneDetector>(
+  LaneParams params{.tables = std::make_shared<const stack::LaneDetectorTables>(
                         config.lane_detection, LaneCalibration(sensors.color_camera().model())),
                     .reads = nullptr,
                     .hook = std::move(hook)};
   params.reads = std::make_shared<const vehicle::RowSpans>(
-      LaneDetectorReads(*params.detector, sensors.color_camera().model().height()));
-  params.line_class = LaneLineClass(*params.detector);
+      LaneDetectorReads(*params.tables, sensors.color_camera().model().height()));
+  params.line_class = LaneLineClass(params.tables);
 
   if (mapping.count("lane_detection") != 0) {
     if (InHardware(mapping, "lane_detection", kSoftware)) {
@@ -165,11 +173,11 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
           "detection is two nodes: map lane_planner and poly_fit");
     }
     AddComponentNode(graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes,
-                     std::move(params), std::make_shared<ColorScratch>(),
-                     [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
+                     params, std::make_shared<LaneScratch>(params.tables),
+                     [](const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch) {
                        stack::BirdsEyeRowSums sums;
                        LaneRowSums(p, frame, scratch, &sums);
-                       return Report(p, p.detector->Fit(sums), frame.stamp);
+                       return Report(p, scratch->detector.Fit(sums), frame.stamp);
                      });
     return lanes;
   }
@@ -177,8 +185,8 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
   const auto bird_view =
       graph.AddTopic<BirdViewMessage>({.name = "/camera/bird_view", .type = msg::Image640mono()});
   AddComponentNode(graph, NodeSpec{.name = "lane_planner", .mapping = kSlot1}, image, bird_view,
-                   params, std::make_shared<ColorScratch>(),
-                   [](const LaneParams& p, const CameraFrame& frame, ColorScratch* scratch) {
+                   params, std::make_shared<LaneScratch>(params.tables),
+                   [](const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch) {
                      BirdViewMessage out{.stamp = frame.stamp};
                      LaneRowSums(p, frame, scratch, &out.sums);
                      return out;
@@ -186,17 +194,17 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
   AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,
                    std::move(params), std::shared_ptr<void>(),
                    [](const LaneParams& p, const BirdViewMessage& in, void*) {
-                     return Report(p, p.detector->Fit(in.sums), in.stamp);
+                     return Report(p, stack::FitLanePoints(*p.tables, in.sums), in.stamp);
                    });
   return lanes;
 }
 
 }  // namespace
 
-vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int height) {
+vehicle::RowSpans LaneDetectorReads(const stack::LaneDetectorTables& detector, int height) {
   vehicle::RowSpans reads;
   reads.columns.assign(static_cast<std::size_t>(height), {0, 0});
-  for (const stack::LaneDetector::SourceSpan& span : detector.source_spans()) {
+  for (const stack::LaneDetectorTables::SourceSpan& span : detector.source_spans()) {
     // (a camera of another size has no lane detection: its Step refuses the image)
     if (span.row < height)
       reads.columns[static_cast<std::size_t>(span.row)] = {span.col_begin, span.col_end};
@@ -204,8 +212,10 @@ vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int hei
   return reads;
 }
 
-vehicle::ColourLabel LaneLineClass(const stack::LaneDetector& detector) {
-  return [&detector](const vehicle::Bgr& c) { return detector.ClassOf(c[0], c[1], c[2]); };
+vehicle::ColourLabel LaneLineClass(std::shared_ptr<const stack::LaneDetectorTables> detector) {
+  return [detector = std::move(detector)](const vehicle::Bgr& c) {
+    return detector->ClassOf(c[0], c[1], c[2]);
+  };
 }
 
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {

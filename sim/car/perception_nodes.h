@@ -19,6 +19,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 
 #include "sim/car/perception_config.h"
 #include "sim/car/sensors.h"
@@ -44,17 +45,17 @@ struct PerceptionHooks {
   std::function<void(const stack::LanePoints&, Time stamp)> on_lanes;
 };
 
-// The lane detector's view of a camera: its intrinsics, distortion and mount (the node and the
-// report's lane overlay both build their LaneDetector from it).
+// The lane detector's view of a camera: its intrinsics, distortion and mount (the nodes and the
+// report's lane overlay both build their lane detection from it).
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera);
 
 // The pixels of a camera of `height` rows that the detector reads (its source spans): what the
 // lane nodes ask the renderer for (vehicle::RowSpans, demand-driven colour).
-vehicle::RowSpans LaneDetectorReads(const stack::LaneDetector& detector, int height);
+vehicle::RowSpans LaneDetectorReads(const stack::LaneDetectorTables& detector, int height);
 
-// The detector's line class of a colour (LaneDetector::ClassOf) as a renderer's label
-// (vehicle::CameraRenderer::RenderLabels); `detector` must outlive it.
-vehicle::ColourLabel LaneLineClass(const stack::LaneDetector& detector);
+// The detector's line class of a colour (LaneDetectorTables::ClassOf) as a renderer's label
+// (vehicle::CameraRenderer::RenderLabels); the label keeps the tables alive.
+vehicle::ColourLabel LaneLineClass(std::shared_ptr<const stack::LaneDetectorTables> detector);
 
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a

@@ -138,7 +138,11 @@ class Cache {
 
 // ---- The nodes, in the order they are added (node ids follow it) ----
 
-// imu_driver, hall_sensor: publish each reading the suite samples (same instants, after it).
+// imu_driver, hall_sensor: publish each reading the suite samples (same instants, after it). The
+// suite samples on the sensor's own clock (kPrioritySensor), not in the driver's tick as the
+// cameras are (sim/loop/car_boards.cc): a tick's handler runs when the node's job starts, which is
+// later than the tick while the node is hung or overrun, and a reading taken then (and the noise
+// draws, one per tick) would differ from the sensor's.
 void AddSensorDrivers(NodeGraph& graph, SensorSuite& sensors, const StackTopics& topics) {
   auto imu_latest = std::make_shared<vehicle::ImuReading>();
   sensors.OnImu([imu_latest](const vehicle::ImuReading& r) { *imu_latest = r; });

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -186,10 +187,11 @@ TEST_F(LaneTrack, FastMasksAreBitIdenticalToOpenCv) {
     BirdsEyeRowSums of_black;
     detector.ComputeRowSums(cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC3), &of_black);
     ASSERT_NE(of_black, sums) << p.what;
-    for (const LaneDetector::SourceSpan& span : detector.source_spans()) {
+    const ClassImageRegion classes = detector.MutableClassRegion();
+    for (const LaneDetector::SourceSpan& span : classes.spans) {
       for (int c = span.col_begin; c < span.col_end; ++c) {
         const std::uint8_t* px = frame.color.bgr.data() + 3 * (span.row * kLaneImageWidth + c);
-        detector.source_classes()[span.row * LaneDetector::kClassStride + c] =
+        classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
             detector.ClassOf(px[0], px[1], px[2]);
       }
     }
@@ -203,6 +205,36 @@ TEST_F(LaneTrack, FastMasksAreBitIdenticalToOpenCv) {
     EXPECT_EQ(from_sums.yellow_px, from_masks.yellow_px) << p.what;
     EXPECT_EQ(from_sums.white_px, from_masks.white_px) << p.what;
   }
+}
+
+// The lane planner's and the polynomial fit's nodes share one set of tables: each detector on them
+// has scratch of its own, and the fit stage reads the tables alone.
+TEST_F(LaneTrack, DetectorsOnSharedTablesShareNoScratch) {
+  const LaneCameraCalibration calibration = CalibrationOf(frames_->color_camera());
+  const auto tables =
+      std::make_shared<const LaneDetectorTables>(LaneDetectionParams{}, calibration);
+  LaneDetector first(tables);
+  LaneDetector second(tables);
+  const auto frame = frames_->Render(frames_->PoseOnRoute("outer_loop", 2.5));
+  BirdsEyeRowSums sums;
+  first.ComputeRowSums(AsMat(frame.color), &sums);
+  // every pixel the second detector reads a line pixel: the first one's classes stay its frame's
+  const ClassImageRegion other = second.MutableClassRegion();
+  for (const LaneDetector::SourceSpan& span : other.spans) {
+    std::fill_n(other.pixels.begin() + span.row * other.stride + span.col_begin,
+                span.col_end - span.col_begin, std::uint8_t{3});
+  }
+  EXPECT_NE(first.MutableClassRegion().pixels.data(), other.pixels.data());
+  BirdsEyeRowSums again, all_lines;
+  first.ComputeRowSumsFromClasses(&again);
+  second.ComputeRowSumsFromClasses(&all_lines);
+  EXPECT_EQ(again, sums);
+  EXPECT_NE(all_lines, sums);
+  const LanePoints fitted = FitLanePoints(*tables, sums);
+  const LanePoints stepped =
+      LaneDetector(LaneDetectionParams{}, calibration).Step(AsMat(frame.color));
+  EXPECT_EQ(fitted.valid, 1u);
+  EXPECT_EQ(std::memcmp(&fitted, &stepped, sizeof fitted), 0);
 }
 
 TEST(LaneMasks, RowSumsCountTheNonZeroPixelsOfEachRowAndSumTheirColumns) {
