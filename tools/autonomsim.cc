@@ -13,9 +13,10 @@ int main(int argc, char** argv) {
       "Exit codes: 0 all expectations held, 1 an expectation failed, 2 unusable input."};
   app.set_version_flag("--version", std::string("autonomsim ") + AUTONOMSIM_VERSION);
   app.require_subcommand(1);
-  const std::vector<Command> commands = {
-      AddRunCommand(app),   AddCheckCommand(app),  AddTable1Command(app), AddRenderCommand(app),
-      AddSweepCommand(app), AddReportCommand(app), AddVideoForwarder(app)};
+  const std::vector<Command> commands = {AddRunCommand(app),       AddCheckCommand(app),
+                                         AddTable1Command(app),    AddRenderCommand(app),
+                                         AddSweepCommand(app),     AddReportCommand(app),
+                                         AddReferenceCommand(app), AddVideoForwarder(app)};
 
   return ParseAndRun(app, argc, argv, commands);
 }

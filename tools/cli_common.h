@@ -33,6 +33,7 @@ Command AddTable1Command(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);
+Command AddReferenceCommand(CLI::App& parent);
 // The video command lives in the `autonomsim-video` helper (tools/autonomsim_video.cc);
 // `autonomsim video ...` runs it with the same arguments (AddVideoForwarder).
 Command AddVideoCommand(CLI::App& parent);

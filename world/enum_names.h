@@ -20,7 +20,9 @@ template <class E>
 struct NameTable;
 
 template <class E>
-concept NamedEnum = std::is_enum_v<E> && requires { NameTable<E>::kEntries; };
+concept NamedEnum = std::is_enum_v<E> && requires {
+  NameTable<E>::kEntries;
+};
 
 template <NamedEnum E>
 constexpr std::string_view ToName(E value) {

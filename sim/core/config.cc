@@ -118,6 +118,21 @@ std::string LastKey(const std::string& path) {
   return dot == std::string::npos ? path : path.substr(dot + 1);
 }
 
+void CheckKindKeys(const YAML::Node& node, const std::vector<std::string>& known,
+                   const std::string& kind, const std::string& path, const ConfigSource& source) {
+  for (const auto& item : node) {
+    const std::string key = item.first.Scalar();
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    const std::string closest = ClosestName(key, known);
+    std::string list;
+    for (const std::string& candidate : known) list += (list.empty() ? "" : ", ") + candidate;
+    Fail(item.first, JoinPath(path, key), source,
+         closest.empty() ? "'" + kind + "' takes no key '" + key +
+                               "' (its keys: " + (list.empty() ? "none" : list) + ")"
+                         : "unknown key '" + key + "' (did you mean '" + closest + "'?)");
+  }
+}
+
 void CheckKeys(const YAML::Node& node, const std::vector<std::string>& known,
                const std::string& path, const ConfigSource& source) {
   for (const auto& item : node) {

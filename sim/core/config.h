@@ -151,6 +151,26 @@ class YamlFieldReader {
   std::vector<std::string> known_;
 };
 
+// The keys a struct's Describe lists.
+class KeyLister {
+ public:
+  template <class T>
+  void operator()(const char* key, T&, RequiredKey = {}) {
+    keys.emplace_back(key);
+  }
+  std::vector<std::string> keys;
+};
+template <class T>
+std::vector<std::string> KeysOf(T& value) {
+  KeyLister lister;
+  value.Describe(lister);
+  return lister.keys;
+}
+// Throws for a key of a kind's mapping that the kind does not take: "'server_restart' takes no
+// key 'car' (its keys: at_s, for_s)", or the closest key for a typo.
+void CheckKindKeys(const YAML::Node& node, const std::vector<std::string>& known,
+                   const std::string& kind, const std::string& path, const ConfigSource& source);
+
 template <NamedEnum E>
 void ReadEnum(const YAML::Node& node, E& out, const std::string& path, const ConfigSource& source) {
   std::string name;
@@ -178,6 +198,7 @@ bool ReadAlternative(const std::string& kind, const YAML::Node& node, Variant& o
       return ReadAlternative<Variant, I + 1>(kind, node, out, path, source);
     }
     Alternative value{};
+    if (node.IsMap()) CheckKindKeys(node, KeysOf(value), kind, JoinPath(path, kind), source);
     Read(node, value, JoinPath(path, kind), source);
     out = std::move(value);
     return true;
@@ -189,9 +210,12 @@ void ReadKindVariant(const YAML::Node& node, Variant& out, const std::string& pa
                      const ConfigSource& source) {
   using Kind = std::remove_cv_t<decltype(std::variant_alternative_t<0, Variant>::kKind)>;
   if (!node.IsMap() || node.size() != 1) {
-    Fail(node, path, source,
-         std::string(NameTable<Kind>::kClause) + "; got " +
-             (node.IsMap() ? std::to_string(node.size()) + " keys" : Describe(node)));
+    std::string got = Describe(node);
+    if (node.IsMap()) {
+      got = std::to_string(node.size()) + " keys";
+      for (const auto& item : node) got += " '" + item.first.as<std::string>("?") + "'";
+    }
+    Fail(node, path, source, std::string(NameTable<Kind>::kClause) + "; got " + got);
   }
   const auto item = node.begin();
   if (!item->first.IsScalar()) {

@@ -25,9 +25,9 @@ EventKind EventKindOf(RecordKind kind) {
 }
 
 std::optional<RecordKind> ServerRecordKindOf(EventKind kind) {
-  for (const RecordKind record : {RecordKind::kRequest, RecordKind::kFree, RecordKind::kGrant,
-                                  RecordKind::kDenied, RecordKind::kLeaseExpired,
-                                  RecordKind::kQueueDrop}) {
+  for (const RecordKind record :
+       {RecordKind::kRequest, RecordKind::kFree, RecordKind::kGrant, RecordKind::kDenied,
+        RecordKind::kLeaseExpired, RecordKind::kQueueDrop}) {
     if (EventKindOf(record) == kind) return record;
   }
   return std::nullopt;

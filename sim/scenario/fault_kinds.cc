@@ -28,7 +28,8 @@ std::string Join(const Fault& fault, std::vector<std::string> parts) {
 }  // namespace
 
 void ValidateFaultTiming(double at_s, const std::optional<double>& for_s) {
-  Require(std::isfinite(at_s) && at_s >= 0.0, [&] { return "at_s must be >= 0, got " + Num(at_s); });
+  Require(std::isfinite(at_s) && at_s >= 0.0,
+          [&] { return "at_s must be >= 0, got " + Num(at_s); });
   Require(!for_s || (std::isfinite(*for_s) && *for_s > 0.0),
           "for_s must be > 0 (leave it out for a fault that lasts to the end of the run)");
 }

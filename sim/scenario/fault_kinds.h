@@ -251,7 +251,8 @@ std::optional<double> FaultDuration_s(const FaultClause& fault);  // for_s, wher
 std::optional<int> FaultCar(const FaultClause& fault);            // the car it strikes, if one
 // Whether the fault, without for_s, lasts to the run's end (true) or is done at once (false).
 bool LastsWithoutEnd(const FaultClause& fault);
-// The fault_begin event's detail: the fault's arguments in words, e.g. "node lane_planner, for 2 s".
+// The fault_begin event's detail: the fault's arguments in words, e.g. "node lane_planner, for 2
+// s".
 std::string DescribeFault(const FaultClause& fault);
 
 }  // namespace autonomsim::sim

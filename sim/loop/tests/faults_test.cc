@@ -341,7 +341,8 @@ TEST(FaultKeys, MistakesNameTheKey) {
   ExpectLoadError("[{car_stall: {at_s: 1}}]", "car_stall needs car");
   ExpectLoadError("[{node_crash: {car: 0, node: lane_planner, at_s: 1, for_s: 2}}]", "for_s");
   ExpectLoadError("[{v2i_partition: {direction: sideways, at_s: 1}}]", "direction");
-  ExpectLoadError("[{v2i_loss_burst: {at_s: 1}}]", "loss in (0, 1]");
+  ExpectLoadError("[{v2i_loss_burst: {at_s: 1}}]", "v2i_loss_burst needs loss");
+  ExpectLoadError("[{v2i_loss_burst: {at_s: 1, loss: 1.5}}]", "loss must be in (0, 1]");
   ExpectLoadError("[{server_restart: {car: 0, at_s: 1}}]", "takes no key 'car'");
   ExpectLoadError("[{car_stall: {car: 0, at_s: 500}}]", "never strike");
   ExpectLoadError("[{camera_freeze: {car: 0, camera: thermal, at_s: 1}}]", "camera");

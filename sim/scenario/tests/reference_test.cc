@@ -1,0 +1,38 @@
+// The scenario reference page (docs/scenarios.md) is the text generated from the loader's
+// Describe, so it cannot drift from what the loader reads.
+#include "sim/scenario/reference.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace autonomsim::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(ScenarioReferenceTest, TheDocsPageIsTheGeneratedText) {
+  std::ifstream in("docs/scenarios.md", std::ios::binary);
+  ASSERT_TRUE(in) << "docs/scenarios.md: cannot open (tests run from the checkout's root)";
+  std::stringstream page;
+  page << in.rdbuf();
+  EXPECT_EQ(page.str(), ScenarioReferenceMarkdown() + "\n")
+      << "docs/scenarios.md is out of date: build/bin/autonomsim reference --out "
+         "docs/scenarios.md";
+}
+
+TEST(ScenarioReferenceTest, NamesEveryKeyWithItsTypeUnitAndDefault) {
+  const std::string text = ScenarioReferenceMarkdown();
+  EXPECT_THAT(text, HasSubstr("| `duration_s` | number | s | `120.0` |"));
+  EXPECT_THAT(text, HasSubstr("| `v2i.link` | embedded \\| mqtt \\| realtime |  | `\"embedded\"` |"));
+  EXPECT_THAT(text, HasSubstr("| `cars[i].driver` | oracle \\| stack |  | `\"oracle\"` |"));
+  EXPECT_THAT(text, HasSubstr("| `cars[i].start` | text |  | `(none)` |"));
+  EXPECT_THAT(text, HasSubstr("### car_stall"));
+  EXPECT_THAT(text, HasSubstr("| `car` | integer |  | `(required)` |"));
+  EXPECT_THAT(text, HasSubstr("### recovers_within"));
+}
+
+}  // namespace
+}  // namespace autonomsim::sim
