@@ -3,17 +3,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::stack {
 namespace {
 
 using Phase = IntersectionClientState::Phase;
-
-void RequirePositive(Duration d, const char* key) {
-  if (d <= Duration::zero()) {
-    throw std::invalid_argument(std::string(key) + " must be > 0 s, got " +
-                                std::to_string(ToSeconds(d)) + " s");
-  }
-}
 
 const world::IntersectionSpec* Find(const std::vector<world::IntersectionSpec>& intersections,
                                     int id) {
@@ -58,24 +53,22 @@ std::optional<int> StopZoneAt(const std::vector<world::IntersectionSpec>& inters
 }  // namespace
 
 void IntersectionClientParams::Validate() const {
-  RequirePositive(tick_period, "tick_period_s");
-  RequirePositive(retry_period, "retry_period_s");
-  RequirePositive(keepalive_period, "keepalive_period_s");
+  RequirePositive(ToSeconds(tick_period), "tick_period_s");
+  RequirePositive(ToSeconds(retry_period), "retry_period_s");
+  RequirePositive(ToSeconds(keepalive_period), "keepalive_period_s");
   for (const auto& [value, key] : {std::pair{release_margin_m, "release_margin_m"},
                                    std::pair{exit_margin_m, "exit_margin_m"}}) {
-    if (!(value >= 0.0 && value <= 2.0)) {
-      throw std::invalid_argument(std::string(key) + " must be in [0, 2] m, got " +
-                                  std::to_string(value));
-    }
+    Require(value >= 0.0 && value <= 2.0,
+            [&] { return std::string(key) + " must be in [0, 2] m, got " + Num(value); });
   }
 }
 
 void ValidateAgainstLease(const IntersectionClientParams& params, Duration server_lease) {
   auto require_shorter = [&](Duration d, const char* key) {
     if (d >= server_lease) {
-      throw std::invalid_argument(std::string(key) + " (" + std::to_string(ToSeconds(d)) +
+      throw std::invalid_argument(std::string(key) + " (" + Num(ToSeconds(d)) +
                                   " s) must be shorter than the server's lease_s (" +
-                                  std::to_string(ToSeconds(server_lease)) + " s)");
+                                  Num(ToSeconds(server_lease)) + " s)");
     }
   };
   require_shorter(params.retry_period, "retry_period_s");

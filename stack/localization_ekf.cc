@@ -13,10 +13,6 @@ namespace {
 // Below this |h| the series of sin(h)/h is used (its error there is < 1e-17).
 constexpr double kSmallHalfAngle_rad = 1e-4;
 
-void RequirePositive(double x, const std::string& key) {
-  Require(std::isfinite(x) && x > 0.0, [&] { return key + " must be > 0, got " + Num(x); });
-}
-
 std::string Seconds(Time t) { return Num(ToSeconds(t)) + " s"; }
 
 void RequireFinite(double x, const std::string& what) {

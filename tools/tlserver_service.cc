@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "world/validation.h"
+
 namespace autonomsim::tlserver {
 namespace {
 
@@ -275,8 +277,8 @@ Service::StepCheck Service::Check(const sim::StepTag& tag, std::string* error) {
     return StepCheck::kError;
   }
   if (tag.now < last_now_) {
-    *error = "step " + std::to_string(tag.seq) + " at " + std::to_string(ToSeconds(tag.now)) +
-             " s goes back in time from " + std::to_string(ToSeconds(last_now_)) + " s";
+    *error = "step " + Num(tag.seq) + " at " + Num(ToSeconds(tag.now)) +
+             " s goes back in time from " + Num(ToSeconds(last_now_)) + " s";
     return StepCheck::kError;
   }
   return StepCheck::kNew;

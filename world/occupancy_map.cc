@@ -6,6 +6,7 @@
 #include <string>
 
 #include "world/track.h"
+#include "world/validation.h"
 
 namespace autonomsim::world {
 namespace {
@@ -170,9 +171,8 @@ void OccupyInside(const std::vector<Vec2>& points, OccupancyMap* map) {
 }  // namespace
 
 OccupancyMap BuildStaticMap(const Track& track, double resolution_m) {
-  if (!(std::isfinite(resolution_m) && resolution_m > 0.0)) {
-    throw std::invalid_argument("resolution_m must be > 0, got " + std::to_string(resolution_m));
-  }
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
   const TrackSpec& spec = track.spec();
   OccupancyMap map = EmptyMap(spec, resolution_m);
   for (std::size_t l = 0; l < spec.lines.size(); ++l) {

@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "world/validation.h"
 
 namespace autonomsim::world {
 namespace {
@@ -25,13 +26,7 @@ constexpr double kMergeDistance_m = 1e-9;
 
 double Cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-std::string Format(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.6g", v);
-  return buffer;
-}
-
-std::string FormatPoint(const Vec2& p) { return "(" + Format(p.x()) + ", " + Format(p.y()) + ")"; }
+std::string FormatPoint(const Vec2& p) { return "(" + Num(p.x()) + ", " + Num(p.y()) + ")"; }
 
 }  // namespace
 
@@ -50,7 +45,7 @@ Polyline::Polyline(std::vector<Vec2> points, bool cyclic)
     const double gap = (points_.back() - points_.front()).norm();
     if (gap > kClosureTolerance_m) {
       throw std::invalid_argument("cyclic polyline must end where it starts; last point " +
-                                  FormatPoint(points_.back()) + " is " + Format(gap) +
+                                  FormatPoint(points_.back()) + " is " + Num(gap) +
                                   " m from the first " + FormatPoint(points_.front()));
     }
     points_.back() = points_.front();
@@ -232,7 +227,7 @@ Polyline::Projection Polyline::ProjectNear(const Vec2& p, double s_hint_m, doubl
   if (points_.empty()) throw std::logic_error("ProjectNear on an empty polyline");
   if (!std::isfinite(s_hint_m) || !std::isfinite(window_m) || window_m < 0.0) {
     throw std::invalid_argument("ProjectNear needs a finite hint and a finite window >= 0, got " +
-                                Format(s_hint_m) + " and " + Format(window_m));
+                                Num(s_hint_m) + " and " + Num(window_m));
   }
   Nearest best;
   const double length = length_m();
@@ -340,11 +335,11 @@ void FitArcs(FilletOutline* o) {
     const std::size_t b = (i + 1) % n;
     const double needed = o->tangent[a] + o->tangent[b];
     if (needed > o->side_length[i] + kMergeDistance_m) {
-      throw std::invalid_argument("corner radius " + Format(o->corner_radius_m) +
+      throw std::invalid_argument("corner radius " + Num(o->corner_radius_m) +
                                   " m does not fit: the arcs at points " + std::to_string(a) + " " +
                                   FormatPoint(o->corners[a]) + " and " + std::to_string(b) + " " +
-                                  FormatPoint(o->corners[b]) + " need " + Format(needed) +
-                                  " m of a side " + Format(o->side_length[i]) + " m long");
+                                  FormatPoint(o->corners[b]) + " need " + Num(needed) +
+                                  " m of a side " + Num(o->side_length[i]) + " m long");
     }
   }
 }
@@ -433,10 +428,10 @@ Polyline SampleFilletPolyline(const PointList& points_m, double corner_radius_m,
                               double spacing_m) {
   if (!(std::isfinite(corner_radius_m) && corner_radius_m >= 0.0)) {
     throw std::invalid_argument("corner_radius_m must be finite and >= 0, got " +
-                                Format(corner_radius_m));
+                                Num(corner_radius_m));
   }
   if (!(std::isfinite(spacing_m) && spacing_m > 0.0)) {
-    throw std::invalid_argument("spacing_m must be finite and > 0, got " + Format(spacing_m));
+    throw std::invalid_argument("spacing_m must be finite and > 0, got " + Num(spacing_m));
   }
   FilletOutline outline;
   outline.corners = OutlineCorners(points_m, closed);
