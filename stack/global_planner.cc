@@ -242,7 +242,6 @@ class AStarSearch {
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
                           const world::Vec2& start, const world::Vec2& goal,
                           PlannerScratch* scratch) {
-  params.Validate();
   GlobalPlan plan;
   const auto start_cell = costmap.WorldToMap(start);
   if (!start_cell) {
