@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 #include "world/validation.h"
 
@@ -70,10 +71,177 @@ std::string ToString(PlanStatus status) {
   return "unknown";
 }
 
+namespace {
+
+// Smac's neighbour order (cardinal moves first), as (dx, dy, step in cells).
+struct Move {
+  int dx;
+  int dy;
+  double step;
+};
+constexpr double kDiagonal = std::numbers::sqrt2;
+constexpr Move kMoves[8] = {{-1, 0, 1.0},       {1, 0, 1.0},         {0, -1, 1.0},
+                            {0, 1, 1.0},        {-1, -1, kDiagonal}, {1, -1, kDiagonal},
+                            {-1, 1, kDiagonal}, {1, 1, kDiagonal}};
+
+// The search's memory, a PlannerScratch's: per cell g, parent and the stamps saying whether this
+// search reached or closed it; the open list.
+struct SearchMemory {
+  double* g_cells;
+  int* parent;
+  std::uint32_t* reached;
+  std::uint32_t* closed;
+  std::uint32_t search;
+  std::vector<OpenEntry>* open;
+};
+
+// One A* search from the start cell to the goal cell (Smac 2D's costs: a step's length times
+// 1 + cost_travel_multiplier · cost / kMaxNonInscribedCost; Euclidean heuristic).
+class AStarSearch {
+ public:
+  AStarSearch(const GlobalPlannerParams& params, const Costmap2D& costmap, CellIndex start,
+              CellIndex goal, const world::Vec2& goal_m, SearchMemory memory)
+      : params_(params),
+        costmap_(costmap),
+        costs_(costmap.costs()),
+        nx_(costmap.size_x_cells()),
+        ny_(costmap.size_y_cells()),
+        resolution_m_(costmap.resolution_m()),
+        start_(start),
+        goal_(goal),
+        goal_m_(goal_m),
+        goal_index_(static_cast<int>(costmap.Index(goal.mx, goal.my))),
+        escape_cells_sq_((params.start_escape_m / resolution_m_) *
+                         (params.start_escape_m / resolution_m_)),
+        m_(memory) {}
+
+  // Expands cells until the goal, the expansion limit or an empty open list; the plan's status,
+  // path, cost, length and expansions.
+  void Run(GlobalPlan* plan) {
+    const int start_index = static_cast<int>(costmap_.Index(start_.mx, start_.my));
+    m_.g_cells[start_index] = 0.0;
+    m_.parent[start_index] = -1;
+    m_.reached[start_index] = m_.search;
+    m_.open->clear();
+    const double h_start = Heuristic_m(start_.mx, start_.my);
+    Push({h_start, h_start, start_index});
+    std::vector<OpenEntry>& open = *m_.open;
+    while (!open.empty()) {
+      std::pop_heap(open.begin(), open.end(), WorseEntry{});
+      const OpenEntry top = open.back();
+      open.pop_back();
+      const int i = top.index;
+      if (m_.closed[i] == m_.search) continue;  // a stale entry: closed at a lower cost
+      m_.closed[i] = m_.search;
+      ++plan->expansions;
+      if (i == goal_index_) {
+        Finish(i, true, plan);
+        return;
+      }
+      const int mx = i % nx_;
+      const int my = i / nx_;
+      NoteIfNearest(i, mx, my);
+      if (plan->expansions >= params_.max_expansions) {
+        FinishWithinTolerance(PlanStatus::kExpansionLimit, plan);
+        return;
+      }
+      ExpandNeighbours(i, mx, my);
+    }
+    FinishWithinTolerance(PlanStatus::kNoPath, plan);
+  }
+
+ private:
+  bool NearStart(int i) const {
+    const double dx = i % nx_ - static_cast<int>(start_.mx);
+    const double dy = i / nx_ - static_cast<int>(start_.my);
+    return dx * dx + dy * dy <= escape_cells_sq_;
+  }
+  bool Traversable(int i) const {
+    const std::uint8_t c = costs_[i];
+    if (c == kNoInformation) return params_.allow_unknown;
+    return c < kInscribedInflatedObstacle ||
+           (c == kInscribedInflatedObstacle && params_.start_escape_m > 0.0 && NearStart(i));
+  }
+  double Heuristic_m(int mx, int my) const {
+    const double dx = mx - goal_.mx;
+    const double dy = my - goal_.my;
+    return resolution_m_ * std::sqrt(dx * dx + dy * dy);
+  }
+  // The cost so far of cell i: +inf until this search reaches it.
+  double G(int i) const {
+    return m_.reached[i] == m_.search ? m_.g_cells[i] : std::numeric_limits<double>::infinity();
+  }
+  void Push(const OpenEntry& entry) {
+    m_.open->push_back(entry);
+    std::push_heap(m_.open->begin(), m_.open->end(), WorseEntry{});
+  }
+
+  // The closed cell nearest the goal point (among equals the cheapest, then the lowest index),
+  // for the tolerance.
+  void NoteIfNearest(int i, int mx, int my) {
+    const double distance_m = (costmap_.MapToWorld(mx, my) - goal_m_).norm();
+    // Distances within kSameDistance_m are ties: rounding must not pick among equidistant cells.
+    const bool nearer = distance_m < nearest_distance_m_ - kSameDistance_m;
+    const bool tie = !nearer && distance_m <= nearest_distance_m_ + kSameDistance_m;
+    if (nearer || (tie && (G(i) < G(nearest_) || (G(i) == G(nearest_) && i < nearest_)))) {
+      nearest_distance_m_ = distance_m;
+      nearest_ = i;
+    }
+  }
+
+  void ExpandNeighbours(int i, int mx, int my) {
+    for (const Move& move : kMoves) {
+      const int cx = mx + move.dx;
+      const int cy = my + move.dy;
+      if (cx < 0 || cx >= nx_ || cy < 0 || cy >= ny_) continue;
+      const int j = cy * nx_ + cx;
+      if (m_.closed[j] == m_.search || !Traversable(j)) continue;
+      const double weight = 1.0 + params_.cost_travel_multiplier *
+                                      (static_cast<double>(costs_[j]) / kMaxNonInscribedCost);
+      const double g_new = G(i) + resolution_m_ * move.step * weight;
+      if (!(g_new < G(j))) continue;
+      m_.g_cells[j] = g_new;
+      m_.parent[j] = i;
+      m_.reached[j] = m_.search;
+      const double h = Heuristic_m(cx, cy);
+      Push({g_new + h, h, j});
+    }
+  }
+
+  void Finish(int end, bool exact, GlobalPlan* plan) const {
+    plan->status = PlanStatus::kOk;
+    plan->path_m = Backtrace(costmap_, m_.parent, end);
+    plan->cost = G(end);
+    plan->length_m = Length_m(plan->path_m);
+    plan->exact_goal = exact;
+  }
+  void FinishWithinTolerance(PlanStatus otherwise, GlobalPlan* plan) const {
+    if (nearest_ >= 0 && nearest_distance_m_ <= params_.tolerance_m) {
+      Finish(nearest_, false, plan);
+    } else {
+      plan->status = otherwise;
+    }
+  }
+
+  const GlobalPlannerParams& params_;
+  const Costmap2D& costmap_;
+  const std::vector<std::uint8_t>& costs_;
+  const int nx_, ny_;
+  const double resolution_m_;
+  const CellIndex start_, goal_;
+  const world::Vec2 goal_m_;
+  const int goal_index_;
+  const double escape_cells_sq_;
+  SearchMemory m_;
+  int nearest_{-1};
+  double nearest_distance_m_{std::numeric_limits<double>::infinity()};
+};
+
+}  // namespace
+
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
                           const world::Vec2& start, const world::Vec2& goal,
                           PlannerScratch* scratch) {
-  params.Validate();
   GlobalPlan plan;
   const auto start_cell = costmap.WorldToMap(start);
   if (!start_cell) {
@@ -85,46 +253,9 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
     plan.status = PlanStatus::kGoalOutsideMap;
     return plan;
   }
-
-  const int nx = costmap.size_x_cells();
-  const int ny = costmap.size_y_cells();
-  const double resolution_m = costmap.resolution_m();
-  const std::vector<std::uint8_t>& costs = costmap.costs();
-  const int start_index = static_cast<int>(costmap.Index(start_cell->mx, start_cell->my));
-  const int goal_index = static_cast<int>(costmap.Index(goal_cell->mx, goal_cell->my));
-
-  const double escape_cells_sq =
-      (params.start_escape_m / resolution_m) * (params.start_escape_m / resolution_m);
-  auto near_start = [&](int i) {
-    const double dx = i % nx - static_cast<int>(start_cell->mx);
-    const double dy = i / nx - static_cast<int>(start_cell->my);
-    return dx * dx + dy * dy <= escape_cells_sq;
-  };
-  auto traversable = [&](int i) {
-    const std::uint8_t c = costs[i];
-    if (c == kNoInformation) return params.allow_unknown;
-    return c < kInscribedInflatedObstacle ||
-           (c == kInscribedInflatedObstacle && params.start_escape_m > 0.0 && near_start(i));
-  };
-  auto heuristic_m = [&](int mx, int my) {
-    const double dx = mx - goal_cell->mx;
-    const double dy = my - goal_cell->my;
-    return resolution_m * std::sqrt(dx * dx + dy * dy);
-  };
-  // Smac's neighbour order (cardinal moves first), as (dx, dy, step in cells).
-  struct Move {
-    int dx;
-    int dy;
-    double step;
-  };
-  const double diagonal = std::sqrt(2.0);
-  const Move moves[8] = {{-1, 0, 1.0},      {1, 0, 1.0},        {0, -1, 1.0},
-                         {0, 1, 1.0},       {-1, -1, diagonal}, {1, -1, diagonal},
-                         {-1, 1, diagonal}, {1, 1, diagonal}};
-
   PlannerScratch local;
   PlannerScratch& memory = scratch != nullptr ? *scratch : local;
-  const std::size_t n = costs.size();
+  const std::size_t n = costmap.costs().size();
   if (memory.g_.size() != n || ++memory.search_ == 0) {  // a new size, or the stamps wrapped
     memory.g_.assign(n, 0.0);
     memory.parent_.assign(n, -1);
@@ -132,93 +263,10 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
     memory.closed_.assign(n, 0);
     memory.search_ = 1;
   }
-  const std::uint32_t search = memory.search_;
-  double* g_cells = memory.g_.data();
-  int* parent = memory.parent_.data();
-  std::uint32_t* reached = memory.reached_.data();
-  std::uint32_t* closed = memory.closed_.data();
-  // The cost so far of cell i: +inf until this search reaches it.
-  const auto g = [&](int i) {
-    return reached[i] == search ? g_cells[i] : std::numeric_limits<double>::infinity();
-  };
-  std::vector<OpenEntry>& open = memory.open_;
-  open.clear();
-  const auto push = [&](const OpenEntry& entry) {
-    open.push_back(entry);
-    std::push_heap(open.begin(), open.end(), WorseEntry{});
-  };
-
-  g_cells[start_index] = 0.0;
-  parent[start_index] = -1;
-  reached[start_index] = search;
-  const double h_start = heuristic_m(start_cell->mx, start_cell->my);
-  push({h_start, h_start, start_index});
-
-  // The closed cell nearest the goal point (among equals the cheapest, then the lowest index),
-  // for the tolerance.
-  int nearest = -1;
-  double nearest_distance_m = std::numeric_limits<double>::infinity();
-  auto finish = [&](int end, bool exact) {
-    plan.status = PlanStatus::kOk;
-    plan.path_m = Backtrace(costmap, parent, end);
-    plan.cost = g(end);
-    plan.length_m = Length_m(plan.path_m);
-    plan.exact_goal = exact;
-  };
-  auto finish_within_tolerance = [&](PlanStatus otherwise) {
-    if (nearest >= 0 && nearest_distance_m <= params.tolerance_m) {
-      finish(nearest, false);
-    } else {
-      plan.status = otherwise;
-    }
-  };
-
-  while (!open.empty()) {
-    std::pop_heap(open.begin(), open.end(), WorseEntry{});
-    const OpenEntry top = open.back();
-    open.pop_back();
-    const int i = top.index;
-    if (closed[i] == search) continue;  // a stale entry: the cell was closed at a lower cost
-    closed[i] = search;
-    ++plan.expansions;
-
-    if (i == goal_index) {
-      finish(i, true);
-      return plan;
-    }
-    const int mx = i % nx;
-    const int my = i / nx;
-    const double distance_m = (costmap.MapToWorld(mx, my) - goal).norm();
-    // Distances within kSameDistance_m are ties: rounding must not pick among equidistant cells.
-    const bool nearer = distance_m < nearest_distance_m - kSameDistance_m;
-    const bool tie = !nearer && distance_m <= nearest_distance_m + kSameDistance_m;
-    if (nearer || (tie && (g(i) < g(nearest) || (g(i) == g(nearest) && i < nearest)))) {
-      nearest_distance_m = distance_m;
-      nearest = i;
-    }
-    if (plan.expansions >= params.max_expansions) {
-      finish_within_tolerance(PlanStatus::kExpansionLimit);
-      return plan;
-    }
-
-    for (const Move& move : moves) {
-      const int cx = mx + move.dx;
-      const int cy = my + move.dy;
-      if (cx < 0 || cx >= nx || cy < 0 || cy >= ny) continue;
-      const int j = cy * nx + cx;
-      if (closed[j] == search || !traversable(j)) continue;
-      const double weight = 1.0 + params.cost_travel_multiplier *
-                                      (static_cast<double>(costs[j]) / kMaxNonInscribedCost);
-      const double g_new = g(i) + resolution_m * move.step * weight;
-      if (!(g_new < g(j))) continue;
-      g_cells[j] = g_new;
-      parent[j] = i;
-      reached[j] = search;
-      const double h = heuristic_m(cx, cy);
-      push({g_new + h, h, j});
-    }
-  }
-  finish_within_tolerance(PlanStatus::kNoPath);
+  AStarSearch search(params, costmap, *start_cell, *goal_cell, goal,
+                     {memory.g_.data(), memory.parent_.data(), memory.reached_.data(),
+                      memory.closed_.data(), memory.search_, &memory.open_});
+  search.Run(&plan);
   return plan;
 }
 

@@ -99,7 +99,8 @@ class PlannerScratch {
   std::vector<OpenEntry> open_;
 };
 
-// Plans from start to goal (both in the costmap's frame) on `costmap`. Validates params. A start
+// Plans from start to goal (both in the costmap's frame) on `costmap`, with params as their
+// Validate accepts them (the planner's node validates them once, when it is built). A start
 // and goal in the same cell give a one-point path. `scratch` (optional) is the search's memory.
 GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& costmap,
                           const world::Vec2& start, const world::Vec2& goal,

@@ -3,17 +3,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::stack {
 namespace {
 
 using Phase = IntersectionClientState::Phase;
-
-void RequirePositive(Duration d, const char* key) {
-  if (d <= Duration::zero()) {
-    throw std::invalid_argument(std::string(key) + " must be > 0 s, got " +
-                                std::to_string(ToSeconds(d)) + " s");
-  }
-}
 
 const world::IntersectionSpec* Find(const std::vector<world::IntersectionSpec>& intersections,
                                     int id) {
@@ -58,29 +53,136 @@ std::optional<int> StopZoneAt(const std::vector<world::IntersectionSpec>& inters
 }  // namespace
 
 void IntersectionClientParams::Validate() const {
-  RequirePositive(tick_period, "tick_period_s");
-  RequirePositive(retry_period, "retry_period_s");
-  RequirePositive(keepalive_period, "keepalive_period_s");
+  RequirePositive(ToSeconds(tick_period), "tick_period_s");
+  RequirePositive(ToSeconds(retry_period), "retry_period_s");
+  RequirePositive(ToSeconds(keepalive_period), "keepalive_period_s");
   for (const auto& [value, key] : {std::pair{release_margin_m, "release_margin_m"},
                                    std::pair{exit_margin_m, "exit_margin_m"}}) {
-    if (!(value >= 0.0 && value <= 2.0)) {
-      throw std::invalid_argument(std::string(key) + " must be in [0, 2] m, got " +
-                                  std::to_string(value));
-    }
+    Require(value >= 0.0 && value <= 2.0,
+            [&] { return std::string(key) + " must be in [0, 2] m, got " + Num(value); });
   }
 }
 
 void ValidateAgainstLease(const IntersectionClientParams& params, Duration server_lease) {
   auto require_shorter = [&](Duration d, const char* key) {
     if (d >= server_lease) {
-      throw std::invalid_argument(std::string(key) + " (" + std::to_string(ToSeconds(d)) +
+      throw std::invalid_argument(std::string(key) + " (" + Num(ToSeconds(d)) +
                                   " s) must be shorter than the server's lease_s (" +
-                                  std::to_string(ToSeconds(server_lease)) + " s)");
+                                  Num(ToSeconds(server_lease)) + " s)");
     }
   };
   require_shorter(params.retry_period, "retry_period_s");
   require_shorter(params.keepalive_period, "keepalive_period_s");
 }
+
+namespace {
+
+// One step of the client: what it sends, and its phase, as the input moves it.
+class ClientStep {
+ public:
+  ClientStep(const IntersectionClientParams& params, int car_id,
+             const std::vector<world::IntersectionSpec>& intersections,
+             const IntersectionClientInput& input, IntersectionClientState* state,
+             IntersectionClientOutput* out)
+      : params_(params),
+        car_id_(car_id),
+        intersections_(intersections),
+        input_(input),
+        s_(*state),
+        out_(*out) {}
+
+  // A failed navigation retires the client (true), freeing what it holds, unless the car stopped
+  // inside the area it holds: a car that died there blocks it, and keeps its grant alive rather
+  // than let the next car drive into it.
+  bool RetireOnFailure() {
+    if (!input_.navigation_failed || !params_.release_on_failure) return false;
+    const world::IntersectionSpec* held =
+        s_.phase == Phase::kIdle ? nullptr : Find(intersections_, s_.intersection);
+    if (held != nullptr && ContainsClosed(held->area, input_.p_map)) return false;
+    if (s_.phase != Phase::kIdle) SendFree();
+    GoIdle();
+    s_.retired = true;
+    return true;
+  }
+
+  // A response names no intersection, so it answers the pending one.
+  void ReadResponses() {
+    for (const world::Response& response : input_.responses) {
+      if (response.car != car_id_) continue;
+      if (response.granted) {
+        if (s_.phase == Phase::kWaiting) {
+          s_.phase = Phase::kHolding;
+          s_.held = false;
+        }
+        if (s_.phase == Phase::kIdle) SendFree();  // a grant we no longer want
+      } else if (s_.phase == Phase::kHolding) {
+        s_.phase = Phase::kWaiting;  // the server let our lease lapse and queued our keepalive
+      }
+    }
+  }
+
+  // Leave what we are no longer in (or ask again, to retry or keep the lease alive).
+  void LeaveOrRenew() {
+    if (s_.phase == Phase::kIdle) return;
+    const world::IntersectionSpec* spec = Find(intersections_, s_.intersection);
+    if (spec != nullptr && ContainsClosed(spec->area, input_.p_map)) s_.crossed = true;
+    // Until the car has been in the area, gaps between its boxes do not count as leaving; after,
+    // the estimate's noise on the area's edge does not either.
+    const double margin = s_.crossed ? params_.exit_margin_m : params_.release_margin_m;
+    const bool inside = spec != nullptr && (InStopZoneClosed(*spec, input_.p_map, margin) ||
+                                            ContainsClosed(spec->area, input_.p_map, margin));
+    if (!inside) {
+      SendFree();
+      GoIdle();
+    } else {
+      const Duration period =
+          s_.phase == Phase::kHolding ? params_.keepalive_period : params_.retry_period;
+      if (params_.re_request && input_.now - s_.last_request_sent >= period) SendRequest();
+    }
+  }
+
+  void EnterStopZone() {
+    if (s_.phase != Phase::kIdle) return;
+    if (std::optional<int> id = StopZoneAt(intersections_, input_.p_map)) {
+      s_.phase = Phase::kWaiting;
+      s_.intersection = *id;
+      SendRequest();
+    }
+  }
+
+  void SetWaitOutputs() {
+    if (s_.phase != Phase::kWaiting) return;
+    out_.waiting_for = s_.intersection;
+    const world::IntersectionSpec* spec = Find(intersections_, s_.intersection);
+    const bool in_zone = spec != nullptr && InStopZoneClosed(*spec, input_.p_map);
+    if (params_.latch_wait && in_zone) s_.held = true;
+    out_.may_proceed = !(in_zone || s_.held);
+  }
+
+ private:
+  void SendFree() {
+    if (out_.frees.empty()) out_.frees.push_back(world::Free{car_id_});
+  }
+  void SendRequest() {
+    out_.requests.push_back(world::Request{car_id_, s_.intersection});
+    s_.last_request_sent = input_.now;
+  }
+  void GoIdle() {
+    s_.phase = Phase::kIdle;
+    s_.intersection = -1;
+    s_.crossed = false;
+    s_.held = false;
+  }
+
+  const IntersectionClientParams& params_;
+  int car_id_;
+  const std::vector<world::IntersectionSpec>& intersections_;
+  const IntersectionClientInput& input_;
+  IntersectionClientState& s_;
+  IntersectionClientOutput& out_;
+};
+
+}  // namespace
 
 IntersectionClientOutput StepIntersectionClient(
     const IntersectionClientParams& params, int car_id,
@@ -90,84 +192,15 @@ IntersectionClientOutput StepIntersectionClient(
     throw std::invalid_argument("car_id must be a single digit 0..9, got " +
                                 std::to_string(car_id));
   }
-  IntersectionClientState& s = *state;
   IntersectionClientOutput out;
-  auto send_free = [&] {
-    if (out.frees.empty()) out.frees.push_back(world::Free{car_id});
-  };
-  auto send_request = [&] {
-    out.requests.push_back(world::Request{car_id, s.intersection});
-    s.last_request_sent = input.now;
-  };
-  auto go_idle = [&] {
-    s.phase = Phase::kIdle;
-    s.intersection = -1;
-    s.crossed = false;
-    s.held = false;
-  };
-
-  if (s.retired) return out;
-  if (input.navigation_failed && params.release_on_failure) {
-    // A car that died inside an intersection's area blocks it: it keeps its grant alive rather
-    // than let the next car drive into it.
-    const world::IntersectionSpec* held =
-        s.phase == Phase::kIdle ? nullptr : Find(intersections, s.intersection);
-    if (held == nullptr || !ContainsClosed(held->area, input.p_map)) {
-      if (s.phase != Phase::kIdle) send_free();
-      go_idle();
-      s.retired = true;
-      return out;
-    }
-  }
-
-  // responses: a response names no intersection, so it answers the pending one
-  for (const world::Response& response : input.responses) {
-    if (response.car != car_id) continue;
-    if (response.granted) {
-      if (s.phase == Phase::kWaiting) {
-        s.phase = Phase::kHolding;
-        s.held = false;
-      }
-      if (s.phase == Phase::kIdle) send_free();  // a grant we no longer want
-    } else if (s.phase == Phase::kHolding) {
-      s.phase = Phase::kWaiting;  // the server let our lease lapse and queued our keepalive
-    }
-  }
-
+  if (state->retired) return out;
+  ClientStep step(params, car_id, intersections, input, state, &out);
+  if (step.RetireOnFailure()) return out;
+  step.ReadResponses();
   // position: leave what we are no longer in, then enter a stop zone
-  if (s.phase != Phase::kIdle) {
-    const world::IntersectionSpec* spec = Find(intersections, s.intersection);
-    if (spec != nullptr && ContainsClosed(spec->area, input.p_map)) s.crossed = true;
-    // Until the car has been in the area, gaps between its boxes do not count as leaving; after,
-    // the estimate's noise on the area's edge does not either.
-    const double margin = s.crossed ? params.exit_margin_m : params.release_margin_m;
-    const bool inside = spec != nullptr && (InStopZoneClosed(*spec, input.p_map, margin) ||
-                                            ContainsClosed(spec->area, input.p_map, margin));
-    if (!inside) {
-      send_free();
-      go_idle();
-    } else {
-      const Duration period =
-          s.phase == Phase::kHolding ? params.keepalive_period : params.retry_period;
-      if (params.re_request && input.now - s.last_request_sent >= period) send_request();
-    }
-  }
-  if (s.phase == Phase::kIdle) {
-    if (std::optional<int> id = StopZoneAt(intersections, input.p_map)) {
-      s.phase = Phase::kWaiting;
-      s.intersection = *id;
-      send_request();
-    }
-  }
-
-  // outputs
-  if (s.phase == Phase::kWaiting) {
-    out.waiting_for = s.intersection;
-    const world::IntersectionSpec* spec = Find(intersections, s.intersection);
-    const bool in_zone = spec != nullptr && InStopZoneClosed(*spec, input.p_map);
-    if (params.latch_wait && in_zone) s.held = true;
-    out.may_proceed = !(in_zone || s.held);
-  }
+  step.LeaveOrRenew();
+  step.EnterStopZone();
+  step.SetWaitOutputs();
   return out;
 }
 

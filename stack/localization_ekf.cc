@@ -13,10 +13,6 @@ namespace {
 // Below this |h| the series of sin(h)/h is used (its error there is < 1e-17).
 constexpr double kSmallHalfAngle_rad = 1e-4;
 
-void RequirePositive(double x, const std::string& key) {
-  Require(std::isfinite(x) && x > 0.0, [&] { return key + " must be > 0, got " + Num(x); });
-}
-
 std::string Seconds(Time t) { return Num(ToSeconds(t)) + " s"; }
 
 void RequireFinite(double x, const std::string& what) {
@@ -166,10 +162,12 @@ LocalizationEkfState InitialLocalizationEkfState(const LocalizationEkfParams& pa
   return state;
 }
 
-LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
-                                          const LocalizationEkfInput& input,
-                                          LocalizationEkfState* state) {
-  LocalizationEkfState& s = *state;
+namespace {
+
+// The input's own checks: finite readings, stamps in order and not after now, the filter's time
+// not ahead of now.
+void CheckInput(const LocalizationEkfParams& params, const LocalizationEkfInput& input,
+                const LocalizationEkfState& s) {
   Require(input.now >= s.time, [&] {
     return "localization: now (" + Seconds(input.now) + ") is before the filter's time (" +
            Seconds(s.time) + ")";
@@ -194,8 +192,9 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
   CheckStamps(input.imu, s.last_imu, input.now, "IMU");
   CheckStamps(input.wheel_speed, s.last_wheel_speed, input.now, "wheel speed");
   CheckStamps(input.pose_fixes, s.last_pose_fix, input.now, "pose fix");
+}
 
-  // measurements in stamp order
+std::vector<Pending> MeasurementsInStampOrder(const LocalizationEkfInput& input) {
   std::vector<Pending> pending;
   for (std::size_t i = 0; i < input.imu.size(); ++i) pending.push_back({input.imu[i].stamp, 0, i});
   for (std::size_t i = 0; i < input.wheel_speed.size(); ++i) {
@@ -207,9 +206,59 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
   std::stable_sort(pending.begin(), pending.end(), [](const Pending& a, const Pending& b) {
     return a.stamp != b.stamp ? a.stamp < b.stamp : a.kind < b.kind;
   });
+  return pending;
+}
+
+void FuseImu(const LocalizationEkfParams& params, const ImuMeasurement& m,
+             LocalizationEkfState* state) {
+  LocalizationEkfState& s = *state;
+  if (params.imu_yaw_relative && !s.imu_yaw_origin_rad) s.imu_yaw_origin_rad = m.yaw_rad;
+  const double yaw_odom = params.imu_yaw_relative ? m.yaw_rad - *s.imu_yaw_origin_rad : m.yaw_rad;
+  if (params.fuse_imu_yaw) {
+    CorrectScalar(kEkfYaw, world::WrapAngle(yaw_odom - s.mean(kEkfYaw)),
+                  params.imu_yaw_variance_rad2, &s);
+  }
+  CorrectScalar(kEkfYawRate, m.yaw_rate_rad_per_s - s.mean(kEkfYawRate),
+                params.imu_yaw_rate_variance_rad2_per_s2, &s);
+  s.last_imu = m.stamp;
+}
+
+void FuseWheelSpeed(const LocalizationEkfParams& params, const WheelSpeedMeasurement& m,
+                    LocalizationEkfState* s) {
+  CorrectScalar(kEkfSpeed, m.speed_mps - s->mean(kEkfSpeed), params.wheel_speed_variance_m2_per_s2,
+                s);
+  s->last_wheel_speed = m.stamp;
+}
+
+void FusePoseFix(const PoseFix& f, LocalizationEkfState* state) {
+  LocalizationEkfState& s = *state;
+  // Into the odom frame: rotate the position block of the covariance by map→odom's yaw.
+  const world::Pose2 X_odom_fix = OdomFromMap(s.X_map_odom, f.X_map_base);
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  const double c = std::cos(s.X_map_odom.yaw_rad);
+  const double sn = std::sin(s.X_map_odom.yaw_rad);
+  rotation.topLeftCorner<2, 2>() << c, sn, -sn, c;
+  const Eigen::Matrix3d R = rotation * f.covariance * rotation.transpose();
+  Eigen::Matrix<double, 3, kEkfSize> H = Eigen::Matrix<double, 3, kEkfSize>::Zero();
+  H(0, kEkfX) = 1.0;
+  H(1, kEkfY) = 1.0;
+  H(2, kEkfYaw) = 1.0;
+  const Eigen::Vector3d r{X_odom_fix.x_m - s.mean(kEkfX), X_odom_fix.y_m - s.mean(kEkfY),
+                          world::WrapAngle(X_odom_fix.yaw_rad - s.mean(kEkfYaw))};
+  Correct<3>(H, r, R, &s);
+  s.last_pose_fix = f.stamp;
+}
+
+}  // namespace
+
+LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
+                                          const LocalizationEkfInput& input,
+                                          LocalizationEkfState* state) {
+  LocalizationEkfState& s = *state;
+  CheckInput(params, input, s);
 
   LocalizationEkfOutput out;
-  for (const Pending& p : pending) {
+  for (const Pending& p : MeasurementsInStampOrder(input)) {
     if (p.stamp > s.time) {
       Predict(params, ToSeconds(p.stamp - s.time), &s);
       s.time = p.stamp;
@@ -217,39 +266,11 @@ LocalizationEkfOutput StepLocalizationEkf(const LocalizationEkfParams& params,
       ++out.late;
     }
     if (p.kind == 0) {
-      const ImuMeasurement& m = input.imu[p.index];
-      if (params.imu_yaw_relative && !s.imu_yaw_origin_rad) s.imu_yaw_origin_rad = m.yaw_rad;
-      const double yaw_odom =
-          params.imu_yaw_relative ? m.yaw_rad - *s.imu_yaw_origin_rad : m.yaw_rad;
-      if (params.fuse_imu_yaw) {
-        CorrectScalar(kEkfYaw, world::WrapAngle(yaw_odom - s.mean(kEkfYaw)),
-                      params.imu_yaw_variance_rad2, &s);
-      }
-      CorrectScalar(kEkfYawRate, m.yaw_rate_rad_per_s - s.mean(kEkfYawRate),
-                    params.imu_yaw_rate_variance_rad2_per_s2, &s);
-      s.last_imu = m.stamp;
+      FuseImu(params, input.imu[p.index], &s);
     } else if (p.kind == 1) {
-      const WheelSpeedMeasurement& m = input.wheel_speed[p.index];
-      CorrectScalar(kEkfSpeed, m.speed_mps - s.mean(kEkfSpeed),
-                    params.wheel_speed_variance_m2_per_s2, &s);
-      s.last_wheel_speed = m.stamp;
+      FuseWheelSpeed(params, input.wheel_speed[p.index], &s);
     } else {
-      const PoseFix& f = input.pose_fixes[p.index];
-      // Into the odom frame: rotate the position block of the covariance by map→odom's yaw.
-      const world::Pose2 X_odom_fix = OdomFromMap(s.X_map_odom, f.X_map_base);
-      Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-      const double c = std::cos(s.X_map_odom.yaw_rad);
-      const double sn = std::sin(s.X_map_odom.yaw_rad);
-      rotation.topLeftCorner<2, 2>() << c, sn, -sn, c;
-      const Eigen::Matrix3d R = rotation * f.covariance * rotation.transpose();
-      Eigen::Matrix<double, 3, kEkfSize> H = Eigen::Matrix<double, 3, kEkfSize>::Zero();
-      H(0, kEkfX) = 1.0;
-      H(1, kEkfY) = 1.0;
-      H(2, kEkfYaw) = 1.0;
-      const Eigen::Vector3d r{X_odom_fix.x_m - s.mean(kEkfX), X_odom_fix.y_m - s.mean(kEkfY),
-                              world::WrapAngle(X_odom_fix.yaw_rad - s.mean(kEkfYaw))};
-      Correct<3>(H, r, R, &s);
-      s.last_pose_fix = f.stamp;
+      FusePoseFix(input.pose_fixes[p.index], &s);
     }
     s.last_measurement = std::max(s.last_measurement, p.stamp);
     ++out.fused;

@@ -247,8 +247,6 @@ void ObstacleLayerParams::Validate() const {
 std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
                                            const ObstacleGridParams& grid_params,
                                            const Grid234& grid, const world::Pose2& X_odom_base) {
-  layer.Validate();
-  grid_params.Validate();
   const double offset_m = layer.mark_at_cell_centre ? 0.5 * grid_params.cell_size_m : 0.0;
   const double c = std::cos(X_odom_base.yaw_rad);
   const double s = std::sin(X_odom_base.yaw_rad);

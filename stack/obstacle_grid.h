@@ -141,7 +141,8 @@ struct ObstacleLayerParams {
 
 // The costmap layer's step (reference §4): all 234 cells as costmap marks (stack/costmap.h), in
 // Index order, each LETHAL or FREE at its point in base_link moved into odom by X_odom_base (the
-// odom→base_link transform when the grid arrived); `p` of a mark is in the odom frame.
+// odom→base_link transform when the grid arrived); `p` of a mark is in the odom frame. The params
+// as their Validate accepts them: the layer's node validates them once, when it is built.
 std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,
                                            const ObstacleGridParams& grid_params,
                                            const Grid234& grid, const world::Pose2& X_odom_base);

@@ -14,10 +14,6 @@ constexpr double kMinCarrotDist2_m2 = 0.001;
 // Tolerance on "elapsed time <= horizon" so that 5 steps of 0.2 s reach exactly 1.0 s.
 constexpr double kHorizonEpsilon_s = 1e-9;
 
-void RequirePositive(double x, const std::string& key) {
-  Require(std::isfinite(x) && x > 0.0, [&] { return key + " must be > 0, got " + Num(x); });
-}
-
 void RequireNonNegative(double x, const std::string& key) {
   Require(std::isfinite(x) && x >= 0.0, [&] { return key + " must be >= 0, got " + Num(x); });
 }

@@ -57,29 +57,113 @@ std::string ReadPassword(const std::string& file) {
   return line;
 }
 
+// std::invalid_argument for an unreadable password file.
+sim::MqttOptions ToMqttOptions(const Options& o) {
+  sim::MqttOptions mqtt;
+  mqtt.host = o.host;
+  mqtt.port = o.port;
+  mqtt.client_id = o.client_id;
+  mqtt.username = o.username;
+  mqtt.password = o.password_file.empty() ? o.password : ReadPassword(o.password_file);
+  mqtt.cafile = o.cafile;
+  mqtt.certfile = o.certfile;
+  mqtt.keyfile = o.keyfile;
+  return mqtt;
+}
+
+ServiceOptions ToServiceOptions(const Options& o) {
+  ServiceOptions service_options;
+  service_options.params.policy = o.policy;
+  service_options.params.lease = FromSeconds(o.lease_s);
+  service_options.intersections = o.intersections;
+  service_options.sim_clock = o.sim_clock;
+  return service_options;
+}
+
+// SIGINT and SIGTERM are taken by a thread of our own (sigwait), never by a handler: the mask is
+// set before any thread starts, so every thread inherits it.
+sigset_t BlockStopSignals() {
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  return stop_signals;
+}
+
+// The thread that waits for a stop signal, then says so and interrupts the client's wait; ended
+// however Serve is left.
+class StopSignalThread {
+ public:
+  StopSignalThread(sigset_t stop_signals, sim::MqttClient* client)
+      : thread_([this, stop_signals, client] {
+          int signal_number = 0;
+          sigwait(&stop_signals, &signal_number);
+          spdlog::info("{} received, shutting down", strsignal(signal_number));
+          stop_ = true;
+          client->Interrupt();
+        }) {}
+  StopSignalThread(const StopSignalThread&) = delete;
+  StopSignalThread& operator=(const StopSignalThread&) = delete;
+  ~StopSignalThread() {
+    if (!stop_) kill(getpid(), SIGTERM);
+    thread_.join();
+  }
+  bool stopped() const { return stop_; }
+
+ private:
+  std::atomic<bool> stop_{false};  // before thread_: set up before the thread starts
+  std::thread thread_;
+};
+
+void LogStart(const Options& o) {
+  std::string ids;
+  for (int id : o.intersections) ids += (ids.empty() ? "" : ",") + std::to_string(id);
+  spdlog::info(
+      "tlserver: broker {}:{} as '{}'{}, policy {}, lease {} s, intersections {}, {} clock", o.host,
+      o.port, o.client_id, o.username.empty() ? "" : " (user " + o.username + ")", o.policy,
+      o.lease_s, ids, o.sim_clock ? "simulation" : "wall");
+}
+
+// Messages and lease timers until a stop signal; the service's time is the wall time since start.
+void ServeUntilStopped(Service& service, sim::MqttClient& client, const StopSignalThread& signals,
+                       Clock::time_point start) {
+  auto wall_now = [&] { return std::chrono::duration_cast<Duration>(Clock::now() - start); };
+  while (!signals.stopped()) {
+    const std::optional<Time> next = service.NextTimer();
+    const Clock::time_point wake = next ? start + *next : Clock::now() + kIdleWake;
+    std::vector<sim::MqttMessage> out;
+    if (std::optional<sim::MqttMessage> in = client.Receive(wake)) {
+      out = service.OnMessage(*in, wall_now());
+    } else if (next && Clock::now() >= wake) {
+      out = service.OnTimer(wall_now());
+    }
+    for (const sim::MqttMessage& m : out) client.Publish(m);
+  }
+}
+
+// The final status (the broker's confirmation awaited a while), then the counters in the log.
+void SignOff(const Service& service, sim::MqttClient& client) {
+  client.Publish(service.Status(false));
+  if (!client.Flush(Clock::now() + kFlushTimeout)) {
+    spdlog::warn("the broker did not confirm the final status within {} s", kFlushTimeout.count());
+  }
+  const ServiceCounters& c = service.counters();
+  const world::TrafficLightServer::Counters s = service.server().counters();
+  spdlog::info(
+      "tlserver stopped: {} requests, {} grants, {} denials, {} frees, {} lease expiries, {} "
+      "malformed, {} refused, {} duplicates",
+      s.requests, s.grants, s.denials, s.frees, s.lease_expiries, c.malformed, c.refused,
+      c.duplicates);
+}
+
 int Serve(const Options& o) {
   // options → service and client; mistakes here are unusable input
-  ServiceOptions service_options;
   sim::MqttOptions mqtt;
-  try {
-    service_options.params.policy = o.policy;
-    service_options.params.lease = FromSeconds(o.lease_s);
-    service_options.intersections = o.intersections;
-    service_options.sim_clock = o.sim_clock;
-    mqtt.host = o.host;
-    mqtt.port = o.port;
-    mqtt.client_id = o.client_id;
-    mqtt.username = o.username;
-    mqtt.password = o.password_file.empty() ? o.password : ReadPassword(o.password_file);
-    mqtt.cafile = o.cafile;
-    mqtt.certfile = o.certfile;
-    mqtt.keyfile = o.keyfile;
-  } catch (const std::invalid_argument& e) {
-    spdlog::critical("{}", e.what());
-    return kExitUnusable;
-  }
   std::optional<Service> service;
   try {
+    const ServiceOptions service_options = ToServiceOptions(o);
+    mqtt = ToMqttOptions(o);
     service.emplace(service_options);
   } catch (const std::invalid_argument& e) {
     spdlog::critical("{}", e.what());
@@ -88,14 +172,7 @@ int Serve(const Options& o) {
   mqtt.will = service->Status(false);
   mqtt.on_log = [](const std::string& line) { spdlog::info("mqtt: {}", line); };
 
-  // SIGINT and SIGTERM are taken by a thread of our own (sigwait), never by a handler: the
-  // mask is set before any thread starts, so every thread inherits it.
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
-
+  const sigset_t stop_signals = BlockStopSignals();
   std::unique_ptr<sim::MqttClient> client;
   try {
     client = sim::MakeMosquittoClient(mqtt);
@@ -103,33 +180,12 @@ int Serve(const Options& o) {
     spdlog::critical("{}", e.what());
     return kExitUnusable;
   }
-  std::atomic<bool> stop{false};
-  std::thread signals([&] {
-    int signal_number = 0;
-    sigwait(&stop_signals, &signal_number);
-    spdlog::info("{} received, shutting down", strsignal(signal_number));
-    stop = true;
-    client->Interrupt();
-  });
-  // Ends the signal thread however we leave.
-  struct JoinSignals {
-    std::thread& thread;
-    std::atomic<bool>& stop;
-    ~JoinSignals() {
-      if (!stop) kill(getpid(), SIGTERM);
-      thread.join();
-    }
-  } join_signals{signals, stop};
+  const StopSignalThread signals(stop_signals, client.get());
 
-  std::string ids;
-  for (int id : o.intersections) ids += (ids.empty() ? "" : ",") + std::to_string(id);
-  spdlog::info(
-      "tlserver: broker {}:{} as '{}'{}, policy {}, lease {} s, intersections {}, {} clock", o.host,
-      o.port, o.client_id, o.username.empty() ? "" : " (user " + o.username + ")", o.policy,
-      o.lease_s, ids, o.sim_clock ? "simulation" : "wall");
+  LogStart(o);
   for (const std::string& filter : Service::Subscriptions()) client->Subscribe(filter, 1);
   try {
-    while (!stop && !client->WaitReady(Clock::now() + std::chrono::seconds(5))) {
+    while (!signals.stopped() && !client->WaitReady(Clock::now() + std::chrono::seconds(5))) {
       spdlog::warn("waiting for the broker at {}:{}", o.host, o.port);
     }
   } catch (const sim::MqttError& e) {
@@ -138,35 +194,14 @@ int Serve(const Options& o) {
   }
 
   const Clock::time_point start = Clock::now();
-  auto wall_now = [&] { return std::chrono::duration_cast<Duration>(Clock::now() - start); };
   client->Publish(service->Status(true));
   try {
-    while (!stop) {
-      const std::optional<Time> next = service->NextTimer();
-      const Clock::time_point wake = next ? start + *next : Clock::now() + kIdleWake;
-      std::vector<sim::MqttMessage> out;
-      if (std::optional<sim::MqttMessage> in = client->Receive(wake)) {
-        out = service->OnMessage(*in, wall_now());
-      } else if (next && Clock::now() >= wake) {
-        out = service->OnTimer(wall_now());
-      }
-      for (const sim::MqttMessage& m : out) client->Publish(m);
-    }
+    ServeUntilStopped(*service, *client, signals, start);
   } catch (const std::exception& e) {
     spdlog::critical("stopping: {}", e.what());
     return kExitFailure;
   }
-  client->Publish(service->Status(false));
-  if (!client->Flush(Clock::now() + kFlushTimeout)) {
-    spdlog::warn("the broker did not confirm the final status within {} s", kFlushTimeout.count());
-  }
-  const ServiceCounters& c = service->counters();
-  const world::TrafficLightServer::Counters s = service->server().counters();
-  spdlog::info(
-      "tlserver stopped: {} requests, {} grants, {} denials, {} frees, {} lease expiries, {} "
-      "malformed, {} refused, {} duplicates",
-      s.requests, s.grants, s.denials, s.frees, s.lease_expiries, c.malformed, c.refused,
-      c.duplicates);
+  SignOff(*service, *client);
   return kExitOk;
 }
 

@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "world/validation.h"
+
 namespace autonomsim::tlserver {
 namespace {
 
@@ -44,6 +46,50 @@ std::string Describe(const world::Response& r) {
   return "car " + std::to_string(r.car) + (r.granted ? " granted" : " told occupied");
 }
 
+// A request or free from a car: decoded, and checked against the user that sent it (a topic
+// "<base>/car<d>" speaks for car d only); `problem` says why it is not served.
+struct CarMessage {
+  std::optional<world::Request> request;
+  std::optional<world::Free> free;
+  int car{-1};
+  std::string problem;
+  bool refused{false};  // decoded, but the user may not send it
+};
+
+CarMessage DecodeCarMessage(const MqttMessage& message, bool request, const std::string& user,
+                            std::string_view base) {
+  CarMessage out;
+  if (request) {
+    const world::Decoded<world::Request> d = world::DecodeRequest(message.payload);
+    if (d) {
+      out.request = d.value();
+      out.car = out.request->car;
+    } else {
+      out.problem = d.error();
+    }
+  } else {
+    const world::Decoded<world::Free> d = world::DecodeFree(message.payload);
+    if (d) {
+      out.free = d.value();
+      out.car = out.free->car;
+    } else {
+      out.problem = d.error();
+    }
+  }
+  if (out.problem.empty() && !user.empty()) {
+    const std::optional<int> owner = CarOfUser(user);
+    if (!owner) {
+      out.refused = true;
+      out.problem = message.topic + " names no car (expected " + std::string(base) + "/car<0-9>)";
+    } else if (*owner != out.car) {
+      out.refused = true;
+      out.problem = "car " + std::to_string(*owner) + " sent " + Printable(message.payload) +
+                    ", which speaks for car " + std::to_string(out.car);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Service::Service(ServiceOptions options)
@@ -74,6 +120,44 @@ std::vector<MqttMessage> Service::OnMessage(const MqttMessage& message, Time wal
   return out;
 }
 
+bool Service::ReadStep(const MqttMessage& message, std::optional<sim::StepTag>* tag,
+                       std::vector<MqttMessage>* answer) {
+  if (const std::optional<std::string> text = message.Property(std::string(sim::kStepProperty))) {
+    const world::Decoded<sim::StepTag> decoded = sim::DecodeStepTag(*text);
+    if (!decoded) {
+      ++counters_.malformed;
+      spdlog::warn("rejected {} {}: {}", message.topic, Printable(message.payload),
+                   decoded.error());
+      return false;
+    }
+    if (options_.sim_clock) *tag = decoded.value();
+  }
+  if (!*tag) return true;
+  std::string error;
+  switch (Check(**tag, &error)) {
+    case StepCheck::kRepeat:
+      *answer = last_step_outputs_;
+      return false;
+    case StepCheck::kStale:
+      return false;
+    case StepCheck::kError:
+      *answer = ErrorAck((*tag)->epoch, (*tag)->seq, error);
+      return false;
+    case StepCheck::kNew:
+      break;
+  }
+  return true;
+}
+
+Time Service::ServiceTime(const MqttMessage& message, const sim::StepTag* tag, Time wall_now) {
+  if (!options_.sim_clock) return wall_now;
+  if (tag) return tag->now;
+  ++counters_.unclocked;
+  spdlog::warn("{} {} carries no simulation step; served at the last simulated time {} s",
+               message.topic, Printable(message.payload), ToSeconds(last_now_));
+  return last_now_;
+}
+
 std::vector<MqttMessage> Service::OnCarMessage(const MqttMessage& message, bool request,
                                                Time wall_now) {
   const std::string_view base = request ? world::kVtlRequestTopic : world::kVtlFreeTopic;
@@ -81,89 +165,27 @@ std::vector<MqttMessage> Service::OnCarMessage(const MqttMessage& message, bool 
 
   // a simulation's step: its tag says when, and a repeat is answered from the cache
   std::optional<sim::StepTag> tag;
-  if (const std::optional<std::string> text = message.Property(std::string(sim::kStepProperty))) {
-    const world::Decoded<sim::StepTag> decoded = sim::DecodeStepTag(*text);
-    if (!decoded) {
-      ++counters_.malformed;
-      spdlog::warn("rejected {} {}: {}", message.topic, Printable(message.payload),
-                   decoded.error());
-      return {};
-    }
-    if (options_.sim_clock) tag = decoded.value();
-  }
-  if (tag) {
-    std::string error;
-    switch (Check(*tag, &error)) {
-      case StepCheck::kRepeat:
-        return last_step_outputs_;
-      case StepCheck::kStale:
-        return {};
-      case StepCheck::kError:
-        return ErrorAck(tag->epoch, tag->seq, error);
-      case StepCheck::kNew:
-        break;
-    }
-  }
+  std::vector<MqttMessage> answer;
+  if (!ReadStep(message, &tag, &answer)) return answer;
 
   // the payload, and whether this user may send it
-  std::string problem;
-  bool refused = false;
-  std::optional<world::Request> req;
-  std::optional<world::Free> free;
-  int car = -1;
-  if (request) {
-    const world::Decoded<world::Request> d = world::DecodeRequest(message.payload);
-    if (d) {
-      req = d.value();
-      car = req->car;
-    } else {
-      problem = d.error();
-    }
-  } else {
-    const world::Decoded<world::Free> d = world::DecodeFree(message.payload);
-    if (d) {
-      free = d.value();
-      car = free->car;
-    } else {
-      problem = d.error();
-    }
-  }
-  if (problem.empty() && !user.empty()) {
-    const std::optional<int> owner = CarOfUser(user);
-    if (!owner) {
-      refused = true;
-      problem = message.topic + " names no car (expected " + std::string(base) + "/car<0-9>)";
-    } else if (*owner != car) {
-      refused = true;
-      problem = "car " + std::to_string(*owner) + " sent " + Printable(message.payload) +
-                ", which speaks for car " + std::to_string(car);
-    }
-  }
-  if (!problem.empty()) {
-    ++(refused ? counters_.refused : counters_.malformed);
-    spdlog::warn("{} {} {}: {}", refused ? "refused" : "rejected", message.topic,
-                 Printable(message.payload), problem);
-    return tag ? ErrorAck(tag->epoch, tag->seq, problem) : std::vector<MqttMessage>{};
+  const CarMessage car = DecodeCarMessage(message, request, user, base);
+  if (!car.problem.empty()) {
+    ++(car.refused ? counters_.refused : counters_.malformed);
+    spdlog::warn("{} {} {}: {}", car.refused ? "refused" : "rejected", message.topic,
+                 Printable(message.payload), car.problem);
+    return tag ? ErrorAck(tag->epoch, tag->seq, car.problem) : std::vector<MqttMessage>{};
   }
 
-  Time now = wall_now;
-  if (options_.sim_clock) {
-    if (tag) {
-      now = tag->now;
-    } else {
-      ++counters_.unclocked;
-      now = last_now_;
-      spdlog::warn("{} {} carries no simulation step; served at the last simulated time {} s",
-                   message.topic, Printable(message.payload), ToSeconds(now));
-    }
-  }
+  const Time now = ServiceTime(message, tag ? &*tag : nullptr, wall_now);
   const std::vector<world::Response> responses =
-      req ? server_.OnRequest(now, *req) : server_.OnFree(now, *free);
+      car.request ? server_.OnRequest(now, *car.request) : server_.OnFree(now, *car.free);
   const auto log_level = tag ? spdlog::level::debug : spdlog::level::info;
-  if (req) {
-    spdlog::log(log_level, "car {} requests intersection {}", req->car, req->intersection);
+  if (car.request) {
+    spdlog::log(log_level, "car {} requests intersection {}", car.request->car,
+                car.request->intersection);
   } else {
-    spdlog::log(log_level, "car {} frees", free->car);
+    spdlog::log(log_level, "car {} frees", car.free->car);
   }
   for (const world::Response& r : responses) spdlog::log(log_level, "  -> {}", Describe(r));
   return Outputs(responses, tag ? &*tag : nullptr);
@@ -255,8 +277,8 @@ Service::StepCheck Service::Check(const sim::StepTag& tag, std::string* error) {
     return StepCheck::kError;
   }
   if (tag.now < last_now_) {
-    *error = "step " + std::to_string(tag.seq) + " at " + std::to_string(ToSeconds(tag.now)) +
-             " s goes back in time from " + std::to_string(ToSeconds(last_now_)) + " s";
+    *error = "step " + Num(tag.seq) + " at " + Num(ToSeconds(tag.now)) +
+             " s goes back in time from " + Num(ToSeconds(last_now_)) + " s";
     return StepCheck::kError;
   }
   return StepCheck::kNew;

@@ -73,6 +73,14 @@ class Service {
 
   std::vector<sim::MqttMessage> OnCarMessage(const sim::MqttMessage& message, bool request,
                                              Time wall_now);
+  // The message's simulation step, kept in *tag with sim_clock. False when the message is answered
+  // already: a malformed tag or a stale step (no answer), a repeated step (the cached answer), a
+  // step out of order (an error ack), in *answer.
+  bool ReadStep(const sim::MqttMessage& message, std::optional<sim::StepTag>* tag,
+                std::vector<sim::MqttMessage>* answer);
+  // When a car's message is served: the wall time, or with sim_clock its step's time (the last
+  // simulated time for a message without a step, counted as unclocked).
+  Time ServiceTime(const sim::MqttMessage& message, const sim::StepTag* tag, Time wall_now);
   std::vector<sim::MqttMessage> OnReset(const sim::MqttMessage& message);
   std::vector<sim::MqttMessage> OnClock(const sim::MqttMessage& message);
   StepCheck Check(const sim::StepTag& tag, std::string* error);

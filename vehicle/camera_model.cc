@@ -20,8 +20,6 @@ constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kMaxSearchRadius = 10.0;
 constexpr int kRadiusSearchSteps = 10000;
 
-std::string Num(double v) { return std::to_string(v); }
-
 void RequireFinite(double value, const std::string& key) {
   Require(std::isfinite(value), [&] { return key + " must be finite, got " + Num(value); });
 }

@@ -19,12 +19,6 @@ constexpr double kGravity_mps2 = 9.81;
 // them to rounding; more are cheap.
 constexpr int kTireIterations = 8;
 
-void RequirePositive(double value, const char* key) {
-  Require(std::isfinite(value) && value > 0.0, [&] {
-    return std::string(key) + " must be finite and > 0, got " + std::to_string(value);
-  });
-}
-
 double Cross(const world::Vec2& a, const world::Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // ω × r for a scalar ω about z.
@@ -57,23 +51,18 @@ void CarParams::Validate() const {
   RequirePositive(motor_time_constant_s, "motor_time_constant_s");
   RequirePositive(tire_friction_coefficient, "tire_friction_coefficient");
   Require(wheelbase_m < length_m, [&] {
-    return "wheelbase_m must be < length_m (" + std::to_string(length_m) + "), got " +
-           std::to_string(wheelbase_m);
+    return "wheelbase_m must be < length_m (" + Num(length_m) + "), got " + Num(wheelbase_m);
   });
-  Require(track_m <= width_m, [&] {
-    return "track_m must be <= width_m (" + std::to_string(width_m) + "), got " +
-           std::to_string(track_m);
-  });
+  Require(track_m <= width_m,
+          [&] { return "track_m must be <= width_m (" + Num(width_m) + "), got " + Num(track_m); });
   Require(std::isfinite(body_friction_coefficient) && body_friction_coefficient >= 0.0, [&] {
     return "body_friction_coefficient must be finite and >= 0, got " +
-           std::to_string(body_friction_coefficient);
+           Num(body_friction_coefficient);
   });
-  Require(esc_neutral_band >= 0.0 && esc_neutral_band < 1.0, [&] {
-    return "esc_neutral_band must be in [0, 1), got " + std::to_string(esc_neutral_band);
-  });
-  Require(body_restitution >= 0.0 && body_restitution <= 1.0, [&] {
-    return "body_restitution must be in [0, 1], got " + std::to_string(body_restitution);
-  });
+  Require(esc_neutral_band >= 0.0 && esc_neutral_band < 1.0,
+          [&] { return "esc_neutral_band must be in [0, 1), got " + Num(esc_neutral_band); });
+  Require(body_restitution >= 0.0 && body_restitution <= 1.0,
+          [&] { return "body_restitution must be in [0, 1], got " + Num(body_restitution); });
 }
 
 Car::Car(b2World* world, const CarParams& params, int id, const world::Pose2& start)
@@ -127,7 +116,7 @@ void Car::SetCommand(const ActuatorCommand& command) {
 
 void Car::ApplyForces(double dt_s) {
   Require(std::isfinite(dt_s) && dt_s > 0.0,
-          [&] { return "ApplyForces: dt_s must be finite and > 0, got " + std::to_string(dt_s); });
+          [&] { return "ApplyForces: dt_s must be finite and > 0, got " + Num(dt_s); });
 
   // keep Box2D's (float) angle small so its resolution does not decay over many turns
   const float angle = body_->GetAngle();
@@ -229,7 +218,7 @@ void PwmParams::Validate() const {
   });
   Require(std::isfinite(steering_full_curvature_per_m) && steering_full_curvature_per_m > 0.0, [&] {
     return "steering_full_curvature_per_m must be finite and > 0, got " +
-           std::to_string(steering_full_curvature_per_m);
+           Num(steering_full_curvature_per_m);
   });
   Require(steering_counts_at_full > 0, [&] {
     return "steering_counts_at_full must be > 0, got " + std::to_string(steering_counts_at_full);

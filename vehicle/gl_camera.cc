@@ -362,6 +362,83 @@ GlScene::Target& GlScene::TargetOfSize(int width, int height) {
   return *targets_.back();
 }
 
+namespace {
+
+// The view's transforms, as the vertex shader takes them.
+struct ViewTransforms {
+  Eigen::Matrix4f clip_from_map;
+  Eigen::Vector4f optical_z_row;  // p_map → the optical z
+};
+
+// The projection: pixel (u, v) = K · p / z has its centre at window (u + 0.5, v + 0.5), row 0 at
+// window y = 0 (the first row read back), z in [near, far] to [-1, 1].
+ViewTransforms TransformsOf(const GlView& view) {
+  const int w = view.width_px, h = view.height_px;
+  const double n = view.near_m, f = view.far_m;
+  Eigen::Matrix4d projection = Eigen::Matrix4d::Zero();
+  projection(0, 0) = 2.0 * view.K[0] / w;
+  projection(0, 1) = 2.0 * view.K[1] / w;
+  projection(0, 2) = 2.0 * (view.K[2] + 0.5) / w - 1.0;
+  projection(1, 1) = 2.0 * view.K[4] / h;
+  projection(1, 2) = 2.0 * (view.K[5] + 0.5) / h - 1.0;
+  projection(2, 2) = (f + n) / (f - n);
+  projection(2, 3) = -2.0 * f * n / (f - n);
+  projection(3, 2) = 1.0;
+  const Eigen::Matrix4d X_optical_map = view.X_map_optical.inverse().matrix();
+  return {(projection * X_optical_map).cast<float>(),
+          X_optical_map.row(2).transpose().cast<float>()};
+}
+
+// Two triangles a-b-c, a-c-d: x, y, z and the packed colour per vertex.
+void AppendQuad(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                const Eigen::Vector3d& d, std::uint32_t colour, std::vector<float>* vertices) {
+  for (const Eigen::Vector3d* p : {&a, &b, &c, &a, &c, &d}) {
+    vertices->push_back(static_cast<float>(p->x()));
+    vertices->push_back(static_cast<float>(p->y()));
+    vertices->push_back(static_cast<float>(p->z()));
+    float bits = 0.0f;
+    std::memcpy(&bits, &colour, 4);
+    vertices->push_back(bits);
+  }
+}
+
+// The floor: a square about the camera holding every floor point within the far plane.
+void AppendFloor(const GlView& view, std::vector<float>* vertices) {
+  const int w = view.width_px, h = view.height_px;
+  const double half_w = std::max(view.K[2] + 0.5, w - 0.5 - view.K[2]) / view.K[0];
+  const double half_h = std::max(view.K[5] + 0.5, h - 0.5 - view.K[5]) / view.K[4];
+  const double reach = view.far_m * std::sqrt(1.0 + half_w * half_w + half_h * half_h) + 1.0;
+  const Eigen::Vector3d eye = view.X_map_optical.translation();
+  AppendQuad({eye.x() - reach, eye.y() - reach, 0.0}, {eye.x() + reach, eye.y() - reach, 0.0},
+             {eye.x() + reach, eye.y() + reach, 0.0}, {eye.x() - reach, eye.y() + reach, 0.0},
+             PackColour({0, 0, 0}, 0), vertices);
+}
+
+// A prism's six faces, in PrismFaceColours' order; nothing for a flat one.
+void AppendPrism(const Prism& prism, std::vector<float>* vertices) {
+  const world::OrientedBox& box = prism.footprint;
+  if (!(box.length_m > 0.0 && box.width_m > 0.0 && prism.height_m > 0.0)) return;
+  const std::array<Bgr, 7> faces = PrismFaceColours(prism);
+  const double c = std::cos(box.pose.yaw_rad), s = std::sin(box.pose.yaw_rad);
+  const auto corner = [&](double sx, double sy, double z) {
+    const double lx = 0.5 * sx * box.length_m, ly = 0.5 * sy * box.width_m;
+    return Eigen::Vector3d(box.pose.x_m + c * lx - s * ly, box.pose.y_m + s * lx + c * ly, z);
+  };
+  const double top = prism.height_m;
+  const auto quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                        const Eigen::Vector3d& cc, const Eigen::Vector3d& d, int face) {
+    AppendQuad(a, b, cc, d, PackColour(faces[face], 255), vertices);
+  };
+  quad(corner(-1, -1, 0), corner(-1, 1, 0), corner(-1, 1, top), corner(-1, -1, top), 0);
+  quad(corner(1, -1, 0), corner(1, 1, 0), corner(1, 1, top), corner(1, -1, top), 1);
+  quad(corner(-1, -1, 0), corner(1, -1, 0), corner(1, -1, top), corner(-1, -1, top), 2);
+  quad(corner(-1, 1, 0), corner(1, 1, 0), corner(1, 1, top), corner(-1, 1, top), 3);
+  quad(corner(-1, -1, top), corner(1, -1, top), corner(1, 1, top), corner(-1, 1, top), 4);
+  quad(corner(-1, -1, 0), corner(1, -1, 0), corner(1, 1, 0), corner(-1, 1, 0), 5);
+}
+
+}  // namespace
+
 void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame* out,
                      GlImages wanted) {
   if (!(view.width_px > 0 && view.height_px > 0 && view.near_m > 0.0 && view.far_m > view.near_m &&
@@ -370,7 +447,17 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
         "GlScene::Render: a view needs a size, fx, fy > 0 and 0 < near < far");
   }
   context_->MakeCurrent();
-  const int w = view.width_px, h = view.height_px;
+  ClearTarget(view.width_px, view.height_px);
+  vertices_.clear();
+  AppendFloor(view, &vertices_);
+  for (const Prism& prism : prisms) AppendPrism(prism, &vertices_);
+  const ViewTransforms transforms = TransformsOf(view);
+  Draw(transforms.clip_from_map, transforms.optical_z_row, view.far_m);
+  ReadBack(view.width_px, view.height_px, wanted, out);
+  CheckGl("rendering a view");
+}
+
+void GlScene::ClearTarget(int w, int h) {
   Target& target = TargetOfSize(w, h);
   glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
   glViewport(0, 0, w, h);
@@ -386,73 +473,14 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
   glClearBufferfv(GL_COLOR, 0, surround.data());
   glClearBufferfv(GL_COLOR, 1, no_z.data());
   glClearBufferfi(GL_DEPTH_STENCIL, 0, 1.0f, 0);
+}
 
-  // the projection: pixel (u, v) = K · p / z has its centre at window (u + 0.5, v + 0.5), row 0
-  // at window y = 0 (the first row read back), z in [near, far] to [-1, 1]
-  const double n = view.near_m, f = view.far_m;
-  Eigen::Matrix4d projection = Eigen::Matrix4d::Zero();
-  projection(0, 0) = 2.0 * view.K[0] / w;
-  projection(0, 1) = 2.0 * view.K[1] / w;
-  projection(0, 2) = 2.0 * (view.K[2] + 0.5) / w - 1.0;
-  projection(1, 1) = 2.0 * view.K[4] / h;
-  projection(1, 2) = 2.0 * (view.K[5] + 0.5) / h - 1.0;
-  projection(2, 2) = (f + n) / (f - n);
-  projection(2, 3) = -2.0 * f * n / (f - n);
-  projection(3, 2) = 1.0;
-  const Eigen::Matrix4d X_optical_map = view.X_map_optical.inverse().matrix();
-  const Eigen::Matrix4f clip_from_map = (projection * X_optical_map).cast<float>();
-  const Eigen::Vector4f z_row = X_optical_map.row(2).transpose().cast<float>();
-
-  // the floor: a square about the camera holding every floor point within the far plane
-  vertices_.clear();
-  const auto add = [&](const Eigen::Vector3d& p, std::uint32_t colour) {
-    vertices_.push_back(static_cast<float>(p.x()));
-    vertices_.push_back(static_cast<float>(p.y()));
-    vertices_.push_back(static_cast<float>(p.z()));
-    float bits = 0.0f;
-    std::memcpy(&bits, &colour, 4);
-    vertices_.push_back(bits);
-  };
-  const auto add_quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                            const Eigen::Vector3d& c, const Eigen::Vector3d& d,
-                            std::uint32_t colour) {
-    for (const Eigen::Vector3d* p : {&a, &b, &c, &a, &c, &d}) add(*p, colour);
-  };
-  const double half_w = std::max(view.K[2] + 0.5, w - 0.5 - view.K[2]) / view.K[0];
-  const double half_h = std::max(view.K[5] + 0.5, h - 0.5 - view.K[5]) / view.K[4];
-  const double reach = f * std::sqrt(1.0 + half_w * half_w + half_h * half_h) + 1.0;
-  const Eigen::Vector3d eye = view.X_map_optical.translation();
-  const std::uint32_t floor_colour = PackColour({0, 0, 0}, 0);
-  add_quad({eye.x() - reach, eye.y() - reach, 0.0}, {eye.x() + reach, eye.y() - reach, 0.0},
-           {eye.x() + reach, eye.y() + reach, 0.0}, {eye.x() - reach, eye.y() + reach, 0.0},
-           floor_colour);
-  // the prisms: six faces each, in PrismFaceColours' order
-  for (const Prism& prism : prisms) {
-    const world::OrientedBox& box = prism.footprint;
-    if (!(box.length_m > 0.0 && box.width_m > 0.0 && prism.height_m > 0.0)) continue;
-    const std::array<Bgr, 7> faces = PrismFaceColours(prism);
-    const double c = std::cos(box.pose.yaw_rad), s = std::sin(box.pose.yaw_rad);
-    const auto corner = [&](double sx, double sy, double z) {
-      const double lx = 0.5 * sx * box.length_m, ly = 0.5 * sy * box.width_m;
-      return Eigen::Vector3d(box.pose.x_m + c * lx - s * ly, box.pose.y_m + s * lx + c * ly, z);
-    };
-    const double top = prism.height_m;
-    const auto colour = [&](int face) { return PackColour(faces[face], 255); };
-    add_quad(corner(-1, -1, 0), corner(-1, 1, 0), corner(-1, 1, top), corner(-1, -1, top),
-             colour(0));
-    add_quad(corner(1, -1, 0), corner(1, 1, 0), corner(1, 1, top), corner(1, -1, top), colour(1));
-    add_quad(corner(-1, -1, 0), corner(1, -1, 0), corner(1, -1, top), corner(-1, -1, top),
-             colour(2));
-    add_quad(corner(-1, 1, 0), corner(1, 1, 0), corner(1, 1, top), corner(-1, 1, top), colour(3));
-    add_quad(corner(-1, -1, top), corner(1, -1, top), corner(1, 1, top), corner(-1, 1, top),
-             colour(4));
-    add_quad(corner(-1, -1, 0), corner(1, -1, 0), corner(1, 1, 0), corner(-1, 1, 0), colour(5));
-  }
-
+void GlScene::Draw(const Eigen::Matrix4f& clip_from_map, const Eigen::Vector4f& optical_z_row,
+                   double far_m) {
   glUseProgram(program_);
   glUniformMatrix4fv(clip_from_map_at_, 1, GL_FALSE, clip_from_map.data());
-  glUniform4fv(optical_z_row_at_, 1, z_row.data());
-  glUniform1f(far_at_, static_cast<float>(f));
+  glUniform4fv(optical_z_row_at_, 1, optical_z_row.data());
+  glUniform1f(far_at_, static_cast<float>(far_m));
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, floor_texture_);
   glBindVertexArray(vertex_array_);
@@ -460,8 +488,10 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices_.size() * sizeof(float)),
                vertices_.data(), GL_STREAM_DRAW);
   glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(vertices_.size() / 4));
+}
 
-  // read back: colour as B, G, R, A bytes, then the optical z
+// Colour as B, G, R, A bytes, then the optical z; only what is wanted.
+void GlScene::ReadBack(int w, int h, GlImages wanted, GlFrame* out) {
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   out->width = w;
   out->height = h;
@@ -474,10 +504,7 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
     cv::cvtColor(cv::Mat(h, w, CV_8UC4, rgba_bytes_.data()),
                  cv::Mat(h, w, CV_8UC3, out->bgr.data()), cv::COLOR_RGBA2RGB);
   }
-  if (!wanted.z) {
-    CheckGl("rendering a view");
-    return;
-  }
+  if (!wanted.z) return;
   out->z_m.resize(pixels);
   glReadBuffer(GL_COLOR_ATTACHMENT1);
   if (read_red_) {
@@ -487,7 +514,6 @@ void GlScene::Render(const GlView& view, std::span<const Prism> prisms, GlFrame*
     glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rgba_floats_.data());
     for (std::size_t i = 0; i < pixels; ++i) out->z_m[i] = rgba_floats_[4 * i];
   }
-  CheckGl("rendering a view");
 }
 
 // --- GlCameraRenderer -------------------------------------------------------------------------

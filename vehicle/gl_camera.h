@@ -125,6 +125,11 @@ class GlScene {
  private:
   struct Target;
   Target& TargetOfSize(int width, int height);
+  // The steps of Render: a cleared target of the view's size, the draw of vertices_, the read-back.
+  void ClearTarget(int width, int height);
+  void Draw(const Eigen::Matrix4f& clip_from_map, const Eigen::Vector4f& optical_z_row,
+            double far_m);
+  void ReadBack(int width, int height, GlImages wanted, GlFrame* out);
 
   std::shared_ptr<GlContext> context_;
   Bgr surround_;

@@ -10,9 +10,8 @@ namespace autonomsim::vehicle {
 namespace {
 
 void RequireStddev(double value, const char* key) {
-  Require(std::isfinite(value) && value >= 0.0, [&] {
-    return std::string(key) + " must be finite and >= 0, got " + std::to_string(value);
-  });
+  Require(std::isfinite(value) && value >= 0.0,
+          [&] { return std::string(key) + " must be finite and >= 0, got " + Num(value); });
 }
 
 }  // namespace
@@ -26,7 +25,7 @@ void ImuParams::Validate() const {
   RequireStddev(accel_bias_stddev_mps2, "accel_bias_stddev_mps2");
   RequireStddev(yaw_noise_stddev_rad, "yaw_noise_stddev_rad");
   Require(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0,
-          [&] { return "gravity_mps2 must be > 0, got " + std::to_string(gravity_mps2); });
+          [&] { return "gravity_mps2 must be > 0, got " + Num(gravity_mps2); });
 }
 
 ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias) {

@@ -61,8 +61,7 @@ class ContactRecorder : public b2ContactListener {
 
 void PhysicsParams::Validate() const {
   Require(step > Duration::zero() && step <= kMaxStep, [&] {
-    return "step_s must be in (0, " + std::to_string(ToSeconds(kMaxStep)) + "] s, got " +
-           std::to_string(ToSeconds(step));
+    return "step_s must be in (0, " + Num(ToSeconds(kMaxStep)) + "] s, got " + Num(ToSeconds(step));
   });
   Require(velocity_iterations >= 1, [&] {
     return "velocity_iterations must be >= 1, got " + std::to_string(velocity_iterations);
@@ -78,8 +77,7 @@ void ObstacleBox::Validate() const {
           [&] { return "obstacle '" + name + "': pose must be finite"; });
   auto positive = [this](double value, const char* key) {
     Require(std::isfinite(value) && value > 0.0, [&] {
-      return "obstacle '" + name + "': " + key + " must be finite and > 0, got " +
-             std::to_string(value);
+      return "obstacle '" + name + "': " + key + " must be finite and > 0, got " + Num(value);
     });
   };
   positive(length_m, "length_m");

@@ -44,16 +44,14 @@ double DistanceToSegment(const world::Vec2& p, const world::Vec2& a, const world
 void UltrasonicParams::Validate() const {
   Require(std::isfinite(mount_x_m) && std::isfinite(mount_y_m) && std::isfinite(mount_yaw_deg),
           "mount_x_m, mount_y_m and mount_yaw_deg must be finite");
-  Require(field_of_view_deg > 0.0 && field_of_view_deg < 180.0, [&] {
-    return "field_of_view_deg must be in (0, 180), got " + std::to_string(field_of_view_deg);
-  });
+  Require(field_of_view_deg > 0.0 && field_of_view_deg < 180.0,
+          [&] { return "field_of_view_deg must be in (0, 180), got " + Num(field_of_view_deg); });
   Require(std::isfinite(min_range_m) && min_range_m >= 0.0,
-          [&] { return "min_range_m must be >= 0, got " + std::to_string(min_range_m); });
+          [&] { return "min_range_m must be >= 0, got " + Num(min_range_m); });
   Require(std::isfinite(max_range_m) && max_range_m > min_range_m,
-          [&] { return "max_range_m must be > min_range_m, got " + std::to_string(max_range_m); });
-  Require(std::isfinite(noise_stddev_m) && noise_stddev_m >= 0.0, [&] {
-    return "noise_stddev_m must be finite and >= 0, got " + std::to_string(noise_stddev_m);
-  });
+          [&] { return "max_range_m must be > min_range_m, got " + Num(max_range_m); });
+  Require(std::isfinite(noise_stddev_m) && noise_stddev_m >= 0.0,
+          [&] { return "noise_stddev_m must be finite and >= 0, got " + Num(noise_stddev_m); });
 }
 
 double NearestInCone(const UltrasonicParams& params, const world::Pose2& X_map_car,

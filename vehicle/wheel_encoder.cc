@@ -13,11 +13,10 @@ void WheelEncoderParams::Validate() const {
   Require(pulses_per_revolution > 0, [&] {
     return "pulses_per_revolution must be > 0, got " + std::to_string(pulses_per_revolution);
   });
-  Require(std::isfinite(metres_per_revolution) && metres_per_revolution > 0.0, [&] {
-    return "metres_per_revolution must be > 0, got " + std::to_string(metres_per_revolution);
-  });
+  Require(std::isfinite(metres_per_revolution) && metres_per_revolution > 0.0,
+          [&] { return "metres_per_revolution must be > 0, got " + Num(metres_per_revolution); });
   Require(std::isfinite(counter_clock_hz) && counter_clock_hz >= 1.0,
-          [&] { return "counter_clock_hz must be >= 1, got " + std::to_string(counter_clock_hz); });
+          [&] { return "counter_clock_hz must be >= 1, got " + Num(counter_clock_hz); });
   Require(standstill_timeout >= Duration::zero(), "standstill_timeout_s must be >= 0");
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "world/track.h"
+#include "world/validation.h"
 
 namespace autonomsim::world {
 namespace {
@@ -39,7 +40,7 @@ std::array<std::uint8_t, 3> FloorRaster::ColorAt(const Vec2& p_map) const {
 
 FloorRaster RasterizeFloor(const Track& track, double m_per_px) {
   if (!(std::isfinite(m_per_px) && m_per_px > 0.0)) {
-    throw std::invalid_argument("m_per_px must be > 0, got " + std::to_string(m_per_px));
+    throw std::invalid_argument("m_per_px must be > 0, got " + Num(m_per_px));
   }
   const TrackSpec& spec = track.spec();
   FloorRaster raster;

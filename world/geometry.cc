@@ -5,14 +5,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::world {
 
 void Box::Validate() const {
   if (!(x_min_m < x_max_m) || !(y_min_m < y_max_m)) {
     throw std::invalid_argument("box must have x_min_m < x_max_m and y_min_m < y_max_m, got x [" +
-                                std::to_string(x_min_m) + ", " + std::to_string(x_max_m) +
-                                "], y [" + std::to_string(y_min_m) + ", " +
-                                std::to_string(y_max_m) + "]");
+                                Num(x_min_m) + ", " + Num(x_max_m) + "], y [" + Num(y_min_m) +
+                                ", " + Num(y_max_m) + "]");
   }
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "world/track.h"
+#include "world/validation.h"
 
 namespace autonomsim::world {
 namespace {
@@ -81,11 +82,10 @@ Vec2 OccupancyMap::CellCentre(int col, int row) const {
   return {origin_m.x() + (col + 0.5) * resolution_m, origin_m.y() + (row + 0.5) * resolution_m};
 }
 
-OccupancyMap BuildStaticMap(const Track& track, double resolution_m) {
-  if (!(std::isfinite(resolution_m) && resolution_m > 0.0)) {
-    throw std::invalid_argument("resolution_m must be > 0, got " + std::to_string(resolution_m));
-  }
-  const TrackSpec& spec = track.spec();
+namespace {
+
+// A square map of free cells, centred on the track's origin.
+OccupancyMap EmptyMap(const TrackSpec& spec, double resolution_m) {
   OccupancyMap map;
   map.resolution_m = resolution_m;
   // 1e-9 absorbs the rounding of size / resolution so that 5 m at 5 cm is 100 cells, not 101.
@@ -95,72 +95,92 @@ OccupancyMap BuildStaticMap(const Track& track, double resolution_m) {
   map.height_cells = side;
   map.origin_m = Vec2(-0.5 * side * resolution_m, -0.5 * side * resolution_m);
   map.cells.assign(static_cast<std::size_t>(side) * side, OccupancyMap::kFree);
-  auto occupy = [&map](int col, int row) {
-    map.cells[static_cast<std::size_t>(row) * map.width_cells + col] = OccupancyMap::kOccupied;
-  };
-  // Index range of the cells meeting [lo, hi] along one axis, clamped to the map.
-  auto cell_range = [&](double lo_m, double hi_m, double origin) {
-    const double first = std::floor((lo_m - origin) / resolution_m);
-    const double last = std::floor((hi_m - origin) / resolution_m);
-    return std::array<int, 2>{static_cast<int>(std::clamp(first, 0.0, double(side))),
-                              static_cast<int>(std::clamp(last, -1.0, double(side - 1)))};
-  };
+  return map;
+}
 
+void Occupy(OccupancyMap* map, int col, int row) {
+  map->cells[static_cast<std::size_t>(row) * map->width_cells + col] = OccupancyMap::kOccupied;
+}
+
+// Index range of the cells meeting [lo, hi] along one axis, clamped to the (square) map.
+std::array<int, 2> CellRange(const OccupancyMap& map, double lo_m, double hi_m, double origin) {
+  const int side = map.width_cells;
+  const double first = std::floor((lo_m - origin) / map.resolution_m);
+  const double last = std::floor((hi_m - origin) / map.resolution_m);
+  return std::array<int, 2>{static_cast<int>(std::clamp(first, 0.0, double(side))),
+                            static_cast<int>(std::clamp(last, -1.0, double(side - 1)))};
+}
+
+// The painted stroke: cells it overlaps with positive area, chord by chord.
+void OccupyStroke(const std::vector<Vec2>& points, double width_m, OccupancyMap* map) {
+  const double resolution_m = map->resolution_m;
+  const double half_width = 0.5 * width_m;
+  const double half_width_sq = half_width * half_width;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    const Vec2& a = points[i];
+    const Vec2& b = points[i + 1];
+    const auto cols = CellRange(*map, std::min(a.x(), b.x()) - half_width,
+                                std::max(a.x(), b.x()) + half_width, map->origin_m.x());
+    const auto rows = CellRange(*map, std::min(a.y(), b.y()) - half_width,
+                                std::max(a.y(), b.y()) + half_width, map->origin_m.y());
+    for (int row = rows[0]; row <= rows[1]; ++row) {
+      for (int col = cols[0]; col <= cols[1]; ++col) {
+        const Vec2 lo = map->origin_m + Vec2(col, row) * resolution_m;
+        const Vec2 hi = lo + Vec2(resolution_m, resolution_m);
+        if (SegmentBoxDistanceSq(a, b, lo, hi) < half_width_sq) Occupy(map, col, row);
+      }
+    }
+  }
+}
+
+// The inside of a filled outline: cell centres inside the sampled outline, row by row (even-odd
+// rule on the crossings of the row's centre line).
+void OccupyInside(const std::vector<Vec2>& points, OccupancyMap* map) {
+  const double resolution_m = map->resolution_m;
+  const int side = map->width_cells;
+  double y_min = points[0].y();
+  double y_max = points[0].y();
+  for (const Vec2& p : points) {
+    y_min = std::min(y_min, p.y());
+    y_max = std::max(y_max, p.y());
+  }
+  const auto rows = CellRange(*map, y_min, y_max, map->origin_m.y());
+  std::vector<double> crossings;
+  for (int row = rows[0]; row <= rows[1]; ++row) {
+    const double y = map->CellCentre(0, row).y();
+    crossings.clear();
+    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+      const Vec2& a = points[i];
+      const Vec2& b = points[i + 1];
+      if ((a.y() > y) != (b.y() > y)) {
+        crossings.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
+      }
+    }
+    std::sort(crossings.begin(), crossings.end());
+    for (std::size_t k = 0; k + 1 < crossings.size(); k += 2) {
+      // Cell centres x_c = origin.x + (col + 0.5) res within [crossings[k], crossings[k+1]].
+      const double first = std::ceil((crossings[k] - map->origin_m.x()) / resolution_m - 0.5);
+      const double last = std::floor((crossings[k + 1] - map->origin_m.x()) / resolution_m - 0.5);
+      const int col_lo = static_cast<int>(std::clamp(first, 0.0, double(side)));
+      const int col_hi = static_cast<int>(std::clamp(last, -1.0, double(side - 1)));
+      for (int col = col_lo; col <= col_hi; ++col) Occupy(map, col, row);
+    }
+  }
+}
+
+}  // namespace
+
+OccupancyMap BuildStaticMap(const Track& track, double resolution_m) {
+  Require(std::isfinite(resolution_m) && resolution_m > 0.0,
+          [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
+  const TrackSpec& spec = track.spec();
+  OccupancyMap map = EmptyMap(spec, resolution_m);
   for (std::size_t l = 0; l < spec.lines.size(); ++l) {
     const TrackLineSpec& line = spec.lines[l];
     if (line.planner == "none") continue;
     const std::vector<Vec2>& points = track.line_paths()[l].points();
-
-    // The painted stroke: cells it overlaps with positive area, chord by chord.
-    const double half_width = 0.5 * line.width_m;
-    const double half_width_sq = half_width * half_width;
-    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
-      const Vec2& a = points[i];
-      const Vec2& b = points[i + 1];
-      const auto cols = cell_range(std::min(a.x(), b.x()) - half_width,
-                                   std::max(a.x(), b.x()) + half_width, map.origin_m.x());
-      const auto rows = cell_range(std::min(a.y(), b.y()) - half_width,
-                                   std::max(a.y(), b.y()) + half_width, map.origin_m.y());
-      for (int row = rows[0]; row <= rows[1]; ++row) {
-        for (int col = cols[0]; col <= cols[1]; ++col) {
-          const Vec2 lo = map.origin_m + Vec2(col, row) * resolution_m;
-          const Vec2 hi = lo + Vec2(resolution_m, resolution_m);
-          if (SegmentBoxDistanceSq(a, b, lo, hi) < half_width_sq) occupy(col, row);
-        }
-      }
-    }
-
-    // The inside of a filled outline: cell centres inside the sampled outline, row by row
-    // (even-odd rule on the crossings of the row's centre line).
-    if (line.planner != "filled") continue;
-    double y_min = points[0].y();
-    double y_max = points[0].y();
-    for (const Vec2& p : points) {
-      y_min = std::min(y_min, p.y());
-      y_max = std::max(y_max, p.y());
-    }
-    const auto rows = cell_range(y_min, y_max, map.origin_m.y());
-    std::vector<double> crossings;
-    for (int row = rows[0]; row <= rows[1]; ++row) {
-      const double y = map.CellCentre(0, row).y();
-      crossings.clear();
-      for (std::size_t i = 0; i + 1 < points.size(); ++i) {
-        const Vec2& a = points[i];
-        const Vec2& b = points[i + 1];
-        if ((a.y() > y) != (b.y() > y)) {
-          crossings.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
-        }
-      }
-      std::sort(crossings.begin(), crossings.end());
-      for (std::size_t k = 0; k + 1 < crossings.size(); k += 2) {
-        // Cell centres x_c = origin.x + (col + 0.5) res within [crossings[k], crossings[k+1]].
-        const double first = std::ceil((crossings[k] - map.origin_m.x()) / resolution_m - 0.5);
-        const double last = std::floor((crossings[k + 1] - map.origin_m.x()) / resolution_m - 0.5);
-        const int col_lo = static_cast<int>(std::clamp(first, 0.0, double(side)));
-        const int col_hi = static_cast<int>(std::clamp(last, -1.0, double(side - 1)));
-        for (int col = col_lo; col <= col_hi; ++col) occupy(col, row);
-      }
-    }
+    OccupyStroke(points, line.width_m, &map);
+    if (line.planner == "filled") OccupyInside(points, &map);
   }
   return map;
 }

@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "world/validation.h"
 
 namespace autonomsim::world {
 namespace {
@@ -25,13 +26,7 @@ constexpr double kMergeDistance_m = 1e-9;
 
 double Cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-std::string Format(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.6g", v);
-  return buffer;
-}
-
-std::string FormatPoint(const Vec2& p) { return "(" + Format(p.x()) + ", " + Format(p.y()) + ")"; }
+std::string FormatPoint(const Vec2& p) { return "(" + Num(p.x()) + ", " + Num(p.y()) + ")"; }
 
 }  // namespace
 
@@ -50,7 +45,7 @@ Polyline::Polyline(std::vector<Vec2> points, bool cyclic)
     const double gap = (points_.back() - points_.front()).norm();
     if (gap > kClosureTolerance_m) {
       throw std::invalid_argument("cyclic polyline must end where it starts; last point " +
-                                  FormatPoint(points_.back()) + " is " + Format(gap) +
+                                  FormatPoint(points_.back()) + " is " + Num(gap) +
                                   " m from the first " + FormatPoint(points_.front()));
     }
     points_.back() = points_.front();
@@ -232,7 +227,7 @@ Polyline::Projection Polyline::ProjectNear(const Vec2& p, double s_hint_m, doubl
   if (points_.empty()) throw std::logic_error("ProjectNear on an empty polyline");
   if (!std::isfinite(s_hint_m) || !std::isfinite(window_m) || window_m < 0.0) {
     throw std::invalid_argument("ProjectNear needs a finite hint and a finite window >= 0, got " +
-                                Format(s_hint_m) + " and " + Format(window_m));
+                                Num(s_hint_m) + " and " + Num(window_m));
   }
   Nearest best;
   const double length = length_m();
@@ -259,15 +254,11 @@ Polyline::Projection Polyline::ProjectNear(const Vec2& p, double s_hint_m, doubl
   return Finish(p, best);
 }
 
-Polyline SampleFilletPolyline(const PointList& points_m, double corner_radius_m, bool closed,
-                              double spacing_m) {
-  if (!(std::isfinite(corner_radius_m) && corner_radius_m >= 0.0)) {
-    throw std::invalid_argument("corner_radius_m must be finite and >= 0, got " +
-                                Format(corner_radius_m));
-  }
-  if (!(std::isfinite(spacing_m) && spacing_m > 0.0)) {
-    throw std::invalid_argument("spacing_m must be finite and > 0, got " + Format(spacing_m));
-  }
+namespace {
+
+// The outline's corners without a closing repeat: std::invalid_argument for too few or a point
+// that is not finite.
+std::vector<Vec2> OutlineCorners(const PointList& points_m, bool closed) {
   std::vector<Vec2> corners;
   corners.reserve(points_m.size());
   for (const auto& [x, y] : points_m) corners.emplace_back(x, y);
@@ -284,51 +275,77 @@ Polyline SampleFilletPolyline(const PointList& points_m, double corner_radius_m,
       throw std::invalid_argument("point " + std::to_string(i) + " is not finite");
     }
   }
+  return corners;
+}
 
+// An outline with an arc of one radius at each inner corner.
+struct FilletOutline {
+  std::vector<Vec2> corners;
+  bool closed{false};
+  double corner_radius_m{0.0};
   // Side i runs from corner i to corner i+1 (closed: n sides, open: n-1).
-  const std::size_t sides = closed ? n : n - 1;
-  std::vector<Vec2> side_direction(sides);
-  std::vector<double> side_length(sides);
-  for (std::size_t i = 0; i < sides; ++i) {
-    const Vec2 d = corners[(i + 1) % n] - corners[i];
-    side_length[i] = d.norm();
-    if (!(side_length[i] > Polyline::kMinChord_m)) {
+  std::size_t sides{0};
+  std::vector<Vec2> side_direction;
+  std::vector<double> side_length;
+  // The arc at each corner: its turn (signed, left positive) and tangent length.
+  std::vector<double> turn;
+  std::vector<double> tangent;
+
+  const Vec2& In(std::size_t c) const { return side_direction[(c + sides - 1) % sides]; }
+  const Vec2& Out(std::size_t c) const { return side_direction[c % sides]; }
+  Vec2 ArcStart(std::size_t c) const { return corners[c] - In(c) * tangent[c]; }
+  Vec2 ArcEnd(std::size_t c) const { return corners[c] + Out(c) * tangent[c]; }
+};
+
+void MeasureSides(FilletOutline* o) {
+  const std::size_t n = o->corners.size();
+  o->sides = o->closed ? n : n - 1;
+  o->side_direction.resize(o->sides);
+  o->side_length.resize(o->sides);
+  for (std::size_t i = 0; i < o->sides; ++i) {
+    const Vec2 d = o->corners[(i + 1) % n] - o->corners[i];
+    o->side_length[i] = d.norm();
+    if (!(o->side_length[i] > Polyline::kMinChord_m)) {
       throw std::invalid_argument("points " + std::to_string(i) + " and " +
                                   std::to_string((i + 1) % n) + " coincide at " +
-                                  FormatPoint(corners[i]));
+                                  FormatPoint(o->corners[i]));
     }
-    side_direction[i] = d / side_length[i];
+    o->side_direction[i] = d / o->side_length[i];
   }
+}
 
-  // The arc at each corner: its turn (signed, left positive) and tangent length.
-  std::vector<double> turn(n, 0.0);
-  std::vector<double> tangent(n, 0.0);
+// Each corner's turn and tangent length; std::invalid_argument where a path turns back or two
+// arcs do not fit on the side between them.
+void FitArcs(FilletOutline* o) {
+  const std::size_t n = o->corners.size();
+  o->turn.assign(n, 0.0);
+  o->tangent.assign(n, 0.0);
   for (std::size_t c = 0; c < n; ++c) {
-    if (!closed && (c == 0 || c == n - 1)) continue;
-    const Vec2& in = side_direction[(c + sides - 1) % sides];
-    const Vec2& out = side_direction[c % sides];
-    turn[c] = std::atan2(Cross(in, out), in.dot(out));
-    if (corner_radius_m == 0.0 || std::abs(turn[c]) < kStraightTurn_rad) continue;
-    if (std::abs(turn[c]) > kPi - 1e-9) {
+    if (!o->closed && (c == 0 || c == n - 1)) continue;
+    o->turn[c] = std::atan2(Cross(o->In(c), o->Out(c)), o->In(c).dot(o->Out(c)));
+    if (o->corner_radius_m == 0.0 || std::abs(o->turn[c]) < kStraightTurn_rad) continue;
+    if (std::abs(o->turn[c]) > kPi - 1e-9) {
       throw std::invalid_argument("the path turns back on itself at point " + std::to_string(c) +
-                                  " " + FormatPoint(corners[c]) + "; it cannot be rounded");
+                                  " " + FormatPoint(o->corners[c]) + "; it cannot be rounded");
     }
-    tangent[c] = corner_radius_m * std::tan(0.5 * std::abs(turn[c]));
+    o->tangent[c] = o->corner_radius_m * std::tan(0.5 * std::abs(o->turn[c]));
   }
-  for (std::size_t i = 0; i < sides; ++i) {
+  for (std::size_t i = 0; i < o->sides; ++i) {
     const std::size_t a = i;
     const std::size_t b = (i + 1) % n;
-    const double needed = tangent[a] + tangent[b];
-    if (needed > side_length[i] + kMergeDistance_m) {
-      throw std::invalid_argument("corner radius " + Format(corner_radius_m) +
+    const double needed = o->tangent[a] + o->tangent[b];
+    if (needed > o->side_length[i] + kMergeDistance_m) {
+      throw std::invalid_argument("corner radius " + Num(o->corner_radius_m) +
                                   " m does not fit: the arcs at points " + std::to_string(a) + " " +
-                                  FormatPoint(corners[a]) + " and " + std::to_string(b) + " " +
-                                  FormatPoint(corners[b]) + " need " + Format(needed) +
-                                  " m of a side " + Format(side_length[i]) + " m long");
+                                  FormatPoint(o->corners[a]) + " and " + std::to_string(b) + " " +
+                                  FormatPoint(o->corners[b]) + " need " + Num(needed) +
+                                  " m of a side " + Num(o->side_length[i]) + " m long");
     }
   }
+}
 
-  // Largest angle step that keeps both the chord length and the chord error in bounds.
+// Largest angle step that keeps both the chord length and the chord error in bounds.
+double MaxArcStep_rad(double corner_radius_m, double spacing_m) {
   double max_step_rad = kMaxArcStep_rad;
   if (corner_radius_m > 0.0) {
     if (spacing_m < 2.0 * corner_radius_m) {
@@ -339,58 +356,90 @@ Polyline SampleFilletPolyline(const PointList& points_m, double corner_radius_m,
           std::min(max_step_rad, 2.0 * std::acos(1.0 - kMaxChordError_m / corner_radius_m));
     }
   }
+  return max_step_rad;
+}
 
-  std::vector<Vec2> out;
-  auto emit = [&out](const Vec2& p) {
-    if (out.empty() || (p - out.back()).norm() > kMergeDistance_m) out.push_back(p);
-  };
-  auto emit_straight_to = [&](const Vec2& to) {
-    const Vec2 from = out.back();
+// The points along a fitted outline: straight pieces at most spacing_m long, arcs in steps of at
+// most max_step_rad; points within kMergeDistance_m of the previous one merged.
+class FilletSampler {
+ public:
+  FilletSampler(const FilletOutline& outline, double spacing_m)
+      : o_(outline),
+        spacing_m_(spacing_m),
+        max_step_rad_(MaxArcStep_rad(outline.corner_radius_m, spacing_m)) {}
+
+  std::vector<Vec2> Sample() && {
+    const std::size_t n = o_.corners.size();
+    if (o_.closed) {
+      Emit(o_.ArcEnd(0));
+      for (std::size_t k = 1; k <= n; ++k) ToCorner(k % n);
+      out_.back() = out_.front();  // the arc at corner 0 ends where the path began
+    } else {
+      Emit(o_.corners[0]);
+      for (std::size_t c = 1; c + 1 < n; ++c) ToCorner(c);
+      EmitStraightTo(o_.corners[n - 1]);
+    }
+    return std::move(out_);
+  }
+
+ private:
+  void Emit(const Vec2& p) {
+    if (out_.empty() || (p - out_.back()).norm() > kMergeDistance_m) out_.push_back(p);
+  }
+  // The straight piece to corner c's arc, then the arc.
+  void ToCorner(std::size_t c) {
+    EmitStraightTo(o_.ArcStart(c));
+    if (o_.tangent[c] > 0.0) EmitArc(c);
+  }
+  void EmitStraightTo(const Vec2& to) {
+    const Vec2 from = out_.back();
     const double length = (to - from).norm();
     if (length <= kMergeDistance_m) return;
-    const int pieces = std::max(1, static_cast<int>(std::ceil(length / spacing_m)));
-    for (int k = 1; k < pieces; ++k) emit(from + (to - from) * (static_cast<double>(k) / pieces));
-    emit(to);
-  };
-  // Arc at corner c, from its start tangent point (already emitted) to its end tangent point.
-  auto emit_arc = [&](std::size_t c) {
-    const Vec2& in = side_direction[(c + sides - 1) % sides];
-    const Vec2& out_dir = side_direction[c % sides];
-    const Vec2 start = corners[c] - in * tangent[c];
-    const Vec2 end = corners[c] + out_dir * tangent[c];
-    const double sign = turn[c] > 0.0 ? 1.0 : -1.0;
-    const Vec2 left(-in.y(), in.x());
-    const Vec2 centre = start + left * (sign * corner_radius_m);
-    const double start_angle = std::atan2(start.y() - centre.y(), start.x() - centre.x());
-    const int pieces = std::max(1, static_cast<int>(std::ceil(std::abs(turn[c]) / max_step_rad)));
-    for (int k = 1; k < pieces; ++k) {
-      const double angle = start_angle + turn[c] * (static_cast<double>(k) / pieces);
-      emit(centre + corner_radius_m * Vec2(std::cos(angle), std::sin(angle)));
-    }
-    emit(end);
-  };
-  auto arc_start = [&](std::size_t c) {
-    return corners[c] - side_direction[(c + sides - 1) % sides] * tangent[c];
-  };
-  auto arc_end = [&](std::size_t c) { return corners[c] + side_direction[c % sides] * tangent[c]; };
-
-  if (closed) {
-    emit(arc_end(0));
-    for (std::size_t k = 1; k <= n; ++k) {
-      const std::size_t c = k % n;
-      emit_straight_to(arc_start(c));
-      if (tangent[c] > 0.0) emit_arc(c);
-    }
-    out.back() = out.front();  // the arc at corner 0 ends where the path began
-  } else {
-    emit(corners[0]);
-    for (std::size_t c = 1; c + 1 < n; ++c) {
-      emit_straight_to(arc_start(c));
-      if (tangent[c] > 0.0) emit_arc(c);
-    }
-    emit_straight_to(corners[n - 1]);
+    const int pieces = std::max(1, static_cast<int>(std::ceil(length / spacing_m_)));
+    for (int k = 1; k < pieces; ++k) Emit(from + (to - from) * (static_cast<double>(k) / pieces));
+    Emit(to);
   }
-  return Polyline(std::move(out), closed);
+  // Arc at corner c, from its start tangent point (already emitted) to its end tangent point.
+  void EmitArc(std::size_t c) {
+    const Vec2& in = o_.In(c);
+    const Vec2 start = o_.ArcStart(c);
+    const double turn = o_.turn[c];
+    const double sign = turn > 0.0 ? 1.0 : -1.0;
+    const Vec2 left(-in.y(), in.x());
+    const Vec2 centre = start + left * (sign * o_.corner_radius_m);
+    const double start_angle = std::atan2(start.y() - centre.y(), start.x() - centre.x());
+    const int pieces = std::max(1, static_cast<int>(std::ceil(std::abs(turn) / max_step_rad_)));
+    for (int k = 1; k < pieces; ++k) {
+      const double angle = start_angle + turn * (static_cast<double>(k) / pieces);
+      Emit(centre + o_.corner_radius_m * Vec2(std::cos(angle), std::sin(angle)));
+    }
+    Emit(o_.ArcEnd(c));
+  }
+
+  const FilletOutline& o_;
+  double spacing_m_;
+  double max_step_rad_;
+  std::vector<Vec2> out_;
+};
+
+}  // namespace
+
+Polyline SampleFilletPolyline(const PointList& points_m, double corner_radius_m, bool closed,
+                              double spacing_m) {
+  if (!(std::isfinite(corner_radius_m) && corner_radius_m >= 0.0)) {
+    throw std::invalid_argument("corner_radius_m must be finite and >= 0, got " +
+                                Num(corner_radius_m));
+  }
+  if (!(std::isfinite(spacing_m) && spacing_m > 0.0)) {
+    throw std::invalid_argument("spacing_m must be finite and > 0, got " + Num(spacing_m));
+  }
+  FilletOutline outline;
+  outline.corners = OutlineCorners(points_m, closed);
+  outline.closed = closed;
+  outline.corner_radius_m = corner_radius_m;
+  MeasureSides(&outline);
+  FitArcs(&outline);
+  return Polyline(FilletSampler(outline, spacing_m).Sample(), closed);
 }
 
 }  // namespace autonomsim::world

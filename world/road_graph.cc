@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "world/validation.h"
+
 namespace autonomsim::world {
 namespace {
 
@@ -137,10 +139,10 @@ Route MakeRoute(const RoadGraph& graph, const std::string& name,
       const Vec2& start = graph.path(b).points().front();
       throw std::invalid_argument(
           "route '" + name + "': lane '" + graph.name(a) + "' does not lead into lane '" +
-          graph.name(b) + "' (it ends at (" + std::to_string(end.x()) + ", " +
-          std::to_string(end.y()) + "), the next starts at (" + std::to_string(start.x()) + ", " +
-          std::to_string(start.y()) + "), " + std::to_string((end - start).norm()) +
-          " m apart; at most " + std::to_string(RoadGraph::kJunctionTolerance_m) + " m allowed)");
+          graph.name(b) + "' (it ends at (" + Num(end.x()) + ", " + Num(end.y()) +
+          "), the next starts at (" + Num(start.x()) + ", " + Num(start.y()) + "), " +
+          Num((end - start).norm()) + " m apart; at most " + Num(RoadGraph::kJunctionTolerance_m) +
+          " m allowed)");
     }
   }
   route.cyclic = leads_into(route.segments.back(), route.segments.front());

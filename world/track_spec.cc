@@ -28,11 +28,9 @@ void RequireOnFloor(double x_m, double y_m, double size_m, const std::string& wh
 
 void TrackLineSpec::Validate() const {
   Require(!name.empty(), "line needs a name");
-  Require(width_m > 0.0 && width_m < 1.0,
-          "width_m must be in (0, 1) m, got " + std::to_string(width_m));
+  Require(width_m > 0.0 && width_m < 1.0, "width_m must be in (0, 1) m, got " + Num(width_m));
   ValidatePoints(points_m, "points_m");
-  Require(corner_radius_m >= 0.0,
-          "corner_radius_m must be >= 0, got " + std::to_string(corner_radius_m));
+  Require(corner_radius_m >= 0.0, "corner_radius_m must be >= 0, got " + Num(corner_radius_m));
   Require(planner == "none" || planner == "line" || planner == "filled",
           "planner must be one of none, line, filled; got '" + planner + "'");
   Require(planner != "filled" || closed, "planner: filled needs closed: true");
@@ -41,8 +39,7 @@ void TrackLineSpec::Validate() const {
 void LaneSegmentSpec::Validate() const {
   Require(!name.empty(), "lane needs a name");
   ValidatePoints(points_m, "points_m");
-  Require(corner_radius_m > 0.0,
-          "corner_radius_m must be > 0, got " + std::to_string(corner_radius_m));
+  Require(corner_radius_m > 0.0, "corner_radius_m must be > 0, got " + Num(corner_radius_m));
 }
 
 void IntersectionSpec::Validate() const {
@@ -58,7 +55,7 @@ void IntersectionSpec::Validate() const {
 Pose2 StartPoseSpec::ToPose() const { return Pose2{x_m, y_m, yaw_deg * std::numbers::pi / 180.0}; }
 
 void TrackSpec::Validate() const {
-  Require(size_m > 0.0, "size_m must be > 0, got " + std::to_string(size_m));
+  Require(size_m > 0.0, "size_m must be > 0, got " + Num(size_m));
   Require(!planner_map_size_m || *planner_map_size_m >= size_m,
           "planner_map_size_m must be >= size_m (" + Num(size_m) + " m), got " +
               (planner_map_size_m ? Num(*planner_map_size_m) : std::string()));

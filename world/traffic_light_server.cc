@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "world/validation.h"
+
 namespace autonomsim::world {
 namespace {
 
@@ -21,8 +23,7 @@ void TrafficLightServerParams::Validate() const {
     throw std::invalid_argument("policy must be 'fifo' or 'original', got '" + policy + "'");
   }
   if (lease <= Duration::zero()) {
-    throw std::invalid_argument("lease_s must be > 0 s, got " + std::to_string(ToSeconds(lease)) +
-                                " s");
+    throw std::invalid_argument("lease_s must be > 0 s, got " + Num(ToSeconds(lease)) + " s");
   }
 }
 
@@ -44,8 +45,8 @@ TrafficLightServer::TrafficLightServer(TrafficLightServerParams params,
 
 void TrafficLightServer::AdvanceTo(Time now) {
   if (last_now_ && now < *last_now_) {
-    throw std::invalid_argument("time went backwards: " + std::to_string(ToSeconds(now)) +
-                                " s after " + std::to_string(ToSeconds(*last_now_)) + " s");
+    throw std::invalid_argument("time went backwards: " + Num(ToSeconds(now)) + " s after " +
+                                Num(ToSeconds(*last_now_)) + " s");
   }
   last_now_ = now;
 }

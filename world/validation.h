@@ -2,10 +2,12 @@
 // names the key and the bad value (the config reader adds file, line and key path).
 #pragma once
 
+#include <cmath>
 #include <concepts>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace autonomsim {
@@ -29,6 +31,12 @@ std::string Num(T value) {
   std::ostringstream out;
   out << value;
   return out.str();
+}
+
+// A finite x > 0, else "<key> must be > 0, got <x>" (a Duration: pass ToSeconds(d) and its _s key).
+inline void RequirePositive(double x, std::string_view key) {
+  Require(std::isfinite(x) && x > 0.0,
+          [&] { return std::string(key) + " must be > 0, got " + Num(x); });
 }
 
 }  // namespace autonomsim

@@ -4,25 +4,24 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::sim {
 
 void OracleDriverParams::Validate() const {
   if (period <= kZeroTime) throw std::invalid_argument("period_s must be > 0");
   if (!(speed_mps > 0.0 && speed_mps <= 5.0)) {
-    throw std::invalid_argument("speed_mps must be in (0, 5] m/s, got " +
-                                std::to_string(speed_mps));
+    throw std::invalid_argument("speed_mps must be in (0, 5] m/s, got " + Num(speed_mps));
   }
   if (!(lookahead_m >= 0.05 && lookahead_m <= 5.0)) {
-    throw std::invalid_argument("lookahead_m must be in [0.05, 5] m, got " +
-                                std::to_string(lookahead_m));
+    throw std::invalid_argument("lookahead_m must be in [0.05, 5] m, got " + Num(lookahead_m));
   }
   if (!(obstacle_stop_gap_m >= 0.0)) {
     throw std::invalid_argument("obstacle_stop_gap_m must be >= 0, got " +
-                                std::to_string(obstacle_stop_gap_m));
+                                Num(obstacle_stop_gap_m));
   }
   if (!(speed_gain_per_mps >= 0.0)) {
-    throw std::invalid_argument("speed_gain_per_mps must be >= 0, got " +
-                                std::to_string(speed_gain_per_mps));
+    throw std::invalid_argument("speed_gain_per_mps must be >= 0, got " + Num(speed_gain_per_mps));
   }
 }
 

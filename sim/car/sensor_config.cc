@@ -13,7 +13,7 @@ constexpr double kMaxRate_hz = 1e6;  // a sample every microsecond at most
 
 void RequireRate(double rate_hz) {
   Require(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRate_hz,
-          [&] { return "rate_hz must be in (0, 1e6], got " + std::to_string(rate_hz); });
+          [&] { return "rate_hz must be in (0, 1e6], got " + Num(rate_hz); });
 }
 
 // Rethrows a nested struct's error with its key in front, as the config reader expects paths.

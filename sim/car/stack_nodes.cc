@@ -308,6 +308,7 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::uint64_t plans{0};
     stack::PlannerScratch search;
   };
+  config.planner.Validate();  // once here: PlanThroughPoses takes them as validated
   auto state = std::make_shared<State>();
   state->costmap.emplace(config.global_costmap, static_map);
   state->costmap->Update();
@@ -341,6 +342,9 @@ void AddLocalCostmapNode(NodeGraph& graph, Cache& cache, const StackTopics& topi
     std::vector<stack::CostmapMark> pending;
     std::optional<stack::LocalizationEkfOutput> odom;
   };
+  // once here: StepObstacleLayer takes them as validated
+  config.obstacle_layer.Validate();
+  grid_params.Validate();
   auto state = std::make_shared<State>();
   state->costmap = std::make_unique<stack::LocalCostmap>(config.local_costmap);
   const NodeId node = graph.AddNode(SoftwareNode("local_costmap"));

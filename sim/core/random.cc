@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim::sim {
 namespace {
 
@@ -27,8 +29,6 @@ constexpr std::uint64_t Fnv1a64(std::string_view s) {
 }
 
 constexpr std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-
-std::string Num(double v) { return std::to_string(v); }
 
 }  // namespace
 

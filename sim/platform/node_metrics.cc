@@ -7,6 +7,9 @@
 #include <iterator>
 #include <optional>
 #include <set>
+#include <string_view>
+
+#include "world/validation.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -334,83 +337,114 @@ void AppendMicroseconds(std::int64_t ns, std::string* out) {
 }
 }  // namespace detail
 
+namespace {
+
 // A little more than one trace event's text takes (the default scenario's trace.json: 31 MB for
 // its two boards' 200 k events each, some 78 bytes an event): what TraceJson reserves per event.
 constexpr std::size_t kTypicalTraceEventBytes = 96;
 
-std::string TraceJson(const std::vector<BoardMetrics>& boards) {
-  // Written event by event rather than through a JSON document: a run's trace holds up to
-  // trace_max_events per board, and a document of them takes ~1 KB per event.
-  std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
-  bool first = true;
-  auto separate = [&] {
-    if (!first) out += ',';
-    first = false;
+// The events are most of the file: appended piece by piece, the times from integers, each after
+// a comma (they follow their board's names).
+void AppendTraceEvents(const RunMetrics& metrics, int base, std::string* out_ptr) {
+  using namespace std::string_view_literals;  // each piece's length known when compiled
+  std::string& out = *out_ptr;
+  std::vector<std::string> names;  // JSON-quoted
+  for (const std::string& name : metrics.trace_names()) {
+    names.push_back(nlohmann::json(name).dump());
+  }
+  out.reserve(out.size() + metrics.trace_events().size() * kTypicalTraceEventBytes);
+  const auto append_int = [&out](int value) {
+    const fmt::format_int text(value);
+    out.append(text.data(), text.size());
   };
-  auto meta = [&](int pid, std::optional<int> tid, const char* what, const std::string& name) {
-    nlohmann::json e = {{"name", what}, {"ph", "M"}, {"pid", pid}, {"args", {{"name", name}}}};
-    if (tid) e["tid"] = *tid;
-    separate();
-    out += e.dump();
-  };
-  std::vector<std::string> truncated;
-  for (std::size_t b = 0; b < boards.size(); ++b) {
-    const RunMetrics& metrics = *boards[b].metrics;
-    const std::string& board = boards[b].board;
-    const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
-    std::vector<std::string> names;  // JSON-quoted
-    for (const std::string& name : metrics.trace_names())
-      names.push_back(nlohmann::json(name).dump());
-    meta(base + kPidCpu, std::nullopt, "process_name",
+  for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
+    out += ",{\"name\":"sv;
+    out += names[static_cast<std::size_t>(e.name)];
+    if (e.phase == 'C') {
+      out += ",\"ph\":\"C\",\"pid\":"sv;
+      append_int(base + e.pid);
+      out += ",\"ts\":"sv;
+      detail::AppendMicroseconds(e.ts_ns, &out);
+      out += ",\"args\":{\"cores\":"sv;
+      fmt::format_to(std::back_inserter(out), "{}", e.value);
+      out += "}}"sv;
+    } else {
+      out += ",\"ph\":\"X\",\"pid\":"sv;
+      append_int(base + e.pid);
+      out += ",\"tid\":"sv;
+      append_int(e.tid);
+      out += ",\"ts\":"sv;
+      detail::AppendMicroseconds(e.ts_ns, &out);
+      out += ",\"dur\":"sv;
+      detail::AppendMicroseconds(e.dur_ns, &out);
+      out += '}';
+    }
+  }
+}
+
+// trace.json's "traceEvents", event by event rather than through a JSON document: a run's trace
+// holds up to trace_max_events per board, and a document of them takes ~1 KB per event.
+class TraceWriter {
+ public:
+  explicit TraceWriter(std::string* out) : out_(*out) {}
+
+  // The names of a board's processes (CPU, executors, receive threads, slots) and threads.
+  void AppendBoardNames(const RunMetrics& metrics, const std::string& board, int base) {
+    Meta(base + kPidCpu, std::nullopt, "process_name",
          fmt::format("{}: CPU ({} cores; busy cores, 1.0 = one core)", board, metrics.cores()));
-    meta(base + kPidExecutors, std::nullopt, "process_name",
+    Meta(base + kPidExecutors, std::nullopt, "process_name",
          board + ": node executors (jobs on the cores or in a slot)");
-    meta(base + kPidReceive, std::nullopt, "process_name", board + ": DDS receive threads");
-    meta(base + kPidSlots, std::nullopt, "process_name", board + ": FPGA slots");
+    Meta(base + kPidReceive, std::nullopt, "process_name", board + ": DDS receive threads");
+    Meta(base + kPidSlots, std::nullopt, "process_name", board + ": FPGA slots");
     for (std::size_t i = 0; i < metrics.nodes().size(); ++i) {
       const auto& n = metrics.nodes()[i];
-      meta(base + kPidExecutors, static_cast<int>(i), "thread_name",
+      Meta(base + kPidExecutors, static_cast<int>(i), "thread_name",
            n.name + " (" + n.mapping + ")");
-      meta(base + kPidReceive, static_cast<int>(i), "thread_name", n.name + " receive");
+      Meta(base + kPidReceive, static_cast<int>(i), "thread_name", n.name + " receive");
     }
     std::set<int> slots;
     for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
       if (e.pid == kPidSlots) slots.insert(e.tid);
     }
     for (int slot : slots) {
-      meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
+      Meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
     }
-    // the events are most of the file: appended piece by piece, the times from integers
-    out.reserve(out.size() + metrics.trace_events().size() * kTypicalTraceEventBytes);
-    const auto append_int = [&out](int value) {
-      const fmt::format_int text(value);
-      out.append(text.data(), text.size());
-    };
-    for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
-      const std::string& name = names[static_cast<std::size_t>(e.name)];
-      separate();
-      out += "{\"name\":";
-      out += name;
-      if (e.phase == 'C') {
-        out += ",\"ph\":\"C\",\"pid\":";
-        append_int(base + e.pid);
-        out += ",\"ts\":";
-        detail::AppendMicroseconds(e.ts_ns, &out);
-        out += ",\"args\":{\"cores\":";
-        fmt::format_to(std::back_inserter(out), "{}", e.value);
-        out += "}}";
-      } else {
-        out += ",\"ph\":\"X\",\"pid\":";
-        append_int(base + e.pid);
-        out += ",\"tid\":";
-        append_int(e.tid);
-        out += ",\"ts\":";
-        detail::AppendMicroseconds(e.ts_ns, &out);
-        out += ",\"dur\":";
-        detail::AppendMicroseconds(e.dur_ns, &out);
-        out += '}';
-      }
-    }
+  }
+
+  // The events follow their board's names, so each comes after another entry.
+  void AppendEvents(const RunMetrics& metrics, int base) {
+    Require(!first_, "TraceWriter: a board's events before its names");
+    AppendTraceEvents(metrics, base, &out_);
+  }
+
+ private:
+  void Separate() {
+    if (!first_) out_ += ',';
+    first_ = false;
+  }
+  void Meta(int pid, std::optional<int> tid, const char* what, const std::string& name) {
+    nlohmann::json e = {{"name", what}, {"ph", "M"}, {"pid", pid}, {"args", {{"name", name}}}};
+    if (tid) e["tid"] = *tid;
+    Separate();
+    out_ += e.dump();
+  }
+
+  std::string& out_;
+  bool first_{true};
+};
+
+}  // namespace
+
+std::string TraceJson(const std::vector<BoardMetrics>& boards) {
+  std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
+  TraceWriter writer(&out);
+  std::vector<std::string> truncated;
+  for (std::size_t b = 0; b < boards.size(); ++b) {
+    const RunMetrics& metrics = *boards[b].metrics;
+    const std::string& board = boards[b].board;
+    const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
+    writer.AppendBoardNames(metrics, board, base);
+    writer.AppendEvents(metrics, base);
     if (metrics.trace_truncated()) {
       truncated.push_back(fmt::format("{}: recording stopped after {} events", board,
                                       metrics.options().trace_max_events));

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "sim/core/config.h"
+#include "world/validation.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -59,11 +60,11 @@ Cpu::JobId Cpu::Start(int owner, double work_core_s, double max_parallelism,
                       std::function<void()> done) {
   if (!(work_core_s >= 0.0) || !std::isfinite(work_core_s)) {
     throw std::invalid_argument("Cpu::Start: work must be finite and >= 0, got " +
-                                std::to_string(work_core_s));
+                                Num(work_core_s));
   }
   if (!(max_parallelism > 0.0)) {
     throw std::invalid_argument("Cpu::Start: max_parallelism must be > 0, got " +
-                                std::to_string(max_parallelism));
+                                Num(max_parallelism));
   }
   Advance();
   const JobId id = next_id_++;

@@ -2,19 +2,12 @@
 
 #include <cmath>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include "world/validation.h"
 
 namespace autonomsim::sim {
 namespace {
-
-std::string Num(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 void RequireNonNegative(Duration d, const std::string& key) {
   Require(d.count() >= 0, key + " must be >= 0, got " + Num(ToSeconds(d)));

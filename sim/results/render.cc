@@ -17,6 +17,7 @@
 #include "sim/loop/simulation.h"
 #include "sim/results/png.h"
 #include "world/floor_raster.h"
+#include "world/validation.h"
 
 namespace autonomsim::sim {
 namespace {
@@ -54,9 +55,9 @@ WorldSnapshot SnapshotWithPoses(const Scenario& scenario, const std::vector<worl
 
 WorldSnapshot SnapshotAt(const LoadedScenario& scenario, Time t) {
   if (t < kZeroTime || t > scenario.scenario.duration) {
-    throw std::invalid_argument("the instant " + std::to_string(ToSeconds(t)) +
+    throw std::invalid_argument("the instant " + Num(ToSeconds(t)) +
                                 " s is outside the scenario's [0, " +
-                                std::to_string(ToSeconds(scenario.scenario.duration)) + "] s");
+                                Num(ToSeconds(scenario.scenario.duration)) + "] s");
   }
   return SnapshotsAt(scenario, {t}).front();
 }
@@ -72,8 +73,7 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
         (times.size() > 1 && t % ms != Time{0}) || (k > 0 && t <= times[k - 1])) {
       throw std::invalid_argument(
           "the instants must ascend, be whole milliseconds and lie within the scenario's [0, " +
-          std::to_string(ToSeconds(scenario.scenario.duration)) + "] s; " +
-          std::to_string(ToSeconds(t)) + " s does not");
+          Num(ToSeconds(scenario.scenario.duration)) + "] s; " + Num(ToSeconds(t)) + " s does not");
     }
     step_ms = std::gcd(step_ms, static_cast<std::int64_t>(t / ms));
   }
@@ -101,7 +101,7 @@ std::vector<WorldSnapshot> SnapshotsAt(const LoadedScenario& scenario,
                        [&](const TrajectorySample& s) { return s.car == id && s.t == t; });
       if (sample == samples.end()) {
         throw std::logic_error("SnapshotsAt: no trajectory sample of car " + std::to_string(id) +
-                               " at " + std::to_string(ToSeconds(t)) + " s");
+                               " at " + Num(ToSeconds(t)) + " s");
       }
       poses[i] = world::Pose2{sample->x_m, sample->y_m, sample->yaw_rad};
     }

@@ -422,15 +422,12 @@ void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots, con
   }
 }
 
-void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
-                     const std::vector<RunSummary>& summaries, const ResultsTable& table,
-                     const fs::path& dir) {
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  if (points.empty()) return;
-  std::vector<std::pair<std::string, PlotSpec>> plots;
+namespace {
 
-  // 1. Each key metric against each varied key; one series per car or board (column prefix).
+using NamedPlots = std::vector<std::pair<std::string, PlotSpec>>;
+
+// Each key metric against each varied key; one series per car or board (column prefix).
+void AddMetricPlots(const SweepSpec& spec, const ResultsTable& table, NamedPlots* plots) {
   for (std::size_t a = 0; a < spec.axes.size(); ++a) {
     const VaryAxis& axis = spec.axes[a];
     const AxisPositions positions = PositionsOf(axis);
@@ -452,44 +449,56 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
           .log_x = false};
       if (plot.series.empty()) continue;
       plot.subtitle = AveragedOver(spec, a, SplitAxis(spec, a), runs_per_x);
-      plots.emplace_back(FileSafe(metric.column) + "_vs_" + FileSafe(axis.key), std::move(plot));
+      plots->emplace_back(FileSafe(metric.column) + "_vs_" + FileSafe(axis.key), std::move(plot));
     }
   }
+}
 
-  // 2. CPU load over time per board; 3. turnaround histograms per board and node: a series per
-  // distinct run, in grid order.
+// Each distinct run's CPU load over time and turnaround histograms, per board and per board/node,
+// in grid order.
+struct PlatformSeries {
   std::map<std::string, std::vector<PlotSeries>> loads;       // by board
   std::map<std::string, std::vector<PlotSeries>> histograms;  // by board/node
   std::map<std::string, int> cores;
+};
+
+PlatformSeries PlatformSeriesOf(const SweepSpec& spec, const std::vector<PointRecord>& points,
+                                const std::vector<RunSummary>& summaries) {
+  PlatformSeries out;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!seen.insert(points[i].run_id).second || !summaries[i].platform) continue;
     const std::string label = RunLabel(spec, points[i]);
     for (const auto& [board, report] : *summaries[i].platform) {
-      loads[board].push_back(LoadSeries(report, label));
-      cores[board] = report.value("cores", 0);
+      out.loads[board].push_back(LoadSeries(report, label));
+      out.cores[board] = report.value("cores", 0);
       for (const nlohmann::json& node : report.at("nodes")) {
         if (auto h = HistogramSeries(node, label)) {
-          histograms[board + "/" + node.at("name").get<std::string>()].push_back(std::move(*h));
+          out.histograms[board + "/" + node.at("name").get<std::string>()].push_back(std::move(*h));
         }
       }
     }
   }
-  for (auto& [board, runs] : loads) {
-    plots.emplace_back(
+  return out;
+}
+
+// CPU load over time per board; turnaround histograms per board and node: a series per run.
+void AddPlatformPlots(PlatformSeries series, NamedPlots* plots) {
+  for (auto& [board, runs] : series.loads) {
+    plots->emplace_back(
         "cpu_load_" + FileSafe(board),
         PlotSpec{.title = fmt::format("CPU load of {}'s board over time", board),
                  .subtitle = fmt::format("Mean over each load bin; {} cores, 100 % = one core.",
-                                         cores[board]),
+                                         series.cores[board]),
                  .x_label = "simulated time (s)",
                  .y_label = "CPU load (%)",
                  .series = RunSeries(std::move(runs)),
                  .categories = {},
                  .log_x = false});
   }
-  for (auto& [name, runs] : histograms) {
+  for (auto& [name, runs] : series.histograms) {
     const auto slash = name.find('/');
-    plots.emplace_back(
+    plots->emplace_back(
         "turnaround_" + FileSafe(name),
         PlotSpec{.title = fmt::format("Turnaround of {} on {}'s board", name.substr(slash + 1),
                                       name.substr(0, slash)),
@@ -501,6 +510,19 @@ void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poin
                  .categories = {},
                  .log_x = true});
   }
+}
+
+}  // namespace
+
+void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
+                     const std::vector<RunSummary>& summaries, const ResultsTable& table,
+                     const fs::path& dir) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  if (points.empty()) return;
+  NamedPlots plots;
+  AddMetricPlots(spec, table, &plots);
+  AddPlatformPlots(PlatformSeriesOf(spec, points, summaries), &plots);
   RenderPlots(plots, dir);
 }
 

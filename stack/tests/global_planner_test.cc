@@ -211,8 +211,7 @@ TEST(GlobalPlannerTest, OutsideMapAndTrivialCases) {
   ASSERT_TRUE(same.ok());
   EXPECT_EQ(same.path_m, (std::vector<Vec2>{Centre(map, 5, 5)}));
   EXPECT_EQ(same.cost, 0.0);
-  EXPECT_THROW(PlanGlobalPath({.tolerance_m = -1.0}, map, Vec2(0.5, 0.5), Vec2(0.6, 0.6)),
-               std::invalid_argument);
+  EXPECT_THROW(GlobalPlannerParams{.tolerance_m = -1.0}.Validate(), std::invalid_argument);
 }
 
 TEST(GlobalPlannerTest, ExpansionLimitIsAStatus) {
