@@ -41,7 +41,7 @@ struct Options {
   std::string password_file;
   std::string cafile, certfile, keyfile;
   // the server's own defaults (world/traffic_light_server.h) and the lab's two intersections
-  std::string policy{world::TrafficLightServerParams{}.policy};
+  std::string policy{ToName(world::TrafficLightServerParams{}.policy)};
   double lease_s{ToSeconds(world::TrafficLightServerParams{}.lease)};
   std::vector<int> intersections{ServiceOptions{}.intersections};
   bool sim_clock{false};
@@ -73,7 +73,7 @@ sim::MqttOptions ToMqttOptions(const Options& o) {
 
 ServiceOptions ToServiceOptions(const Options& o) {
   ServiceOptions service_options;
-  service_options.params.policy = o.policy;
+  service_options.params.policy = *FromName<world::ServerPolicy>(o.policy);  // CLI checked it
   service_options.params.lease = FromSeconds(o.lease_s);
   service_options.intersections = o.intersections;
   service_options.sim_clock = o.sim_clock;

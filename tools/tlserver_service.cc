@@ -218,7 +218,7 @@ std::vector<MqttMessage> Service::OnReset(const MqttMessage& message) {
   std::string ids;
   for (int id : reset.intersections) ids += (ids.empty() ? "" : ",") + std::to_string(id);
   spdlog::info("simulation run {} drives the server: policy {}, lease {} s, intersections {}",
-               reset.epoch, reset.params.policy, ToSeconds(reset.params.lease), ids);
+               reset.epoch, ToName(reset.params.policy), ToSeconds(reset.params.lease), ids);
   epoch_ = reset.epoch;
   last_seq_ = 0;
   last_now_ = kZeroTime;
@@ -350,7 +350,7 @@ nlohmann::json Service::StatusJson(bool online) const {
   const world::TrafficLightServer::Counters c = server_.counters();
   return Json{{"online", online},
               {"clock", options_.sim_clock ? "simulation" : "wall"},
-              {"policy", server_.params().policy},
+              {"policy", ToName(server_.params().policy)},
               {"lease_s", ToSeconds(server_.params().lease)},
               {"run", epoch_ ? Json(*epoch_) : Json()},
               {"intersections", intersections},

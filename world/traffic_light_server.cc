@@ -19,9 +19,6 @@ void CheckId(int id, const char* what) {
 }  // namespace
 
 void TrafficLightServerParams::Validate() const {
-  if (policy != "fifo" && policy != "original") {
-    throw std::invalid_argument("policy must be 'fifo' or 'original', got '" + policy + "'");
-  }
   if (lease <= Duration::zero()) {
     throw std::invalid_argument("lease_s must be > 0 s, got " + Num(ToSeconds(lease)) + " s");
   }
@@ -31,7 +28,7 @@ TrafficLightServer::TrafficLightServer(TrafficLightServerParams params,
                                        std::vector<int> intersection_ids)
     : params_(std::move(params)) {
   params_.Validate();
-  fifo_ = params_.policy == "fifo";
+  fifo_ = params_.policy == ServerPolicy::kFifo;
   if (intersection_ids.empty()) {
     throw std::invalid_argument("intersection_ids must not be empty");
   }

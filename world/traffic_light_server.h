@@ -37,14 +37,29 @@
 #include <string>
 #include <vector>
 
+#include "world/enum_names.h"
 #include "world/time.h"
 #include "world/v2i_protocol.h"
 
 namespace autonomsim::world {
 
+// "fifo": ours (above); "original": the lab's vtl.py behaviour (reference §7).
+enum class ServerPolicy { kFifo, kOriginal };
+
+}  // namespace autonomsim::world
+
+namespace autonomsim {
+template <>
+struct NameTable<world::ServerPolicy> {
+  static constexpr std::array<std::pair<world::ServerPolicy, std::string_view>, 2> kEntries{
+      {{world::ServerPolicy::kFifo, "fifo"}, {world::ServerPolicy::kOriginal, "original"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::world {
+
 struct TrafficLightServerParams {
-  // "fifo": ours (above); "original": the lab's vtl.py behaviour (reference §7).
-  std::string policy{"fifo"};
+  ServerPolicy policy{ServerPolicy::kFifo};
   // Assumed: the reference has no timeout at all (§7). A holder silent this long loses its grant;
   // it must exceed the cars' keepalive and retry periods (stack/intersection_client.h, 1 s) with
   // room for a few lost messages.

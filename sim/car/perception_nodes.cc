@@ -12,16 +12,16 @@ namespace {
 
 // The real build's slots (reference §8): 0 point cloud + obstacle grid, 1 lane planner (HSV,
 // threshold, warp), 2 polynomial fit.
-const NodeMappingConfig kSlot0{.target = "hw", .slot = 0};
-const NodeMappingConfig kSlot1{.target = "hw", .slot = 1};
-const NodeMappingConfig kSlot2{.target = "hw", .slot = 2};
-const NodeMappingConfig kSoftware{.target = "sw"};
+const NodeMappingConfig kSlot0{.target = Target::kHw, .slot = 0};
+const NodeMappingConfig kSlot1{.target = Target::kHw, .slot = 1};
+const NodeMappingConfig kSlot2{.target = Target::kHw, .slot = 2};
+const NodeMappingConfig kSoftware{.target = Target::kSw};
 
 // The node's target as the board will map it: its configured mapping, else its default.
 bool InHardware(const std::map<std::string, NodeMappingConfig>& mapping, const std::string& node,
                 const NodeMappingConfig& fallback) {
   const auto it = mapping.find(node);
-  return (it != mapping.end() ? it->second.target : fallback.target) == "hw";
+  return (it != mapping.end() ? it->second.target : fallback.target) == Target::kHw;
 }
 
 // Messages between perception nodes that the rest of the stack does not read. Like the real

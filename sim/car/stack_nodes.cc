@@ -67,7 +67,7 @@ MessageType SensorTopicType(const SensorStream& stream) {
 }
 
 NodeSpec SoftwareNode(const char* name) {
-  return NodeSpec{.name = name, .mapping = NodeMappingConfig{.target = "sw"}};
+  return NodeSpec{.name = name, .mapping = NodeMappingConfig{.target = Target::kSw}};
 }
 
 // The stack's topics, made once. The members are initialised in this order, which is the order

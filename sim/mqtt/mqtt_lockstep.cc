@@ -135,7 +135,7 @@ world::Decoded<ResponseTag> DecodeResponseTag(std::string_view text) {
 
 std::string EncodeReset(const SimReset& reset) {
   return Json{{"epoch", reset.epoch},
-              {"policy", reset.params.policy},
+              {"policy", ToName(reset.params.policy)},
               {"lease_ns", reset.params.lease.count()},
               {"intersections", reset.intersections}}
       .dump();
@@ -147,7 +147,10 @@ world::Decoded<SimReset> DecodeReset(std::string_view json) {
     SimReset reset;
     reset.epoch = j.at("epoch").get<std::string>();
     if (!IsValidEpoch(reset.epoch)) throw std::invalid_argument("bad epoch " + Show(reset.epoch));
-    reset.params.policy = j.at("policy").get<std::string>();
+    const std::string policy = j.at("policy").get<std::string>();
+    const std::optional<world::ServerPolicy> named = FromName<world::ServerPolicy>(policy);
+    if (!named) throw std::invalid_argument("policy: unknown " + Show(policy));
+    reset.params.policy = *named;
     reset.params.lease = Duration{Integer<std::int64_t>(j.at("lease_ns"), "lease_ns")};
     const Json& intersections = j.at("intersections");
     if (!intersections.is_array()) throw std::invalid_argument("intersections: expected a list");

@@ -16,10 +16,6 @@ double SwWorkSeconds(const SwCost& sw, std::int64_t in_bytes, std::int64_t out_b
 
 }  // namespace
 
-const char* TransportName(Transport transport) {
-  return transport == Transport::kDds ? "dds" : "zero_copy";
-}
-
 NodeGraph::NodeGraph(Platform& platform, RunMetrics* metrics, const RngStreams* rng,
                      std::string rng_prefix)
     : platform_(platform),
@@ -66,7 +62,7 @@ void NodeGraph::CheckConfigUsed() const {
 
 int NodeGraph::AddTopicImpl(TopicSpec spec) {
   if (const auto it = transport_config_.find(spec.name); it != transport_config_.end()) {
-    spec.transport = it->second.transport == "dds" ? Transport::kDds : Transport::kZeroCopy;
+    spec.transport = it->second.transport;
     if (it->second.depth) spec.depth = *it->second.depth;
   }
   if (spec.depth < 1) {
@@ -93,7 +89,7 @@ int NodeGraph::AddTopicImpl(TopicSpec spec) {
   }
   if (metrics_) {
     topic.metrics_index =
-        metrics_->AddTopic(spec.name, TransportName(spec.transport), spec.type.bytes);
+        metrics_->AddTopic(spec.name, std::string(ToName(spec.transport)), spec.type.bytes);
   }
   topics_.push_back(std::move(topic));
   return static_cast<int>(topics_.size()) - 1;
@@ -108,7 +104,7 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
   }
   const std::string cost_name = spec.mapping.cost.value_or(spec.name);
   ComponentCost cost = spec.cost ? *spec.cost : platform_.profile().Component(cost_name);
-  const bool hw = spec.mapping.target == "hw";
+  const bool hw = spec.mapping.target == Target::kHw;
   if (hw && !cost.hw) {
     throw ConfigError("node '" + spec.name + "' is mapped to hw, but components." + cost_name +
                       " of profile '" + platform_.profile().name + "' has no 'hw' cost");

@@ -50,8 +50,7 @@ inline MessageType Grid234() { return {"Grid234", 240, true}; }                 
 inline MessageType LanePoints() { return {"LanePoints", 248, true}; }            // 30*8 + 8
 }  // namespace msg
 
-enum class Transport { kDds, kZeroCopy };
-const char* TransportName(Transport transport);
+// Transport (dds, zero_copy) is in platform_profile.h, where a scenario names it.
 
 struct TopicSpec {
   std::string name;

@@ -128,15 +128,12 @@ PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
 }
 
 void NodeMappingConfig::Validate() const {
-  Require(target == "sw" || target == "hw", "target must be 'sw' or 'hw', got '" + target + "'");
-  if (target == "hw") Require(slot.has_value(), "a node mapped to 'hw' needs a 'slot'");
-  if (target == "sw") Require(!slot.has_value(), "'slot' is only for target 'hw'");
+  if (target == Target::kHw) Require(slot.has_value(), "a node mapped to 'hw' needs a 'slot'");
+  if (target == Target::kSw) Require(!slot.has_value(), "'slot' is only for target 'hw'");
   if (slot) Require(*slot >= 0, "slot must be >= 0, got " + std::to_string(*slot));
 }
 
 void TopicTransportConfig::Validate() const {
-  Require(transport == "dds" || transport == "zero_copy",
-          "transport must be 'dds' or 'zero_copy', got '" + transport + "'");
   if (depth) Require(*depth >= 1, "depth must be >= 1, got " + std::to_string(*depth));
 }
 

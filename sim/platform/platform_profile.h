@@ -223,10 +223,32 @@ PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
 
 // ---- How a run uses the platform: the fields a scenario embeds as `platform:` ----
 
+// Where a node runs: on the CPU cores, or in an FPGA slot.
+enum class Target { kSw, kHw };
+// How a topic is carried: DDS over loopback sockets, or zero-copy shared memory (Iceoryx).
+enum class Transport { kDds, kZeroCopy };
+
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::Target> {
+  static constexpr std::array<std::pair<sim::Target, std::string_view>, 2> kEntries{
+      {{sim::Target::kSw, "sw"}, {sim::Target::kHw, "hw"}}};
+};
+template <>
+struct NameTable<sim::Transport> {
+  static constexpr std::array<std::pair<sim::Transport, std::string_view>, 2> kEntries{
+      {{sim::Transport::kDds, "dds"}, {sim::Transport::kZeroCopy, "zero_copy"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::sim {
+
 // Where one node runs: "sw" on the CPU cores, or "hw" in FPGA slot `slot`. `cost` names the
 // profile's components entry (default: the node's name).
 struct NodeMappingConfig {
-  std::string target{"sw"};
+  Target target{Target::kSw};
   std::optional<int> slot;
   std::optional<std::string> cost;
 
@@ -242,7 +264,7 @@ struct NodeMappingConfig {
 // How one topic is carried: "dds" (loopback sockets) or "zero_copy" (Iceoryx), and its QoS
 // history depth (keep-last).
 struct TopicTransportConfig {
-  std::string transport{"zero_copy"};
+  Transport transport{Transport::kZeroCopy};
   std::optional<int> depth;
 
   template <class V>

@@ -78,7 +78,7 @@ Table1Result RunOne(const PlatformProfile& profile, const Table1Row& row, const 
     TopicId<Frame> out = graph.AddTopic<Frame>(
         {.name = "/" + stage.node, .type = stage.output, .transport = setup.transport});
     NodeMappingConfig mapping;
-    if (stage.hw) mapping = {.target = "hw", .slot = stage.slot};
+    if (stage.hw) mapping = {.target = Target::kHw, .slot = stage.slot};
     AddComponentNode(graph, NodeSpec{.name = stage.node, .mapping = mapping}, in, out, PassParams{},
                      std::make_shared<PassState>(), PassStep);
     in = out;
@@ -172,7 +172,7 @@ WholeUnitResult RunWholeUnit(const PlatformProfile& profile, const Table1Options
 
   kernel.RunUntil(options.duration);
   WholeUnitResult result;
-  result.transport = TransportName(transport);
+  result.transport = std::string(ToName(transport));
   BoardReport report = board.Report(options.duration);
   result.cpu_percent = report.report.cpu_percent;
   result.demand_percent = report.report.cpu_demand_percent;

@@ -303,8 +303,9 @@ ExpectationResult Evaluate(const MinThroughputExpect& args, const RunRecord& rec
 constexpr double kStillSpeed_mps = 0.02;  // assumed: 2 cm/s, below any driving speed
 constexpr double kDefaultGridlock_s = 30.0;
 
-ExpectationResult Evaluate(const NoGridlockExpect& args, const RunRecord& record) {
-  const double bound_s = args.max_s.value_or(kDefaultGridlock_s);
+// Per car, the intervals in which standing still is excused (see no_gridlock above), in time
+// order.
+std::map<int, std::vector<std::pair<Time, Time>>> ExcusedStandstills(const RunRecord& record) {
   // the holder timeline of each intersection, and the parked instants
   std::map<int, std::vector<std::pair<Time, int>>> holders;  // intersection -> (since, holder)
   std::map<int, Time> parked;
@@ -344,6 +345,12 @@ ExpectationResult Evaluate(const NoGridlockExpect& args, const RunRecord& record
       excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
   }
   for (auto& [car, intervals] : excused) std::sort(intervals.begin(), intervals.end());
+  return excused;
+}
+
+ExpectationResult Evaluate(const NoGridlockExpect& args, const RunRecord& record) {
+  const double bound_s = args.max_s.value_or(kDefaultGridlock_s);
+  std::map<int, std::vector<std::pair<Time, Time>>> excused = ExcusedStandstills(record);
 
   struct Still {
     std::optional<Time> since;  // unexcused standstill began

@@ -385,6 +385,7 @@ std::string ReportHtml(const json& data) {
   ReplacePlaceholder(page, "/*@UPLOT_CSS@*/", report_assets::kUplotCss);
   ReplacePlaceholder(page, "/*@REPORT_CSS@*/", report_assets::kCss);
   ReplacePlaceholder(page, "/*@UPLOT_JS@*/", report_assets::kUplotJs);
+  ReplacePlaceholder(page, "/*@KINDS_JS@*/", report_assets::kKindsJs);
   ReplacePlaceholder(page, "/*@REPORT_JS@*/", report_assets::kJs);
   ReplacePlaceholder(page, "@DATA@", data_text);
   return page;

@@ -164,7 +164,7 @@ int DrawTrackLegend(cv::Mat& image, const Scenario& scenario, int legend_x, bool
     y += 24;
   }
   Cross(image, {legend_x + 13, y - 5}, 7, kCollisionMarkerBgr, 3);
-  Text(image, "collision", {legend_x + 34, y}, 0.45);
+  Text(image, "collision", {legend_x + 34, y}, 0.45);  // not a kind: the legend's word
   y += 24;
   cv::rectangle(image, cv::Rect(legend_x, y - 14, 26, 14), kZoneGrey, 2);
   Text(image, "intersection", {legend_x + 34, y}, 0.45);

@@ -117,9 +117,11 @@ std::map<int, IntersectionTimeline> IntersectionTimelines(const FinishedRun& run
     if (it == out.end()) continue;
     IntersectionState next = it->second.states.back();
     if (e.type == EventKind::kGrant) next.holder = e.car;
-    if ((e.type == EventKind::kFree && next.holder == e.car) || e.type == EventKind::kLeaseExpired) next.holder = -1;
+    if ((e.type == EventKind::kFree && next.holder == e.car) || e.type == EventKind::kLeaseExpired)
+      next.holder = -1;
     auto& q = next.queue;
-    if (e.type == EventKind::kWait && std::find(q.begin(), q.end(), e.car) == q.end()) q.push_back(e.car);
+    if (e.type == EventKind::kWait && std::find(q.begin(), q.end(), e.car) == q.end())
+      q.push_back(e.car);
     if (e.type == EventKind::kGo || e.type == EventKind::kEnter)
       q.erase(std::remove(q.begin(), q.end(), e.car), q.end());
     it->second.since.push_back(e.t);

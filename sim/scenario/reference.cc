@@ -16,10 +16,10 @@ namespace {
 // unit words at its end, e.g. `lease_s` s, `q_position_m2_per_s` m²/s, `gain_per_mps` 1/(m/s).
 std::string UnitOf(std::string_view key) {
   static const std::map<std::string_view, std::string_view> kUnits = {
-      {"s", "s"},     {"s2", "s²"},       {"s3", "s³"},   {"m", "m"},     {"m2", "m²"},
-      {"mps", "m/s"}, {"mps2", "m/s²"},   {"rad", "rad"}, {"rad2", "rad²"}, {"deg", "deg"},
-      {"hz", "Hz"},   {"px", "px"},       {"kg", "kg"},   {"percent", "%"}, {"bytes", "B"},
-      {"ms", "ms"}};
+      {"s", "s"},       {"s2", "s²"},     {"s3", "s³"},     {"m", "m"},
+      {"m2", "m²"},     {"mps", "m/s"},   {"mps2", "m/s²"}, {"rad", "rad"},
+      {"rad2", "rad²"}, {"deg", "deg"},   {"hz", "Hz"},     {"px", "px"},
+      {"kg", "kg"},     {"percent", "%"}, {"bytes", "B"},   {"ms", "ms"}};
   std::vector<std::string_view> words;
   for (std::size_t start = 0; start <= key.size();) {
     const std::size_t end = std::min(key.find('_', start), key.size());
@@ -121,7 +121,7 @@ void Describe(ReferenceWriter& writer, const std::string& path, const T& value) 
     using E = typename T::value_type;
     if constexpr (IsKindVariant<E>::value) {  // faults, expect: their own sections
       writer.rows.push_back({path, "list (see below)", "", "[]"});
-    } else if constexpr (requires(E& e, ReferenceWriter& w) { e.Describe(w); }) {
+    } else if constexpr (requires(E & e, ReferenceWriter & w) { e.Describe(w); }) {
       writer.rows.push_back({path, "list", "", fmt::format("{} entries", value.size())});
       Describe(writer, path + "[i]", E{});
     } else {
@@ -134,14 +134,14 @@ void Describe(ReferenceWriter& writer, const std::string& path, const T& value) 
   } else if constexpr (detail::IsMap<T>::value) {
     writer.rows.push_back({path, "mapping by name", "", "{}"});
     Describe(writer, path + ".<name>", typename T::mapped_type{});
-  } else if constexpr (requires(T& t, ReferenceWriter& w) { t.Describe(w); }) {
+  } else if constexpr (requires(T & t, ReferenceWriter & w) { t.Describe(w); }) {
     const std::string outer = writer.prefix();
     writer.SetPrefix(path);
     const_cast<T&>(value).Describe(writer);  // reads only
     writer.SetPrefix(outer);
   } else {
-    writer.rows.push_back({path, TypeName<T>(), UnitOf(Last(path)),
-                           detail::ToJsonValue(value).dump()});
+    writer.rows.push_back(
+        {path, TypeName<T>(), UnitOf(Last(path)), detail::ToJsonValue(value).dump()});
   }
 }
 

@@ -111,7 +111,7 @@ TEST_F(ServiceTest, TheWallClockExpiresLeasesThroughTheTimer) {
 
 TEST_F(ServiceTest, TheOriginalPolicyIsSelectable) {
   ServiceOptions o = Options();
-  o.params.policy = "original";
+  o.params.policy = world::ServerPolicy::kOriginal;
   Service s(o);
   s.OnMessage(Msg("/vtl/request", "00"), FromSeconds(1));
   EXPECT_EQ(Responses(s.OnMessage(Msg("/vtl/request", "10"), FromSeconds(1))),

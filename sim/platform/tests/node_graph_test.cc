@@ -277,8 +277,8 @@ TEST(NodeGraph, ScenarioMappingAndTransportApplyByName) {
   profile.components["work"] =
       ComponentCost{.sw = SwCost{.work_s = 0.030}, .hw = HwCost{.compute_s = 0.005}};
   PlatformConfig config;
-  config.mapping["work"] = NodeMappingConfig{.target = "hw", .slot = 1};
-  config.transport["/in"] = TopicTransportConfig{.transport = "dds", .depth = 1};
+  config.mapping["work"] = NodeMappingConfig{.target = Target::kHw, .slot = 1};
+  config.transport["/in"] = TopicTransportConfig{.transport = Transport::kDds, .depth = 1};
   Rig rig(profile);
   rig.graph.ApplyConfig(config);
   auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
@@ -318,16 +318,16 @@ TEST(NodeGraph, MappingErrorsAreConfigErrors) {
   EXPECT_THROW(rig.graph.AddNode(NodeSpec{.name = "hw_only"}), ConfigError);  // no sw cost
   EXPECT_THROW(rig.graph.AddNode(NodeSpec{.name = "missing"}), ConfigError);  // no cost at all
   rig.graph.AddNode(
-      NodeSpec{.name = "a", .mapping = {.target = "hw", .slot = 0, .cost = "hw_only"}});
+      NodeSpec{.name = "a", .mapping = {.target = Target::kHw, .slot = 0, .cost = "hw_only"}});
   try {
     rig.graph.AddNode(
-        NodeSpec{.name = "b", .mapping = {.target = "hw", .slot = 0, .cost = "hw_only"}});
+        NodeSpec{.name = "b", .mapping = {.target = Target::kHw, .slot = 0, .cost = "hw_only"}});
     FAIL() << "expected a ConfigError";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("already serves node 'a'"));
   }
   EXPECT_THROW(rig.graph.AddNode(NodeSpec{
-                   .name = "c", .mapping = {.target = "hw", .slot = 7, .cost = "hw_only"}}),
+                   .name = "c", .mapping = {.target = Target::kHw, .slot = 7, .cost = "hw_only"}}),
                ConfigError);
 }
 
@@ -369,8 +369,8 @@ TEST(Board, BuildsFromAScenarioConfigAndWritesNodesCsvTraceAndSummary) {
   // The closed loop's way in: a board per car from the scenario's `platform:` section.
   PlatformConfig config;
   config.profile = "platforms/zcu104.yaml";
-  config.mapping["point_cloud"] = NodeMappingConfig{.target = "hw", .slot = 0};
-  config.transport["/points"] = TopicTransportConfig{.transport = "dds"};
+  config.mapping["point_cloud"] = NodeMappingConfig{.target = Target::kHw, .slot = 0};
+  config.transport["/points"] = TopicTransportConfig{.transport = Transport::kDds};
   Kernel kernel;
   RngStreams rng(1);
   Board board(kernel, "car0", config, "scenarios", &rng, milliseconds(500));
@@ -491,7 +491,7 @@ TEST(NodeGraph, ACachingSubscriptionNeedsASoftwareNode) {
   Rig rig(profile);
   auto topic = rig.graph.AddTopic<int>({.name = "/frames", .type = {"Frame", 64, true}});
   const NodeId node = rig.graph.AddNode(
-      NodeSpec{.name = "hw_node", .mapping = NodeMappingConfig{.target = "hw", .slot = 0}});
+      NodeSpec{.name = "hw_node", .mapping = NodeMappingConfig{.target = Target::kHw, .slot = 0}});
   EXPECT_THROW(rig.graph.AddSubscription<int>(
                    node, topic, [](const int&, Time, Outbox&) {},
                    SubscriptionOptions{.cost = SwCost{.work_s = 0.001}}),

@@ -295,7 +295,7 @@ TEST(Profile, PlatformConfigValidates) {
       "transport: {/points: {transport: dds, depth: 1}}\n");
   const PlatformConfig config = ReadConfig<PlatformConfig>(ok, ConfigSource{"s.yaml", {}});
   EXPECT_EQ(config.mapping.at("point_cloud").slot, 0);
-  EXPECT_EQ(config.transport.at("/points").transport, "dds");
+  EXPECT_EQ(config.transport.at("/points").transport, Transport::kDds);
   for (const char* bad : {"mapping: {a: {target: fpga}}", "mapping: {a: {target: hw}}",
                           "mapping: {a: {target: sw, slot: 1}}",
                           "transport: {/x: {transport: shm}}", "transport: {/x: {depth: 0}}"}) {

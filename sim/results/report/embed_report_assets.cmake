@@ -1,9 +1,11 @@
 # Writes OUT: a C++ file defining autonomsim::sim::report_assets::<name>[] as raw string literals
-# of the report page's files. Called at build time with -DOUT=... -DDIR=... (sim/results/report).
+# of the report page's files. Called at build time with -DOUT=... -DDIR=... (sim/results/report)
+# -DKINDS=... (the generated kinds.js, an absolute path).
 set(assets
   "kHtml|report.html"
   "kCss|report.css"
   "kJs|report.js"
+  "kKindsJs|${KINDS}"
   "kUplotJs|vendor/uplot/uPlot.iife.min.js"
   "kUplotCss|vendor/uplot/uPlot.min.css"
   "kIndexHtml|sweep_index.html")
@@ -15,7 +17,11 @@ foreach(asset IN LISTS assets)
   string(REPLACE "|" ";" parts "${asset}")
   list(GET parts 0 name)
   list(GET parts 1 file)
-  file(READ "${DIR}/${file}" content)
+  if(IS_ABSOLUTE "${file}")
+    file(READ "${file}" content)
+  else()
+    file(READ "${DIR}/${file}" content)
+  endif()
   string(FIND "${content}" ")${delimiter}\"" clash)
   if(NOT clash EQUAL -1)
     message(FATAL_ERROR "${file} contains the raw string delimiter )${delimiter}\"")

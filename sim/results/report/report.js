@@ -78,22 +78,22 @@
 
   // ---------- what the events say over time ----------
   const EVENT_STYLE = {
-    collision: { colour: "#ff3b30", label: "collision", size: 7 },
-    enter: { colour: "#58a6ff", label: "enters an intersection", size: 4 },
-    exit: { colour: "#2f6fb3", label: "leaves it", size: 3 },
-    request: { colour: "#8b949e", label: "request", size: 2 },
-    grant: { colour: "#3fb950", label: "grant", size: 4 },
-    denied: { colour: "#d29922", label: "denied", size: 3 },
-    free: { colour: "#a371f7", label: "free", size: 3 },
-    lease_expired: { colour: "#ff7b72", label: "lease expired", size: 5 },
-    queue_drop: { colour: "#ff7b72", label: "dropped from the queue", size: 5 },
-    wait: { colour: "#e3b341", label: "waiting (bar: until go)", size: 3 },
-    go: { colour: "#e3b341", label: "go", size: 2 },
-    lap: { colour: "#ffffff", label: "lap", size: 5 },
-    behavior: { colour: "#db61a2", label: "behaviour", size: 3 },
-    parked: { colour: "#bbbbbb", label: "parked", size: 4 },
-    fault_begin: { colour: "#f0883e", label: "fault (bar: while it lasts)", size: 5 },
-    fault_end: { colour: "#f0883e", label: "fault ends", size: 3 },
+    [EVENT.COLLISION]: { colour: "#ff3b30", label: EVENT.COLLISION, size: 7 },
+    [EVENT.ENTER]: { colour: "#58a6ff", label: "enters an intersection", size: 4 },
+    [EVENT.EXIT]: { colour: "#2f6fb3", label: "leaves it", size: 3 },
+    [EVENT.REQUEST]: { colour: "#8b949e", label: EVENT.REQUEST, size: 2 },
+    [EVENT.GRANT]: { colour: "#3fb950", label: EVENT.GRANT, size: 4 },
+    [EVENT.DENIED]: { colour: "#d29922", label: EVENT.DENIED, size: 3 },
+    [EVENT.FREE]: { colour: "#a371f7", label: EVENT.FREE, size: 3 },
+    [EVENT.LEASE_EXPIRED]: { colour: "#ff7b72", label: "lease expired", size: 5 },
+    [EVENT.QUEUE_DROP]: { colour: "#ff7b72", label: "dropped from the queue", size: 5 },
+    [EVENT.WAIT]: { colour: "#e3b341", label: "waiting (bar: until go)", size: 3 },
+    [EVENT.GO]: { colour: "#e3b341", label: EVENT.GO, size: 2 },
+    [EVENT.LAP]: { colour: "#ffffff", label: EVENT.LAP, size: 5 },
+    [EVENT.BEHAVIOR]: { colour: "#db61a2", label: "behaviour", size: 3 },
+    [EVENT.PARKED]: { colour: "#bbbbbb", label: EVENT.PARKED, size: 4 },
+    [EVENT.FAULT_BEGIN]: { colour: "#f0883e", label: "fault (bar: while it lasts)", size: 5 },
+    [EVENT.FAULT_END]: { colour: "#f0883e", label: "fault ends", size: 3 },
   };
   const styleOf = (type) => EVENT_STYLE[type] || { colour: "#cccccc", label: type, size: 3 };
 
@@ -101,7 +101,7 @@
     const who = e.car !== undefined ? "car " + e.car : "server";
     let what = e.type;
     if (e.intersection !== undefined) what += " intersection " + e.intersection;
-    if (e.type === "enter") what += e.granted ? " (granted)" : " (WITHOUT grant)";
+    if (e.type === EVENT.ENTER) what += e.granted ? " (granted)" : " (WITHOUT grant)";
     if (e.other_car !== undefined) what += " with car " + e.other_car;
     if (e.obstacle) what += " with obstacle '" + e.obstacle + "'";
     if (e.lap) what += " " + e.lap;
@@ -119,8 +119,8 @@
   {
     const openWait = new Map();
     for (const e of data.events) {
-      if (e.type === "wait") openWait.set(e.car, { car: e.car, intersection: e.intersection, from: e.t });
-      if (e.type === "go" && openWait.has(e.car)) {
+      if (e.type === EVENT.WAIT) openWait.set(e.car, { car: e.car, intersection: e.intersection, from: e.t });
+      if (e.type === EVENT.GO && openWait.has(e.car)) {
         waitBars.push({ ...openWait.get(e.car), to: e.t });
         openWait.delete(e.car);
       }
@@ -128,10 +128,10 @@
       if (!s) continue;
       const prev = s.states[s.states.length - 1];
       const next = { holder: prev.holder, queue: prev.queue.slice() };
-      if (e.type === "grant") next.holder = e.car;
-      if ((e.type === "free" && prev.holder === e.car) || e.type === "lease_expired") next.holder = null;
-      if (e.type === "wait" && !next.queue.includes(e.car)) next.queue.push(e.car);
-      if (e.type === "go" || e.type === "enter") next.queue = next.queue.filter((c) => c !== e.car);
+      if (e.type === EVENT.GRANT) next.holder = e.car;
+      if ((e.type === EVENT.FREE && prev.holder === e.car) || e.type === EVENT.LEASE_EXPIRED) next.holder = null;
+      if (e.type === EVENT.WAIT && !next.queue.includes(e.car)) next.queue.push(e.car);
+      if (e.type === EVENT.GO || e.type === EVENT.ENTER) next.queue = next.queue.filter((c) => c !== e.car);
       if (next.holder !== prev.holder || next.queue.length !== prev.queue.length) {
         s.times.push(e.t);
         s.states.push(next);
@@ -147,8 +147,8 @@
     const open = [];
     for (const e of data.events) {
       const row = e.car !== undefined ? e.car : FLEET;
-      if (e.type === "fault_begin") open.push({ row, fault: e.fault, from: e.t, to: T_END });
-      if (e.type === "fault_end") {
+      if (e.type === EVENT.FAULT_BEGIN) open.push({ row, fault: e.fault, from: e.t, to: T_END });
+      if (e.type === EVENT.FAULT_END) {
         const i = open.findIndex((b) => b.row === row && b.fault === e.fault);
         if (i >= 0) faultBars.push({ ...open.splice(i, 1)[0], to: e.t });
       }
@@ -160,7 +160,7 @@
     return s.states[Math.max(0, lastAtOrBefore(s.times, t))];
   }
   const eventTimes = data.events.map((e) => e.t);
-  const collisions = data.events.filter((e) => e.type === "collision");
+  const collisions = data.events.filter((e) => e.type === EVENT.COLLISION);
   const failures = data.expectations.filter((x) => !x.passed && x.at_s !== undefined);
 
   // ---------- header ----------
@@ -466,12 +466,12 @@
     tctx.fillStyle = "#f0883e";
     for (const l of faultLabels.values()) tctx.fillText(l.names.join(" + "), l.x + 3, l.y - 1);
     for (const e of data.events) {
-      const r = rowOf(e.car !== undefined ? e.car : e.type.startsWith("fault_") ? FLEET : undefined);
+      const r = rowOf(e.car !== undefined ? e.car : (e.type === EVENT.FAULT_BEGIN || e.type === EVENT.FAULT_END) ? FLEET : undefined);
       if (r < 0) continue;
       const st = styleOf(e.type);
       const x = tlX(e.t), y = TL.top + r * TL.rowH + TL.rowH / 2;
-      tctx.fillStyle = e.type === "enter" && !e.granted ? "#ff3b30" : st.colour;
-      if (e.type === "collision") {
+      tctx.fillStyle = e.type === EVENT.ENTER && !e.granted ? "#ff3b30" : st.colour;
+      if (e.type === EVENT.COLLISION) {
         tctx.beginPath(); tctx.moveTo(x, y - st.size); tctx.lineTo(x + st.size, y + st.size);
         tctx.lineTo(x - st.size, y + st.size); tctx.closePath(); tctx.fill();
       } else {
@@ -517,7 +517,7 @@
       if (!shown.has(type)) continue;
       legend.append(el("span", {}, el("i", { style: "background:" + st.colour }), st.label));
     }
-    if (data.events.some((e) => e.type === "enter" && !e.granted)) {
+    if (data.events.some((e) => e.type === EVENT.ENTER && !e.granted)) {
       legend.append(el("span", {}, el("i", { style: "background:#ff3b30" }), "enters without grant"));
     }
     if (failures.length) legend.append(el("span", {}, el("i", { style: "background:#f85149" }), "failed expectation"));

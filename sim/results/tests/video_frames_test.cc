@@ -31,7 +31,7 @@ FinishedRun TwoSampleRun() {
   return run;
 }
 
-Event At(double t_s, const std::string& type, int car, int intersection) {
+Event At(double t_s, EventKind type, int car, int intersection) {
   Event e;
   e.t = FromSeconds(t_s);
   e.type = type;
@@ -86,9 +86,9 @@ TEST(VideoFramesTest, FramesAreEvenlySpacedInSimulatedTime) {
 
 TEST(VideoFramesTest, TheTimelineFollowsGrantsQueuesAndFrees) {
   FinishedRun run = TwoSampleRun();
-  run.record.events = {At(1.0, "wait", 1, 0),  At(2.0, "grant", 0, 0),
-                       At(3.0, "free", 0, 0),  At(3.5, "go", 1, 0),
-                       At(4.0, "grant", 1, 1), At(5.0, "lease_expired", 1, 1)};
+  run.record.events = {At(1.0, EventKind::kWait, 1, 0),  At(2.0, EventKind::kGrant, 0, 0),
+                       At(3.0, EventKind::kFree, 0, 0),  At(3.5, EventKind::kGo, 1, 0),
+                       At(4.0, EventKind::kGrant, 1, 1), At(5.0, EventKind::kLeaseExpired, 1, 1)};
   const auto timelines = IntersectionTimelines(run);
   ASSERT_EQ(timelines.size(), 2u);
   const IntersectionTimeline& right = timelines.at(0);
@@ -132,7 +132,7 @@ TEST(VideoFramesTest, EachFrameShowsTheCarAtItsLastSample) {
 
 TEST(VideoFramesTest, AHeldIntersectionIsTintedOnlyWhileHeld) {
   FinishedRun run = TwoSampleRun();
-  run.record.events = {At(1.0, "grant", 1, 1), At(1.5, "free", 1, 1)};
+  run.record.events = {At(1.0, EventKind::kGrant, 1, 1), At(1.5, EventKind::kFree, 1, 1)};
   VideoFrames frames(run, {});
   const TrackFigureLayout at = DrawTrackFigureBase(run.scenario, run.track, false).layout;
   const cv::Point centre = at.ToPixel(-1.75, -0.3);  // inside intersection 1, off its labels

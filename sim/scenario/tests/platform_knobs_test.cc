@@ -67,7 +67,7 @@ TEST(PlatformKnobs, CostScaleMultipliesSoftwareWorkAndHardwareFabricTime) {
   EXPECT_NEAR(scaled.max, 75.0, 1e-6);
 
   PlatformConfig hw;
-  hw.mapping["work"] = NodeMappingConfig{.target = "hw", .slot = 1};
+  hw.mapping["work"] = NodeMappingConfig{.target = Target::kHw, .slot = 1};
   // 5 ms of fabric + 16 bytes over the memory interface at 1 GB/s
   EXPECT_NEAR(WorkTurnarounds(hw).max, 5.000016, 1e-6);
   hw.cost_scale["work"] = 4.0;

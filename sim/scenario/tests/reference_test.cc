@@ -26,7 +26,8 @@ TEST(ScenarioReferenceTest, TheDocsPageIsTheGeneratedText) {
 TEST(ScenarioReferenceTest, NamesEveryKeyWithItsTypeUnitAndDefault) {
   const std::string text = ScenarioReferenceMarkdown();
   EXPECT_THAT(text, HasSubstr("| `duration_s` | number | s | `120.0` |"));
-  EXPECT_THAT(text, HasSubstr("| `v2i.link` | embedded \\| mqtt \\| realtime |  | `\"embedded\"` |"));
+  EXPECT_THAT(text,
+              HasSubstr("| `v2i.link` | embedded \\| mqtt \\| realtime |  | `\"embedded\"` |"));
   EXPECT_THAT(text, HasSubstr("| `cars[i].driver` | oracle \\| stack |  | `\"oracle\"` |"));
   EXPECT_THAT(text, HasSubstr("| `cars[i].start` | text |  | `(none)` |"));
   EXPECT_THAT(text, HasSubstr("### car_stall"));

@@ -34,13 +34,13 @@ TEST(StackPresetsTest, NoPresetLeavesEveryOptionAtItsDefault) {
   const CarConfig defaults;
   EXPECT_EQ(s.cars[0].stack.localization.use_pose_fix, defaults.stack.localization.use_pose_fix);
   EXPECT_EQ(s.cars[0].intersection_client.re_request, defaults.intersection_client.re_request);
-  EXPECT_EQ(s.traffic_lights.policy, "fifo");
+  EXPECT_EQ(s.traffic_lights.policy, world::ServerPolicy::kFifo);
 }
 
 TEST(StackPresetsTest, LabSelectsTheLabsCodeAndTheOriginalServerExceptWhatTheScenarioSets) {
   ScenarioFile file("preset_lab", kPresetTwoStackCars);
   const Scenario s = LoadScenario(file.path(), {"stack.preset=lab"}).scenario;
-  EXPECT_EQ(s.traffic_lights.policy, "original");
+  EXPECT_EQ(s.traffic_lights.policy, world::ServerPolicy::kOriginal);
   for (const CarConfig& car : s.cars) {
     EXPECT_FALSE(car.stack.localization.use_pose_fix);
     EXPECT_FALSE(car.stack.emergency_stop.enabled);
@@ -59,7 +59,7 @@ TEST(StackPresetsTest, ACarsOwnPresetBeatsTheFleetsAndAnExplicitPolicyBeatsThePr
   const Scenario s = LoadScenario(file.path(), {"stack.preset=safe", "cars[1].stack={preset: lab}",
                                                 "traffic_lights.policy=original"})
                          .scenario;
-  EXPECT_EQ(s.traffic_lights.policy, "original");
+  EXPECT_EQ(s.traffic_lights.policy, world::ServerPolicy::kOriginal);
   EXPECT_TRUE(s.cars[0].stack.localization.use_pose_fix);
   EXPECT_TRUE(s.cars[0].stack.emergency_stop.enabled);
   EXPECT_TRUE(s.cars[0].intersection_client.latch_wait);

@@ -45,12 +45,12 @@ TEST(MqttLockstepTest, EpochsAreShortAndPlain) {
 
 TEST(MqttLockstepTest, ResetCarriesPolicyLeaseAndIntersectionsExactly) {
   SimReset reset{"run1", {}, {0, 1}};
-  reset.params.policy = "original";
+  reset.params.policy = world::ServerPolicy::kOriginal;
   reset.params.lease = Duration{5'000'000'001};  // not a round number of seconds
   const world::Decoded<SimReset> back = DecodeReset(EncodeReset(reset));
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back.value().epoch, "run1");
-  EXPECT_EQ(back.value().params.policy, "original");
+  EXPECT_EQ(back.value().params.policy, world::ServerPolicy::kOriginal);
   EXPECT_EQ(back.value().params.lease, reset.params.lease);
   EXPECT_EQ(back.value().intersections, (std::vector<int>{0, 1}));
   EXPECT_FALSE(DecodeReset("{"));
