@@ -113,9 +113,9 @@ FaultActions ActionsOf(const CameraFault<Kind>& f, const FaultTargets& sim) {
       suite->SetDepthCameraFault(fault);
     }
   };
-  const SensorSuite::CameraFault what = Kind == FaultKind::kCameraFreeze
-                                            ? SensorSuite::CameraFault::kFreeze
-                                            : SensorSuite::CameraFault::kBlackout;
+  SensorSuite::CameraFault what = Kind == FaultKind::kCameraFreeze
+                                      ? SensorSuite::CameraFault::kFreeze
+                                      : SensorSuite::CameraFault::kBlackout;
   return {.begin = [set, what] { set(what); },
           .end = [set] { set(SensorSuite::CameraFault::kNone); }};
 }
