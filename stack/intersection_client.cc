@@ -56,10 +56,12 @@ void IntersectionClientParams::Validate() const {
   RequirePositive(ToSeconds(tick_period), "tick_period_s");
   RequirePositive(ToSeconds(retry_period), "retry_period_s");
   RequirePositive(ToSeconds(keepalive_period), "keepalive_period_s");
-  for (const auto& [value, key] : {std::pair{release_margin_m, "release_margin_m"},
-                                   std::pair{exit_margin_m, "exit_margin_m"}}) {
-    Require(value >= 0.0 && value <= 2.0,
-            [&] { return std::string(key) + " must be in [0, 2] m, got " + Num(value); });
+  // (no structured bindings: clang 14, the fuzz build's compiler, cannot capture them)
+  for (const auto& margin : {std::pair{release_margin_m, "release_margin_m"},
+                             std::pair{exit_margin_m, "exit_margin_m"}}) {
+    Require(margin.first >= 0.0 && margin.first <= 2.0, [&] {
+      return std::string(margin.second) + " must be in [0, 2] m, got " + Num(margin.first);
+    });
   }
 }
 
