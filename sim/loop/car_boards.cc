@@ -5,7 +5,6 @@
 namespace autonomsim::sim {
 
 using detail::CarAgent;
-using detail::kRecentFrames;
 
 std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const PlatformProfile& profile,
                                                    SensorSuite* suite) {
@@ -29,8 +28,7 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
         CameraFrame frame = suite->CaptureColorFrame();
         // the car's pose now, which is the frame's unless the camera froze (then the detection is
         // judged against where the car really is)
-        agent->color_frames.emplace_back(frame.stamp, agent->car->pose());
-        if (agent->color_frames.size() > kRecentFrames) agent->color_frames.pop_front();
+        agent->lanes.OnFrame(frame.stamp, agent->car->pose());
         return frame;
       });
   AddSourceNode(
@@ -90,7 +88,7 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
             agent->command = command;
             agent->car->SetCommand(agent->applied());
           },
-      .mission_done = [agent] { return agent->parked; },
+      .mission_done = [agent] { return agent->route_monitor.parked(); },
       .on_behavior =
           [this, agent, id](const stack::BehaviorOutput& out) {
             StackMetrics& m = *agent->metrics.stack;
@@ -139,20 +137,8 @@ void Simulation::Impl::JudgeGrid(CarAgent* agent, const stack::Grid234& grid) {
 }
 
 void Simulation::Impl::JudgeLanes(CarAgent* agent, const stack::LanePoints& lanes, Time stamp) {
-  PerceptionMetrics& m = *agent->metrics.perception;
-  ++m.lane_frames;
-  if (lanes.valid == 0) return;
-  ++m.lane_valid_frames;
-  // the car's pose when the frame was taken
-  const auto frame = std::find_if(agent->color_frames.rbegin(), agent->color_frames.rend(),
-                                  [stamp](const auto& f) { return f.first == stamp; });
-  if (frame == agent->color_frames.rend()) return;
-  const std::optional<double> error =
-      LaneDetectionError(lane_judge, loaded.track, agent->route->path, frame->second, lanes);
-  if (!error) return;
-  m.lane_error_max_m = std::max(m.lane_error_max_m, *error);
-  agent->lane_error_sq_sum += *error * *error;
-  ++m.lane_error_samples;
+  agent->lanes.OnLanes(lane_judge, loaded.track, *agent->route, lanes, stamp,
+                       &*agent->metrics.perception);
 }
 
 }  // namespace autonomsim::sim

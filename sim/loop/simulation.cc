@@ -11,11 +11,6 @@ namespace {
 using detail::CarAgent;
 using detail::ObstacleOnRoute;
 
-// An open route ends this far before its last point: the car parks there (its motor brakes it
-// within ≈ v·τ ≈ 0.15 m).
-constexpr double kArrivalMargin_m = 0.2;
-// How far a car may move along its route between two physics steps, for the local projection.
-constexpr double kTrackingWindow_m = 0.5;
 // The oracle looks this far ahead along its route for obstacles.
 constexpr double kObstacleHorizon_m = 2.0;
 // At the end of a real-time run, the longest we wait (wall time) for the broker to take the
@@ -52,6 +47,7 @@ Simulation::Impl::Impl(const LoadedScenario& loaded_scenario, std::shared_ptr<Re
       physics(loaded_scenario.scenario.physics),
       server(&kernel, MakeServerEndpoint(loaded_scenario),
              [this](Event event) { Emit(std::move(event)); }),
+      emit_event([this](Event event) { Emit(std::move(event)); }),
       store(std::move(store_)) {
   // The closed loop. At each instant the kernel runs, in this order (sim/core/priorities.h):
   // obstacles appear or go · V2I messages arrive · the server's lease ticks · sensors sample the
@@ -78,7 +74,11 @@ void Simulation::Impl::AddCars() {
     agent.config = &config;
     agent.route = &loaded_car.route;
     agent.car = &physics.AddCar(config.id, config.vehicle, start);
-    agent.route_s_m = loaded_car.start_s_m;
+    agent.route_monitor = RouteMonitor({.car_id = config.id,
+                                        .route = &loaded_car.route,
+                                        .track = &loaded.track,
+                                        .laps = config.laps},
+                                       loaded_car.start_s_m);
     agent.driver.rear_axle_s_m =
         agent.route->path
             .Project(start.position() - 0.5 * config.vehicle.wheelbase_m * start.heading())
@@ -215,27 +215,8 @@ bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
     to_server->SendToServer(id, world::ToMessage(request));
   }
   for (const world::Free& free : out.frees) to_server->SendToServer(id, world::ToMessage(free));
-  const bool was_waiting = agent->waiting;
-  agent->waiting = !out.may_proceed;
-  if (!was_waiting && agent->waiting) {
-    agent->wait_started = kernel.Now();
-    agent->waiting_for = out.waiting_for.value_or(-1);
-    Emit(Event{.t = kernel.Now(),
-               .type = EventKind::kWait,
-               .car = id,
-               .intersection = agent->waiting_for});
-  }
-  if (was_waiting && !agent->waiting) {
-    Emit(Event{
-        .t = kernel.Now(), .type = EventKind::kGo, .car = id, .intersection = agent->waiting_for});
-  }
-  if (was_waiting && !agent->waiting && agent->wait_started) {
-    const double wait_s = ToSeconds(kernel.Now() - *agent->wait_started);
-    agent->metrics.total_wait_s += wait_s;
-    agent->metrics.max_wait_s = std::max(agent->metrics.max_wait_s, wait_s);
-    ++agent->metrics.waits;
-    agent->wait_started.reset();
-  }
+  agent->waits.Observe(kernel.Now(), !out.may_proceed, out.waiting_for.value_or(-1), id, emit_event,
+                       &agent->metrics);
   return out.may_proceed;
 }
 
@@ -251,7 +232,7 @@ void Simulation::Impl::StepDriver(CarAgent* agent) {
   OracleDriverInput input;
   input.X_map_car = agent->car->pose();
   input.speed_mps = agent->car->forward_speed_mps();
-  input.hold = agent->waiting || agent->parked;
+  input.hold = agent->waits.waiting() || agent->route_monitor.parked();
   input.obstacle_gap_m = ObstacleGap(*agent);
   agent->command = StepOracleDriver(agent->config->oracle, agent->config->vehicle, *agent->route,
                                     input, &agent->driver);
@@ -260,7 +241,7 @@ void Simulation::Impl::StepDriver(CarAgent* agent) {
 
 std::optional<double> Simulation::Impl::ObstacleGap(const CarAgent& agent) const {
   const world::Polyline& path = agent.route->path;
-  const double front_s = agent.route_s_m + 0.5 * agent.config->vehicle.length_m;
+  const double front_s = agent.route_monitor.route_s_m() + 0.5 * agent.config->vehicle.length_m;
   std::optional<double> nearest;
   for (const ObstacleOnRoute& o : agent.obstacles_on_lane) {
     if (!physics.obstacle_enabled(o.index)) continue;
@@ -322,62 +303,18 @@ void Simulation::Impl::MeasureObstacleGaps() {
 
 void Simulation::Impl::Track(CarAgent* agent, Time t) {
   const int id = agent->config->id;
-  const world::Pose2 pose = agent->car->pose();
-  const world::Polyline& path = agent->route->path;
-  const double length = path.length_m();
-
-  // progress and lateral error along the route
-  const world::Polyline::Projection on =
-      path.ProjectNear(pose.position(), agent->route_s_m, kTrackingWindow_m);
-  double ds = on.s_m - agent->route_s_m;
-  if (path.cyclic()) ds = std::remainder(ds, length);
-  agent->route_s_m = on.s_m;
-  agent->progress_m += ds;
-  agent->lateral_error_m = on.lateral_m;
-  agent->metrics.max_lateral_error_m =
-      std::max(agent->metrics.max_lateral_error_m, std::abs(on.lateral_m));
-  agent->lateral_sq_sum += on.lateral_m * on.lateral_m;
-  ++agent->lateral_samples;
-  agent->metrics.distance_m +=
-      std::abs(agent->car->forward_speed_mps()) * ToSeconds(physics.step());
-
-  // laps, and the end of the drive
-  if (path.cyclic()) {
-    while (agent->progress_m >= (agent->metrics.laps + 1) * length) {
-      ++agent->metrics.laps;
-      agent->metrics.lap_times_s.push_back(ToSeconds(t));
-      Emit(Event{.t = t, .type = EventKind::kLap, .car = id, .lap = agent->metrics.laps});
-      if (!agent->parked && agent->config->laps && agent->metrics.laps >= *agent->config->laps) {
-        agent->parked = true;
-        Emit(Event{.t = t, .type = EventKind::kParked, .car = id, .detail = "laps done"});
-      }
+  // granted: the server holds the intersection for the car; in real time the server is outside
+  // the run, and what counts is what the car was told (its client holds it)
+  const auto holds = [this, agent, id](int area) {
+    if (realtime_link) {
+      return agent->client.phase == stack::IntersectionClientState::Phase::kHolding &&
+             agent->client.intersection == area;
     }
-  } else if (!agent->parked && agent->route_s_m >= length - kArrivalMargin_m) {
-    agent->parked = true;
-    Emit(Event{.t = t, .type = EventKind::kParked, .car = id, .detail = "route end"});
-  }
-
-  // ground truth: entering and leaving intersection areas
-  const world::IntersectionSpec* inside = loaded.track.IntersectionAt(pose.position());
-  const int area = inside ? inside->id : -1;
-  if (area != agent->area) {
-    if (agent->area >= 0) {
-      Emit(Event{.t = t, .type = EventKind::kExit, .car = id, .intersection = agent->area});
-    }
-    if (area >= 0) {
-      // granted: the server holds the intersection for the car; in real time the server is
-      // outside the run, and what counts is what the car was told (its client holds it)
-      const std::optional<int> holder = server.Holder(area);
-      const bool granted =
-          realtime_link ? agent->client.phase == stack::IntersectionClientState::Phase::kHolding &&
-                              agent->client.intersection == area
-                        : holder.has_value() && *holder == id;
-      Emit(Event{
-          .t = t, .type = EventKind::kEnter, .car = id, .intersection = area, .granted = granted});
-      ++agent->metrics.intersection_entries;
-    }
-    agent->area = area;
-  }
+    const std::optional<int> holder = server.Holder(area);
+    return holder.has_value() && *holder == id;
+  };
+  agent->route_monitor.Observe(t, agent->car->pose(), agent->car->forward_speed_mps(),
+                               physics.step(), holds, emit_event, &agent->metrics);
 }
 
 void Simulation::Impl::Emit(Event event) {
@@ -401,8 +338,8 @@ void Simulation::Impl::Sample() {
         .steering_rad = agent.car->steering_angle_rad(),
         .throttle = agent.command.throttle,
         .curvature_cmd_per_m = agent.command.curvature_per_m,
-        .lateral_error_m = agent.lateral_error_m,
-        .route_progress_m = agent.progress_m,
+        .lateral_error_m = agent.route_monitor.lateral_error_m(),
+        .route_progress_m = agent.route_monitor.progress_m(),
     };
     if (store) {
       store->Append(sample);
@@ -416,16 +353,9 @@ void Simulation::Impl::Finish() {
   record.sim_duration = end;
   record.kernel_events = kernel.executed();
   for (CarAgent& agent : agents) {
-    if (agent.lateral_samples > 0) {
-      agent.metrics.rms_lateral_error_m =
-          std::sqrt(agent.lateral_sq_sum / static_cast<double>(agent.lateral_samples));
-    }
+    agent.route_monitor.Finish(&agent.metrics);
     agent.metrics.mean_speed_mps = agent.metrics.distance_m / ToSeconds(end);
-    if (agent.metrics.perception && agent.metrics.perception->lane_error_samples > 0) {
-      PerceptionMetrics& m = *agent.metrics.perception;
-      m.lane_error_rms_m =
-          std::sqrt(agent.lane_error_sq_sum / static_cast<double>(m.lane_error_samples));
-    }
+    if (agent.metrics.perception) agent.lanes.Finish(&*agent.metrics.perception);
     record.cars.push_back(agent.metrics);
   }
   const world::TrafficLightServer::Counters c = server.counters();

@@ -2,7 +2,6 @@
 // steps, the monitors) and car_boards.cc (a car's board: cameras, perception and stack nodes).
 #pragma once
 
-#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -15,6 +14,7 @@
 #include "sim/core/kernel.h"
 #include "sim/core/priorities.h"
 #include "sim/core/random.h"
+#include "sim/loop/car_monitors.h"
 #include "sim/loop/lane_judge.h"
 #include "sim/loop/simulation.h"
 #include "sim/platform/node_graph.h"
@@ -31,9 +31,6 @@
 namespace autonomsim::sim {
 namespace detail {
 
-// Camera frames remembered per car for judging the perception's results (≈ 2 s at 30 fps).
-constexpr std::size_t kRecentFrames = 64;
-
 // A static obstacle as seen along one car's route (ground truth, for the oracle).
 struct ObstacleOnRoute {
   std::size_t index{0};       // in the physics world
@@ -41,34 +38,28 @@ struct ObstacleOnRoute {
   double half_extent_m{0.0};  // half its diagonal: a conservative reach in every direction
 };
 
-// One car and everything that drives and watches it.
+// One car: what drives it (the Box2D car and its actuator command, its oracle driver or its
+// stack, its intersection client), and the loop's monitors that watch it (car_monitors.h).
 struct CarAgent {
   const CarConfig* config{nullptr};
   const world::Route* route{nullptr};
+  // actuation
   vehicle::Car* car{nullptr};
+  vehicle::ActuatorCommand command;  // what its driver commands
+  bool stalled{false};               // car_stall: the motor is dead (sim/loop/faults.h)
+  // driver: oracle
   OracleDriverState driver;
-  stack::IntersectionClientState client;
-  std::vector<world::Response> inbox;  // responses for this car since the client's last step
-  vehicle::ActuatorCommand command;    // what its driver commands
-  bool stalled{false};                 // car_stall: the motor is dead (sim/loop/faults.h)
-  StackControls stack_controls;        // driver: stack
-  bool waiting{false};                 // the intersection client says: stop here until granted
-  bool parked{false};                  // done: laps driven or route ended
   std::vector<ObstacleOnRoute> obstacles_on_lane;
-  std::optional<Time> wait_started;
-  int waiting_for{-1};  // the intersection of the current (or last) wait
-  // the colour camera's recent frames (stamp, pose), to judge lane detection against ground truth
-  std::deque<std::pair<Time, world::Pose2>> color_frames;
-  double lane_error_sq_sum{0.0};  // over the judged lane detection results
-  // ground-truth tracking of the chassis centre along the route
-  double route_s_m{0.0};
-  double progress_m{0.0};
-  double lateral_error_m{0.0};
-  double lateral_sq_sum{0.0};
-  std::uint64_t lateral_samples{0};
-  int area{-1};  // the intersection whose area holds the chassis centre, or -1
   // driver: stack
+  StackControls stack_controls;
   stack::BehaviorMode behavior_mode{stack::BehaviorMode::kDrive};
+  // the intersection client, and the responses for this car since its last step
+  stack::IntersectionClientState client;
+  std::vector<world::Response> inbox;
+  // monitors (ground truth), and what they measured
+  RouteMonitor route_monitor;
+  WaitMonitor waits;
+  LaneMonitor lanes;
   CarMetrics metrics;
 
   // What reaches the car: its driver's command, with no throttle while the motor is dead.
@@ -123,6 +114,7 @@ struct Simulation::Impl {
   std::vector<CarAgent> agents;
   std::map<int, std::size_t> agent_index;  // car id -> agents index
   TrafficLightNode server;
+  EmitEvent emit_event;  // Emit, for the monitors
   std::unique_ptr<EmbeddedV2ILink> link;
   // v2i.link: realtime: the cars' link to a server outside the run, instead of `link`
   std::unique_ptr<RealTimeV2ILink> realtime_link;
