@@ -68,8 +68,11 @@ void RouteMonitor::WatchAreas(Time t, const world::Pose2& pose,
   const int id = params_.car_id;
   if (area_ >= 0) emit(Event{.t = t, .type = EventKind::kExit, .car = id, .intersection = area_});
   if (area >= 0) {
-    emit(Event{
-        .t = t, .type = EventKind::kEnter, .car = id, .intersection = area, .granted = holds(area)});
+    emit(Event{.t = t,
+               .type = EventKind::kEnter,
+               .car = id,
+               .intersection = area,
+               .granted = holds(area)});
     ++metrics->intersection_entries;
   }
   area_ = area;

@@ -71,8 +71,8 @@ class VideoFrames {
   void DrawCameraPanel(const std::vector<world::Pose2>& poses, Time t);
   void DrawScenePanel(const std::vector<world::Pose2>& poses, Time t);
 
-  const FinishedRun& run_;
-  const VideoOptions& options_;
+  const FinishedRun& run_;      // must outlive this
+  const VideoOptions options_;  // a copy: a caller may pass a temporary
   std::optional<CarCameraViewer> viewer_;
   std::optional<SceneViews> scene_;
   RngStreams streams_;
