@@ -302,16 +302,16 @@ void Simulation::Impl::MeasureObstacleGaps() {
 }
 
 void Simulation::Impl::Track(CarAgent* agent, Time t) {
-  const int id = agent->config->id;
   // granted: the server holds the intersection for the car; in real time the server is outside
-  // the run, and what counts is what the car was told (its client holds it)
-  const auto holds = [this, agent, id](int area) {
+  // the run, and what counts is what the car was told (its client holds it). Two pointers: the
+  // std::function holds them without allocating, once per car and physics step.
+  const auto holds = [this, agent](int area) {
     if (realtime_link) {
       return agent->client.phase == stack::IntersectionClientState::Phase::kHolding &&
              agent->client.intersection == area;
     }
     const std::optional<int> holder = server.Holder(area);
-    return holder.has_value() && *holder == id;
+    return holder.has_value() && *holder == agent->config->id;
   };
   agent->route_monitor.Observe(t, agent->car->pose(), agent->car->forward_speed_mps(),
                                physics.step(), holds, emit_event, &agent->metrics);
