@@ -70,8 +70,12 @@ std::string V2iPartitionFault::Detail() const {
 std::string V2iLossBurstFault::Detail() const {
   return Join(*this, {fmt::format("loss {}", loss)});
 }
-std::string ServerRestartFault::Detail() const { return Join(*this, {}); }
-std::string BrokerOutageFault::Detail() const { return Join(*this, {}); }
+template <FaultKind Kind, bool LastsWithoutEndOfRun>
+std::string FleetFault<Kind, LastsWithoutEndOfRun>::Detail() const {
+  return Join(*this, {});
+}
+template struct FleetFault<FaultKind::kServerRestart, false>;
+template struct FleetFault<FaultKind::kBrokerOutage, true>;
 std::string CarStallFault::Detail() const { return Join(*this, {}); }
 std::string NodeCrashFault::Detail() const { return Join(*this, {"node " + node}); }
 std::string NodeHangFault::Detail() const { return Join(*this, {"node " + node}); }

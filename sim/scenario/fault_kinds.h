@@ -85,10 +85,12 @@ struct V2iLossBurstFault {
   std::string Detail() const;
 };
 
-// {for_s?}: without for_s the server is back at once.
-struct ServerRestartFault {
-  static constexpr FaultKind kKind = FaultKind::kServerRestart;
-  static constexpr bool kLastsWithoutEnd = false;
+// {for_s?}: a fault of the whole fleet (server_restart: without for_s the server is back at once;
+// broker_outage: without for_s it lasts to the run's end).
+template <FaultKind Kind, bool LastsWithoutEndOfRun>
+struct FleetFault {
+  static constexpr FaultKind kKind = Kind;
+  static constexpr bool kLastsWithoutEnd = LastsWithoutEndOfRun;
   double at_s{0.0};
   std::optional<double> for_s;
 
@@ -100,22 +102,8 @@ struct ServerRestartFault {
   void Validate() const { ValidateFaultTiming(at_s, for_s); }
   std::string Detail() const;
 };
-
-// {for_s?}
-struct BrokerOutageFault {
-  static constexpr FaultKind kKind = FaultKind::kBrokerOutage;
-  static constexpr bool kLastsWithoutEnd = true;
-  double at_s{0.0};
-  std::optional<double> for_s;
-
-  template <class V>
-  void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-  }
-  void Validate() const { ValidateFaultTiming(at_s, for_s); }
-  std::string Detail() const;
-};
+using ServerRestartFault = FleetFault<FaultKind::kServerRestart, false>;
+using BrokerOutageFault = FleetFault<FaultKind::kBrokerOutage, true>;
 
 // {car, for_s?}
 struct CarStallFault {
