@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace autonomsim {
 
@@ -52,12 +53,12 @@ std::string NameList() {
   return out;
 }
 
-// Every value, in the table's order.
+// Every name, in the table's order (for "did you mean" and lists).
 template <NamedEnum E>
-constexpr auto AllValues() {
-  std::array<E, NameTable<E>::kEntries.size()> values{};
-  for (std::size_t i = 0; i < values.size(); ++i) values[i] = NameTable<E>::kEntries[i].first;
-  return values;
+std::vector<std::string> NamesOf() {
+  std::vector<std::string> names;
+  for (const auto& entry : NameTable<E>::kEntries) names.emplace_back(entry.second);
+  return names;
 }
 
 }  // namespace autonomsim

@@ -179,9 +179,7 @@ void ReadEnum(const YAML::Node& node, E& out, const std::string& path, const Con
     out = *value;
     return;
   }
-  std::vector<std::string> names;
-  for (const auto& entry : NameTable<E>::kEntries) names.emplace_back(entry.second);
-  const std::string closest = ClosestName(name, names);
+  const std::string closest = ClosestName(name, NamesOf<E>());
   Fail(node, path, source,
        LastKey(path) + " must be " + NameList<E>() + ", got '" + name + "'" +
            (closest.empty() ? "" : " (did you mean '" + closest + "'?)"));
@@ -223,9 +221,7 @@ void ReadKindVariant(const YAML::Node& node, Variant& out, const std::string& pa
   }
   const std::string kind = item->first.Scalar();
   if (ReadAlternative(kind, item->second, out, path, source)) return;
-  std::vector<std::string> kinds;
-  for (const auto& entry : NameTable<Kind>::kEntries) kinds.emplace_back(entry.second);
-  CheckKeys(node, kinds, path, source);  // names the closest kind, or lists them all
+  CheckKeys(node, NamesOf<Kind>(), path, source);  // names the closest kind, or lists them all
 }
 
 template <class T>

@@ -24,13 +24,4 @@ EventKind EventKindOf(RecordKind kind) {
   throw std::logic_error("EventKindOf: a server record kind without its event");
 }
 
-std::optional<RecordKind> ServerRecordKindOf(EventKind kind) {
-  for (const RecordKind record :
-       {RecordKind::kRequest, RecordKind::kFree, RecordKind::kGrant, RecordKind::kDenied,
-        RecordKind::kLeaseExpired, RecordKind::kQueueDrop}) {
-    if (EventKindOf(record) == kind) return record;
-  }
-  return std::nullopt;
-}
-
 }  // namespace autonomsim::sim

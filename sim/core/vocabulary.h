@@ -7,7 +7,6 @@
 #pragma once
 
 #include <array>
-#include <optional>
 #include <string_view>
 #include <utility>
 
@@ -71,10 +70,8 @@ enum class ExpectKind {
   kRecoversWithin,
 };
 
-// The event a traffic-light server record is (request, free, ...), and back (nullopt for an
-// event the server does not make).
+// The event a traffic-light server record is (request, free, ...).
 EventKind EventKindOf(world::ServerRecord::Kind kind);
-std::optional<world::ServerRecord::Kind> ServerRecordKindOf(EventKind kind);
 
 }  // namespace autonomsim::sim
 
