@@ -1,21 +1,36 @@
-// The car's behaviour (reference §6: Nav2's behaviour tree on the car) as a pure step, ticked at
-// 3 Hz. It decides three things:
-//   goals      the poses the global planner plans through (Nav2 NavigateThroughPoses): points on
-//              the car's route, every waypoint_spacing_m from the car's estimated position out to
-//              waypoint_horizon_m ahead. A plan through poses on the lane keeps A* on the car's own
-//              lane (one goal far ahead lets it take the shorter, wrong lane of the middle road);
-//   gate       the IntersectionFree condition: while the intersection client says "wait", a long
-//              Wait pre-empts the controller (hold);
-//   recovery   when the controller reports a collision ahead (or the planner finds no path):
-//              clear the costmaps, wait recovery_wait, retry; after max_retries failed retries
-//              the navigation fails and the car holds for good. Progress of recovery_reset_m along
-//              the route since the last recovery counts as a success and resets the count.
-//              A failed plan counts until the next plan reply or until a recovery starts: the
-//              planner replies at 1 Hz and the tree ticks at 3 Hz, and Nav2 plans again after a
-//              recovery, so the old failure must not start a second one.
+// The car's behaviour: the lab's behaviour tree (reference §6,
+// code/ros_ws/src/nav2_local/behavior_tree/drive_to_pose_test.xml, on Nav2 Galactic's BT nodes)
+// as a pure step, ticked every bt_loop_duration (10 ms). It decides four things:
+//   goals      the poses the global planner plans through: points on the car's route, every
+//              waypoint_spacing_m from the car's estimated position out to waypoint_horizon_m
+//              ahead (assumed: how the lab sent its goals is not recorded; a plan through poses
+//              on the lane keeps A* on the car's own lane);
+//   gate       IntersectionFree inside RateController(3 Hz) inside the FollowPath fallback
+//              (xml:19-26). Galactic's RateController (rate_controller.cpp:34-77) ticks its child
+//              the first time, while the child runs, and once gate_period has passed since it
+//              went from idle; otherwise it returns RUNNING, and the ReactiveFallback halts
+//              FollowPath. Its timer restarts only on SUCCESS, which the Inverter never returns,
+//              so after gate_period the gate is checked every tick. So each time FollowPath's
+//              fallback is (re)started (the first tick, after every recovery) FollowPath runs for
+//              one tick and is then halted for the rest of gate_period: `hold` with mode drive.
+//              Not free: Wait(600) runs, FollowPath is halted (mode intersection_wait);
+//   attempt    each time FollowPath starts again after a halt it is a new FollowPath action
+//              (its id in `attempt`): the controller server resets its progress checker;
+//   recovery   (xml:5-45, Galactic recovery_node.cpp:18-100, round_robin_node.cpp:20-65) a failed
+//              FollowPath (the controller reports a collision ahead or no progress for its
+//              attempt) first clears the local costmap and retries at once (inner RecoveryNode,
+//              follow_path_retries); when that fails too, the outer RecoveryNode runs its
+//              RoundRobin, which alternates "clear both costmaps" (instant) and Wait
+//              recovery_wait, then retries; after max_retries outer retries the next failure
+//              fails the navigation for good. A failed plan first clears the global costmap and
+//              waits for the next plan (inner RecoveryNode of ComputePathToPose, xml:9-15); a
+//              second failed plan goes to the outer recovery. The outer count resets only when
+//              the goal succeeds or the tree is halted (recovery_node.cpp:102-107), which a car
+//              looping its route never does: recovery_reset_m (safe) resets it after progress.
 // The route is map knowledge (the road graph a car is given); the position is the estimate.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
@@ -28,7 +43,13 @@
 namespace autonomsim::stack {
 
 struct BehaviorParams {
-  Duration tick_period{Milliseconds(333)};  // reference §6: the BT ticks IntersectionFree at 3 Hz
+  // reference §6: bt_loop_duration 10 ms (nav2_car_params.yaml:7)
+  Duration tick_period{Milliseconds(10)};
+  // reference §6: RateController hz=3 around IntersectionFree (drive_to_pose_test.xml:19)
+  Duration gate_period{333'333'333};  // 1/3 s
+  // assumed: the goals go to the planner (which plans at 1 Hz) at least this often; the tree's
+  // other outputs (hold, attempt, recovery) go out on the tick they change
+  Duration goals_period{333'333'333};  // 1/3 s
   // assumed: NavigateThroughPoses goals along the lane, one every quarter metre. Between goals
   // the cost term of A* pulls the path towards the middle of free space (at 0.5 m spacing up to
   // 0.16 m off the lane on the lab; at 0.25 m 0.11 m: GlobalPlannerLabTest)
@@ -36,18 +57,21 @@ struct BehaviorParams {
   // assumed: the goals reach as far ahead as the local costmap's half width (reference §6: 5 m
   // rolling window), so the path always covers the controller's 0.6 m lookahead
   double waypoint_horizon_m{2.5};
-  Duration recovery_wait{std::chrono::seconds(5)};  // reference §6: recovery waits 5 s
-  int max_retries{6};                               // reference §6: up to 6 retries
-  // assumed: driving this far along the route after a recovery counts as the navigation
-  // succeeding again (Nav2 resets a RecoveryNode's count when its child succeeds)
-  double recovery_reset_m{0.5};
-  // assumed: how far the car's position may move along the route between two ticks (3 Hz at
-  // 0.25 m/s: 0.08 m), for tracking it on the route
+  Duration recovery_wait{std::chrono::seconds(5)};  // reference §6: Wait 5 s (xml:42)
+  int max_retries{6};                               // reference §6: outer RecoveryNode (xml:5)
+  int follow_path_retries{1};                       // reference §6: inner RecoveryNode (xml:17)
+  int plan_retries{1};                              // reference §6: ComputePathToPose's (xml:9)
+  // Beyond the lab's tree (0: never, as the lab's: the count resets only when the goal
+  // succeeds). Driving this far along the route after a recovery resets the outer count, so a
+  // car that lapped for minutes is not one blocked moment away from failing for good.
+  double recovery_reset_m{0.0};
+  // assumed: how far the car's position may move along the route between two ticks, for
+  // tracking it on the route
   double tracking_window_m{1.0};
   // Beyond the lab's BT (false: every recovery counts): a collision ahead within
-  // queue_margin_m of an intersection's boxes starts a recovery that does not count toward
-  // max_retries. A car queued behind cars waiting at a red light otherwise used up its six
-  // retries in about 35 s and failed for good while it waited in line.
+  // queue_margin_m of an intersection's boxes starts a recovery (clear, wait recovery_wait,
+  // retry) that does not count toward max_retries. A car queued behind cars waiting at a red
+  // light otherwise uses up its retries while it waits in line.
   bool patient_in_queue{false};
   double queue_margin_m{1.5};  // assumed: three cars' lengths back from a stop box
   // Beyond the lab's BT (0: off, the lab's IntersectionFree keeps the last message for ever): in a
@@ -60,10 +84,14 @@ struct BehaviorParams {
   template <class V>
   void Describe(V& v) {
     v("tick_period_s", tick_period);
+    v("gate_period_s", gate_period);
+    v("goals_period_s", goals_period);
     v("waypoint_spacing_m", waypoint_spacing_m);
     v("waypoint_horizon_m", waypoint_horizon_m);
     v("recovery_wait_s", recovery_wait);
     v("max_retries", max_retries);
+    v("follow_path_retries", follow_path_retries);
+    v("plan_retries", plan_retries);
     v("recovery_reset_m", recovery_reset_m);
     v("tracking_window_m", tracking_window_m);
     v("patient_in_queue", patient_in_queue);
@@ -74,13 +102,30 @@ struct BehaviorParams {
 };
 
 enum class BehaviorMode {
-  kDrive,             // following the goals
+  kDrive,             // following the goals (held while the gate's RateController throttles)
   kIntersectionWait,  // held until the intersection is granted
-  kRecovery,          // costmaps cleared, waiting before the retry
+  kRecovery,          // the RoundRobin's Wait (or a patient car's): held, then retry
   kFailed,            // retries exhausted: holds for good
   kDone,              // the end of an open route, or the mission was ended
 };
 const char* ToString(BehaviorMode mode);
+
+// What a recovery did on this tick (none on most ticks).
+enum class RecoveryAction {
+  kNone,
+  kClearLocal,   // FollowPath's inner recovery: clear the local costmap, retry at once
+  kClearGlobal,  // ComputePathToPose's inner recovery: clear the global costmap, plan again
+  kClearBoth,    // the outer RoundRobin's first action: clear both costmaps, retry
+  kWait,         // the outer RoundRobin's second action: wait recovery_wait, then retry
+  kWaitInLine,   // patient_in_queue: clear the local costmap, wait, retry (not counted)
+};
+const char* ToString(RecoveryAction action);
+
+// The controller server's report that a FollowPath action failed (it throws, the action aborts).
+struct FollowPathFailure {
+  std::uint64_t attempt{0};  // the action that failed
+  bool collision{false};     // a collision ahead (else: no progress)
+};
 
 struct BehaviorInput {
   Time now{kZeroTime};
@@ -88,7 +133,8 @@ struct BehaviorInput {
   bool intersection_free{true};            // the intersection client's permission
   // The sensor time of the newest permission (intersection_free_timeout); none before the first.
   std::optional<Time> intersection_free_stamp;
-  bool collision_ahead{false};  // the controller's latest report
+  // The controller's newest failure report; one for an earlier attempt is ignored.
+  std::optional<FollowPathFailure> follow_path_failure;
   // The newest plan reply since the previous tick: true when it failed; none when no reply came.
   std::optional<bool> plan_failed;
   bool mission_done{false};  // the operator ended the drive (laps done)
@@ -100,10 +146,12 @@ struct BehaviorInput {
 
 struct BehaviorOutput {
   BehaviorMode mode{BehaviorMode::kDrive};
-  bool hold{false};                // the controller must not drive
-  std::vector<world::Vec2> goals;  // map frame, nearest first; empty while holding
-  bool clear_costmaps{false};      // the recovery's first action, once per recovery
-  int retries{0};                  // recoveries since the last success
+  bool hold{false};                // FollowPath halted: the controller must not drive
+  std::uint64_t attempt{0};        // the current FollowPath action (new after every halt)
+  std::vector<world::Vec2> goals;  // map frame, nearest first; empty once failed or done
+  bool clear_costmaps{false};      // clear the local costmap now (kClearLocal/Both, kWaitInLine)
+  RecoveryAction recovery{RecoveryAction::kNone};
+  int retries{0};  // outer retries so far
 };
 
 struct BehaviorState {
@@ -111,9 +159,22 @@ struct BehaviorState {
   double route_s_m{0.0};  // the estimated position's projection on the route
   BehaviorMode mode{BehaviorMode::kDrive};
   Time recovery_until{kZeroTime};
-  int retries{0};
+  bool recovery_counts{true};  // the running wait is the outer recovery's (else a patient car's)
+  int retries{0};              // the outer RecoveryNode's count
+  int follow_path_retries{0};  // the inner RecoveryNode's count for FollowPath
+  int plan_retries{0};         // the inner RecoveryNode's count for ComputePathToPose
+  int round_robin{0};          // the RoundRobin's next child: 0 clear both, 1 wait
   double progress_since_recovery_m{0.0};
   bool plan_failed{false};  // the latest plan reply failed, and no recovery has run since
+  // the gate's RateController: idle (restarts its period on the next tick), its start, whether
+  // its child has been ticked since, and whether the child (Wait) is running
+  bool gate_idle{true};
+  Time gate_start{kZeroTime};
+  bool gate_ticked{false};
+  bool gate_waiting{false};
+  bool following{false};             // FollowPath is running (not halted)
+  std::uint64_t attempt{0};          // the newest FollowPath action
+  std::uint64_t failed_attempt{0};   // the newest attempt whose failure was handled (0: none)
 };
 
 // Throws std::invalid_argument on a non-finite position.

@@ -1,5 +1,6 @@
 #include "stack/controller_server.h"
 
+#include <stdexcept>
 #include <utility>
 
 #include "stack/behavior.h"
@@ -7,10 +8,35 @@
 
 namespace autonomsim::stack {
 
+void ProgressCheckerParams::Validate() const {
+  if (!(required_movement_radius_m >= 0.0)) {
+    throw std::invalid_argument("required_movement_radius_m must be >= 0");
+  }
+  if (movement_time_allowance <= kZeroTime) {
+    throw std::invalid_argument("movement_time_allowance_s must be > 0");
+  }
+}
+
 void ControllerServerParams::Validate() const {
   lane_controller.Validate();
   follow_path.Validate();
+  progress_checker.Validate();
 }
+
+namespace {
+
+// SimpleProgressChecker::check: true while the car makes progress.
+bool CheckProgress(const ProgressCheckerParams& params, const world::Vec2& p, Time now,
+                   ControllerServerState* state) {
+  if (!state->baseline || (p - *state->baseline).norm() > params.required_movement_radius_m) {
+    state->baseline = p;
+    state->baseline_time = now;
+    return true;
+  }
+  return !(now - state->baseline_time > params.movement_time_allowance);
+}
+
+}  // namespace
 
 ControllerServerOutput StepControllerServer(const ControllerServerParams& params,
                                             std::span<const world::IntersectionSpec> intersections,
@@ -27,6 +53,27 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
     return out;
   }
   state->stopped = false;
+  if (input.attempt != state->attempt) {  // a new action: the checks start again
+    state->attempt = input.attempt;
+    state->failed = false;
+    state->baseline.reset();
+  }
+  const auto failed_status = [&] {
+    return ControllerStatus{.attempt = state->attempt,
+                            .failed = true,
+                            .collision_ahead = state->failed_by_collision};
+  };
+  if (state->failed) {  // aborted: silent until the behaviour tries again
+    out.status = failed_status();
+    return out;
+  }
+  if (!CheckProgress(params.progress_checker, input.X_map_base.position(), input.now, state)) {
+    state->failed = true;
+    state->failed_by_collision = false;
+    out.cmd_vel = Twist{};
+    out.status = failed_status();
+    return out;
+  }
 
   // select and drive
   const bool follow =
@@ -57,8 +104,16 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
     collision = r.collision_ahead;
     out.cmd_vel_stamp = input.lanes->stamp;
   }
+  if (collision) {  // the controller threw: the action aborts with one zero velocity
+    state->failed = true;
+    state->failed_by_collision = true;
+    out.cmd_vel = Twist{};
+    out.status = failed_status();
+    out.status.follow_path = follow;
+    return out;
+  }
   out.cmd_vel = twist;
-  out.status = {.collision_ahead = collision, .follow_path = follow};
+  out.status = {.attempt = state->attempt, .follow_path = follow};
   return out;
 }
 

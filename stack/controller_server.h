@@ -11,13 +11,19 @@
 //             with nothing to follow yet commands (0, 0);
 //   stamp     the twist carries the lane points' stamp when the LaneController ran on them (so the
 //             latency chain from the camera reaches the actuator command), else the odometry's;
-//   status    every cycle, stamped with the odometry: collision ahead and FollowPath selected
-//             (both false while held).
-// Differences from the real node: a controller that sees a collision ahead throws there, and the
-// controller server aborts its action, which the behaviour tree turns into a recovery; here the
-// cycle commands (0, 0) and reports collision_ahead in the status the behaviour reads. The real
-// node reads its costmap in-process; here the caller passes the lethal-point query
-// (LethalInLocalCostmap on the latest local costmap).
+//   progress  Nav2's SimpleProgressChecker (reference §6; nav2_car_params.yaml:67-70; Galactic
+//             simple_progress_checker.cpp:63-92): reset when a FollowPath action starts (a new
+//             `attempt` from the behaviour, nav2_controller.cpp:356-357); the car must move more
+//             than required_movement_radius_m from its baseline within
+//             movement_time_allowance_s, else the action fails ("Failed to make progress") —
+//             also a car that stands because its LaneController sees no line;
+//   fail      a controller that sees a collision ahead throws, and so does the progress check:
+//             the action aborts (nav2_controller.cpp:395-398): one zero velocity, then nothing
+//             until the behaviour starts a new attempt; the status reports the failed attempt;
+//   status    every cycle, stamped with the odometry: the attempt, whether it failed (and by a
+//             collision), FollowPath selected (all false while held).
+// Differences from the real node: the real node reads its costmap in-process; here the caller
+// passes the lethal-point query (LethalInLocalCostmap on the latest local costmap).
 #pragma once
 
 #include <cstdint>
@@ -34,6 +40,19 @@
 
 namespace autonomsim::stack {
 
+// Nav2's SimpleProgressChecker with the car's parameters (reference §6).
+struct ProgressCheckerParams {
+  double required_movement_radius_m{0.5};            // nav2_car_params.yaml:69
+  Duration movement_time_allowance{std::chrono::seconds(10)};  // nav2_car_params.yaml:70
+
+  template <class V>
+  void Describe(V& v) {
+    v("required_movement_radius_m", required_movement_radius_m);
+    v("movement_time_allowance_s", movement_time_allowance);
+  }
+  void Validate() const;
+};
+
 // Assembled by the node from the stack's lane_controller and follow_path entries.
 struct ControllerServerParams {
   LaneControllerParams lane_controller;
@@ -41,6 +60,7 @@ struct ControllerServerParams {
   // Beyond the lab's /controller_selector (0: its strict boxes): FollowPath also within this
   // distance of an intersection's area and stop zones (stack.controller_selector.zone_margin_m).
   double zone_margin_m{0.0};
+  ProgressCheckerParams progress_checker;
 
   void Validate() const;
 };
@@ -59,7 +79,9 @@ struct ControllerPath {
 };
 
 struct ControllerServerInput {
-  bool hold{true};  // the behaviour's newest hold; true before its first output
+  Time now{kZeroTime};  // the cycle's time (the progress checker's clock)
+  bool hold{true};      // the behaviour's newest hold; true before its first output
+  std::uint64_t attempt{0};  // the behaviour's FollowPath action: a new one resets the checks
   // The newest odometry (the node runs no cycle before the first).
   Time odometry_stamp{kZeroTime};
   world::Pose2 X_map_base;
@@ -77,8 +99,10 @@ struct Twist {
 
 // /controller/status, read by the behaviour.
 struct ControllerStatus {
-  bool collision_ahead{false};
-  bool follow_path{false};  // FollowPath selected (else the LaneController)
+  std::uint64_t attempt{0};     // the FollowPath action it reports on
+  bool failed{false};           // that action failed (and stays failed)
+  bool collision_ahead{false};  // it failed by a collision ahead (else: no progress)
+  bool follow_path{false};      // FollowPath selected (else the LaneController)
 };
 
 enum class ActiveController { kNone, kLaneController, kFollowPath };
@@ -94,6 +118,11 @@ struct ControllerServerOutput {
 struct ControllerServerState {
   bool stopped{false};  // the zero velocity of the current hold went out
   PathFollowerState follower;
+  std::uint64_t attempt{0};  // the action the checks below belong to
+  bool failed{false};        // it failed: silent until the next attempt
+  bool failed_by_collision{false};
+  std::optional<world::Vec2> baseline;  // the progress checker's baseline position (map)
+  Time baseline_time{kZeroTime};
 };
 
 // `intersections` are the zone boxes of the map the car is given. Throws std::invalid_argument

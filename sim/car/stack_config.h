@@ -8,6 +8,7 @@
 #include <string>
 
 #include "stack/behavior.h"
+#include "stack/controller_server.h"
 #include "stack/costmap.h"
 #include "stack/cruise_control.h"
 #include "stack/emergency_stop.h"
@@ -72,6 +73,7 @@ struct StackConfig {
   stack::LaneControllerParams lane_controller;
   stack::PathFollowerParams follow_path;
   ControllerSelectorConfig controller_selector;
+  stack::ProgressCheckerParams progress_checker;  // reference §6: the controller server's
   stack::CruiseControlParams cruise_control;
   // Beyond the lab's stack: the ultrasonic ranger stops the car (stack/emergency_stop.h).
   stack::EmergencyStopParams emergency_stop;
@@ -94,6 +96,7 @@ struct StackConfig {
     v("lane_controller", lane_controller);
     v("follow_path", follow_path);
     v("controller_selector", controller_selector);
+    v("progress_checker", progress_checker);
     v("cruise_control", cruise_control);
     v("emergency_stop", emergency_stop);
   }

@@ -245,7 +245,9 @@ void AddVehicleCommunicationNode(
                  });
 }
 
-// bt_navigator: the gate, the goals, recovery (3 Hz).
+// bt_navigator: the gate, the goals, recovery, ticked every 10 ms (stack/behavior.h). It
+// publishes on the tick its hold, mode, attempt or recovery changes, and its goals at least every
+// goals_period (the tree's blackboard is in-process in Nav2; here a topic).
 void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                      const stack::BehaviorParams& params, const StackContext& context,
                      const StackHooks& hooks) {
@@ -254,8 +256,10 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::optional<stack::LocalizationEkfOutput> odom;
     bool intersection_free{true};
     std::optional<Time> intersection_free_stamp;
-    bool collision_ahead{false};
+    std::optional<stack::FollowPathFailure> follow_path_failure;
     std::optional<bool> plan_failed;  // the newest /plan reply since the last tick
+    std::optional<stack::BehaviorOutput> published;
+    Time published_at{kZeroTime};
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("bt_navigator"));
@@ -265,10 +269,10 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
                                  state->intersection_free = f.free;
                                  state->intersection_free_stamp = stamp;
                                });
-  cache.Keep<stack::ControllerStatus>(node, topics.status,
-                                      [state](const stack::ControllerStatus& s, Time) {
-                                        state->collision_ahead = s.collision_ahead;
-                                      });
+  cache.Keep<stack::ControllerStatus>(
+      node, topics.status, [state](const stack::ControllerStatus& s, Time) {
+        if (s.failed) state->follow_path_failure = {s.attempt, s.collision_ahead};
+      });
   cache.Keep<PathMessage>(node, topics.plan,
                           [state](const PathMessage& p, Time) { state->plan_failed = !p.ok; });
   const auto out = graph.AddPublisher(node, topics.behavior);
@@ -284,7 +288,7 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
             .p_map = p,
             .intersection_free = state->intersection_free,
             .intersection_free_stamp = state->intersection_free_stamp,
-            .collision_ahead = state->collision_ahead,
+            .follow_path_failure = state->follow_path_failure,
             .plan_failed = state->plan_failed,
             .mission_done = mission_done && mission_done(),
             .near_intersection = params.patient_in_queue &&
@@ -294,6 +298,13 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
         state->plan_failed.reset();
         stack::BehaviorOutput result = stack::StepBehavior(params, *route, input, &state->behavior);
         if (on_behavior) on_behavior(result);
+        const stack::BehaviorOutput* last = state->published ? &*state->published : nullptr;
+        const bool changed = last == nullptr || last->hold != result.hold ||
+                             last->mode != result.mode || last->attempt != result.attempt ||
+                             result.recovery != stack::RecoveryAction::kNone;
+        if (!changed && now - state->published_at < params.goals_period) return;
+        state->published = result;
+        state->published_at = now;
         outbox.Publish(out, std::move(result), state->odom->stamp);
       });
 }
@@ -388,6 +399,7 @@ struct ControllerNodeState {
   std::optional<PathMessage> path;  // the newest successful plan
   std::shared_ptr<const stack::Costmap2D> costmap;
   bool hold{true};  // nothing to do before the behaviour's first goals
+  std::uint64_t attempt{0};  // the behaviour's FollowPath action
   stack::ControllerServerState server;
 };
 
@@ -401,9 +413,11 @@ ControllerNodeState::Lanes DecodeLanes(const stack::LanePoints& lanes, Time stam
 }
 
 // The cycle's input from what the node keeps (odom must be set).
-stack::ControllerServerInput ControllerInput(const ControllerNodeState& s,
+stack::ControllerServerInput ControllerInput(const ControllerNodeState& s, Time now,
                                              const world::Pose2& X_map_odom) {
-  stack::ControllerServerInput input{.hold = s.hold,
+  stack::ControllerServerInput input{.now = now,
+                                     .hold = s.hold,
+                                     .attempt = s.attempt,
                                      .odometry_stamp = s.odom->stamp,
                                      .X_map_base = s.odom->X_map_base,
                                      .speed_mps = s.odom->speed_mps};
@@ -434,20 +448,25 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       node, topics.costmap, [state](const CostmapMessage& c, Time) { state->costmap = c.costmap; });
   cache.Keep<stack::BehaviorOutput>(
       node, topics.behavior,
-      [state](const stack::BehaviorOutput& o, Time) { state->hold = o.hold; });
+      [state](const stack::BehaviorOutput& o, Time) {
+        state->hold = o.hold;
+        state->attempt = o.attempt;
+      });
   const auto out = graph.AddPublisher(node, topics.cmd_vel);
   const auto status_out = graph.AddPublisher(node, topics.status);
   const stack::ControllerServerParams params{
       .lane_controller = config.lane_controller,
       .follow_path = config.follow_path,
-      .zone_margin_m = config.controller_selector.zone_margin_m};
+      .zone_margin_m = config.controller_selector.zone_margin_m,
+      .progress_checker = config.progress_checker};
   graph.AddTimer(
       node, config.controller_period, config.controller_period,
       [state, out, status_out, params, intersections = context.intersections,
-       X_map_odom = context.X_map_odom, on_control = std::move(on_control)](Time, Outbox& outbox) {
+       X_map_odom = context.X_map_odom,
+       on_control = std::move(on_control)](Time now, Outbox& outbox) {
         if (!state->odom) return;
         const stack::ControllerServerOutput r = stack::StepControllerServer(
-            params, *intersections, ControllerInput(*state, X_map_odom), &state->server);
+            params, *intersections, ControllerInput(*state, now, X_map_odom), &state->server);
         if (on_control && r.controller != stack::ActiveController::kNone) {
           on_control(r.controller == stack::ActiveController::kFollowPath,
                      r.status.collision_ahead);

@@ -8,7 +8,7 @@
 //   hall_sensor (10 Hz) ──/modelcar/speed──┴→ ekf_filter_node (20 Hz) ──/odometry/filtered──→ all
 //   obstacle_detection ──/local_costmap/obstacles──→ local_costmap (5 Hz)
 //                                                     ──/local_costmap/costmap_raw──┐
-//   vehicle_communication (10 Hz, V2I) ──/intersection_free──→ bt_navigator (3 Hz)   │
+//   vehicle_communication (10 Hz, V2I) ──/intersection_free──→ bt_navigator (100 Hz) │
 //   bt_navigator ──/behavior──→ planner_server (1 Hz) ──/plan──┐                     │
 //   lane detection ──/lane_detector/central_line/point_cloud──┴→ controller_server (20 Hz)
 //   controller_server ──/cmd_vel──→ carcontroller (30 Hz) ──/carcontrol/command──→ rt_carcontrol

@@ -1,10 +1,25 @@
 #include <algorithm>
+#include <string>
 
 #include "sim/loop/simulation_impl.h"
 
 namespace autonomsim::sim {
 
 using detail::CarAgent;
+
+namespace {
+
+// A behaviour event's text: the mode, and the recovery action with the retries so far.
+std::string BehaviorDetail(const stack::BehaviorOutput& out) {
+  std::string detail = stack::ToString(out.mode);
+  if (out.recovery != stack::RecoveryAction::kNone) {
+    detail += std::string(" (") + stack::ToString(out.recovery) + ", retry " +
+              std::to_string(out.retries) + ")";
+  }
+  return detail;
+}
+
+}  // namespace
 
 std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const PlatformProfile& profile,
                                                    SensorSuite* suite) {
@@ -92,17 +107,14 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
       .on_behavior =
           [this, agent, id](const stack::BehaviorOutput& out) {
             StackMetrics& m = *agent->metrics.stack;
-            if (out.clear_costmaps) ++m.recoveries;
+            if (out.recovery != stack::RecoveryAction::kNone) ++m.recoveries;
             if (out.mode == stack::BehaviorMode::kFailed) m.navigation_failed = true;
-            if (out.mode != agent->behavior_mode) {
+            if (out.mode != agent->behavior_mode || out.recovery != stack::RecoveryAction::kNone) {
               agent->behavior_mode = out.mode;
               Emit(Event{.t = kernel.Now(),
                          .type = EventKind::kBehavior,
                          .car = id,
-                         .detail = std::string(stack::ToString(out.mode)) +
-                                   (out.mode == stack::BehaviorMode::kRecovery
-                                        ? " (retry " + std::to_string(out.retries) + ")"
-                                        : "")});
+                         .detail = BehaviorDetail(out)});
             }
           },
       .on_estimate =

@@ -76,8 +76,8 @@ struct PerceptionMetrics {
 struct StackMetrics {
   std::uint64_t control_cycles{0};      // controller server cycles that drove (not held)
   std::uint64_t follow_path_cycles{0};  // of which FollowPath (inside stop boxes/intersections)
-  std::uint64_t collision_cycles{0};    // of which saw a collision ahead and stopped
-  int recoveries{0};                    // clear costmaps, wait, retry
+  std::uint64_t collision_cycles{0};    // of which failed FollowPath by a collision ahead
+  int recoveries{0};                    // recovery actions (clear a costmap, wait)
   bool navigation_failed{false};        // retries exhausted
   // The EKF's map-frame position against the true chassis centre, at each estimate.
   double max_localization_error_m{0.0};

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace autonomsim::stack {
 namespace {
@@ -56,17 +58,78 @@ TEST(BehaviorTest, TheEndOfAnOpenRouteIsTheLastGoalThenItIsDone) {
   EXPECT_TRUE(out.goals.empty());
 }
 
-TEST(BehaviorTest, WaitsAtTheIntersectionUntilItIsFree) {
-  BehaviorState state;
-  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
-  input.intersection_free = false;
-  BehaviorOutput out = StepBehavior({}, Straight(10.0), input, &state);
+// The lab's behaviour tree (code/ros_ws/src/nav2_local/behavior_tree/drive_to_pose_test.xml) on
+// Nav2 Galactic's nodes, ticked every 10 ms (nav2_car_params.yaml:7, bt_loop_duration).
+class TreeRun {
+ public:
+  explicit TreeRun(BehaviorParams params = {}, world::Polyline route = Straight(100.0))
+      : params_(params), route_(std::move(route)) {}
+
+  // One tick at t seconds. A blocked car's controller reports the running attempt as failed by a
+  // collision ahead on the next tick (it runs at 20 Hz; the tick is 10 ms).
+  BehaviorOutput Step(double t) {
+    input_.now = FromSeconds(t);
+    out_ = StepBehavior(params_, route_, input_, &state_);
+    input_.plan_failed.reset();
+    if (blocked && !out_.hold) input_.follow_path_failure = FollowPathFailure{out_.attempt, true};
+    if (out_.recovery != RecoveryAction::kNone) actions.push_back(out_.recovery);
+    return out_;
+  }
+  // Ticks every 10 ms from `from` up to `to` seconds; returns the last output.
+  BehaviorOutput Run(double from, double to) {
+    for (int i = 0; from + 0.01 * i <= to + 1e-9; ++i) Step(from + 0.01 * i);
+    return out_;
+  }
+
+  BehaviorInput& input() { return input_; }
+  const BehaviorState& state() const { return state_; }
+  bool blocked{false};
+  std::vector<RecoveryAction> actions;
+
+ private:
+  BehaviorParams params_;
+  world::Polyline route_;
+  BehaviorInput input_ = At(0.0, Vec2(1.0, 0.0));
+  BehaviorState state_;
+  BehaviorOutput out_;
+};
+
+// rate_controller.cpp:36-76: the first tick runs the child, FollowPath starts; for the rest of
+// the RateController's period (hz=3, xml:19) it returns RUNNING and the ReactiveFallback halts
+// FollowPath; after that its timer never restarts (only SUCCESS restarts it, and the Inverter
+// never returns SUCCESS), so the gate is checked on every tick.
+TEST(BehaviorTest, TheGateHaltsFollowPathForAThirdOfASecondAfterTheTreeStarts) {
+  TreeRun tree;
+  BehaviorOutput out = tree.Step(0.0);
+  EXPECT_FALSE(out.hold);
+  EXPECT_EQ(out.attempt, 1u);
+  for (double t = 0.01; t < 0.33; t += 0.01) {
+    out = tree.Step(t);
+    EXPECT_TRUE(out.hold) << t;
+    EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  }
+  out = tree.Step(0.34);
+  EXPECT_FALSE(out.hold);
+  EXPECT_EQ(out.attempt, 2u);  // a new FollowPath action
+  out = tree.Run(0.35, 5.0);
+  EXPECT_FALSE(out.hold);
+  EXPECT_EQ(out.attempt, 2u);
+}
+
+// xml:21-24: not free, Wait(600) runs and FollowPath is halted within one 10 ms tick; free
+// again, FollowPath runs on the next tick (our former 3 Hz tick held the car up to 0.33 s more).
+TEST(BehaviorTest, WaitsAtTheIntersectionUntilItIsFreeWithinOneTick) {
+  TreeRun tree;
+  tree.Run(0.0, 1.0);
+  tree.input().intersection_free = false;
+  BehaviorOutput out = tree.Step(1.01);
   EXPECT_EQ(out.mode, BehaviorMode::kIntersectionWait);
   EXPECT_TRUE(out.hold);
   EXPECT_FALSE(out.goals.empty());  // the planner keeps planning while the car waits
-  input.now = FromSeconds(0.333);
-  input.intersection_free = true;
-  out = StepBehavior({}, Straight(10.0), input, &state);
+  out = tree.Run(1.02, 4.0);
+  EXPECT_EQ(out.mode, BehaviorMode::kIntersectionWait);
+  tree.input().intersection_free = true;
+  out = tree.Step(4.01);
   EXPECT_EQ(out.mode, BehaviorMode::kDrive);
   EXPECT_FALSE(out.hold);
 }
@@ -91,134 +154,106 @@ TEST(BehaviorTest, AStalePermissionHoldsTheCarInAStopZoneOnlyWithTheTimeout) {
   // a fresh permission lets it go
   input.in_stop_zone = true;
   input.intersection_free_stamp = FromSeconds(9.5);
+  input.now = FromSeconds(10.01);
   EXPECT_EQ(StepBehavior(safe, Straight(10.0), input, &safe_state).mode, BehaviorMode::kDrive);
+}
+
+// A car blocked for good (xml:5-45; recovery_node.cpp:18-100; round_robin_node.cpp:20-65): each
+// failed FollowPath first clears the local costmap and retries at once (inner RecoveryNode, 1
+// retry); its second failure runs the outer RoundRobin, which alternates "clear both costmaps"
+// (instant) with Wait 5 s; six outer retries, then the navigation fails. Three waits: the lab's
+// car gives up after ≈ 15 s of waiting (plus a third of a second of gate throttle per restart).
+TEST(BehaviorTest, ABlockedCarRunsTheLabsRecoverySequenceThenFails) {
+  TreeRun tree;
+  tree.Run(0.0, 1.0);
+  tree.blocked = true;
+  double failed_at = -1.0;
+  for (double t = 1.01; t < 60.0 && failed_at < 0.0; t += 0.01) {
+    if (tree.Step(t).mode == BehaviorMode::kFailed) failed_at = t;
+  }
+  using A = RecoveryAction;
+  const std::vector<A> expected{A::kClearLocal, A::kClearBoth, A::kClearLocal, A::kWait,
+                                A::kClearLocal, A::kClearBoth, A::kClearLocal, A::kWait,
+                                A::kClearLocal, A::kClearBoth, A::kClearLocal, A::kWait,
+                                A::kClearLocal};
+  EXPECT_EQ(tree.actions, expected);
+  EXPECT_EQ(tree.state().retries, 6);
+  // 15 s of waits and 13 restarts of ≈ 0.34 s each
+  EXPECT_GT(failed_at - 1.0, 15.0 + 13 * 0.33);
+  EXPECT_LT(failed_at - 1.0, 15.0 + 13 * 0.36);
+  const BehaviorOutput out = tree.Run(failed_at + 0.01, failed_at + 30.0);
+  EXPECT_EQ(out.mode, BehaviorMode::kFailed);
+  EXPECT_TRUE(out.hold);
+  EXPECT_TRUE(out.goals.empty());
+}
+
+// recovery_node.cpp:102-107: the outer count resets only when the navigation succeeds or is
+// halted, which a car looping its route never does; recovery_reset_m (safe) resets it after
+// driving that far.
+TEST(BehaviorTest, TheRetryCountLastsTheWholeNavigationUnlessRecoveryResetIsSet) {
+  for (const double reset_m : {0.0, 0.5}) {
+    TreeRun tree(BehaviorParams{.recovery_reset_m = reset_m});
+    tree.Run(0.0, 1.0);
+    tree.blocked = true;
+    tree.Run(1.01, 2.0);  // clear local, then clear both: retry 1
+    ASSERT_EQ(tree.state().retries, 1);
+    tree.blocked = false;
+    for (int i = 0; i < 200; ++i) {  // 20 m in 20 s
+      tree.input().p_map = Vec2(1.0 + 0.01 * i * 10.0, 0.0);
+      tree.Run(2.0 + 0.1 * i, 2.0 + 0.1 * i + 0.09);
+    }
+    EXPECT_EQ(tree.state().retries, reset_m > 0.0 ? 0 : 1) << reset_m;
+  }
+}
+
+// xml:9-15: a failed plan clears the global costmap and plans again while FollowPath keeps
+// driving; a second failure in a row goes to the outer recovery; a good plan in between resets.
+TEST(BehaviorTest, AFailedPlanClearsTheGlobalCostmapThenRecovers) {
+  TreeRun tree;
+  tree.Run(0.0, 1.0);
+  tree.input().plan_failed = true;
+  BehaviorOutput out = tree.Step(1.01);
+  EXPECT_EQ(out.recovery, RecoveryAction::kClearGlobal);
+  EXPECT_FALSE(out.hold);
+  tree.input().plan_failed = false;
+  tree.Run(1.02, 2.0);
+  tree.input().plan_failed = true;
+  EXPECT_EQ(tree.Step(2.01).recovery, RecoveryAction::kClearGlobal);  // reset by the good plan
+  tree.Run(2.02, 3.0);
+  tree.input().plan_failed = true;
+  out = tree.Step(3.01);
+  EXPECT_EQ(out.recovery, RecoveryAction::kClearBoth);
+  EXPECT_EQ(out.retries, 1);
+  EXPECT_TRUE(out.hold);
+}
+
+// The controller's failure of an attempt that has been halted since, or handled, starts nothing.
+TEST(BehaviorTest, AFailureCountsOnlyForTheRunningAttemptAndOnlyOnce) {
+  TreeRun tree;
+  tree.Run(0.0, 1.0);
+  const std::uint64_t attempt = tree.Step(1.01).attempt;
+  tree.input().follow_path_failure = FollowPathFailure{attempt - 1, true};
+  EXPECT_EQ(tree.Step(1.02).recovery, RecoveryAction::kNone);
+  tree.input().follow_path_failure = FollowPathFailure{attempt, false};  // no progress
+  EXPECT_EQ(tree.Step(1.03).recovery, RecoveryAction::kClearLocal);
+  EXPECT_EQ(tree.Step(1.04).recovery, RecoveryAction::kNone);
 }
 
 TEST(BehaviorTest, APatientCarWaitingInLineNearAnIntersectionNeverUsesUpItsRetries) {
   for (const bool patient : {false, true}) {
-    const BehaviorParams params{
-        .recovery_wait = std::chrono::seconds(5), .max_retries = 2, .patient_in_queue = patient};
-    BehaviorState state;
-    BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
-    input.near_intersection = true;
-    BehaviorMode last = BehaviorMode::kDrive;
-    // blocked for 60 s: retry every 5 s
-    for (double t = 10.0; t <= 70.0; t += 1.0 / 3.0) {
-      input.now = FromSeconds(t);
-      input.collision_ahead = true;
-      last = StepBehavior(params, Straight(10.0), input, &state).mode;
-    }
-    EXPECT_EQ(last == BehaviorMode::kFailed, !patient) << "patient_in_queue " << patient;
-    EXPECT_EQ(state.retries, patient ? 0 : 2);
+    TreeRun tree(BehaviorParams{.max_retries = 2, .patient_in_queue = patient});
+    tree.input().near_intersection = true;
+    tree.Run(0.0, 1.0);
+    tree.blocked = true;  // 60 s in line
+    const BehaviorOutput out = tree.Run(1.01, 61.0);
+    EXPECT_EQ(out.mode == BehaviorMode::kFailed, !patient) << "patient_in_queue " << patient;
+    EXPECT_EQ(tree.state().retries, patient ? 0 : 2);
   }
   // away from intersections a patient car still fails
-  const BehaviorParams params{
-      .recovery_wait = std::chrono::seconds(5), .max_retries = 2, .patient_in_queue = true};
-  BehaviorState state;
-  BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
-  BehaviorMode last = BehaviorMode::kDrive;
-  for (double t = 10.0; t <= 70.0; t += 1.0 / 3.0) {
-    input.now = FromSeconds(t);
-    input.collision_ahead = true;
-    last = StepBehavior(params, Straight(10.0), input, &state).mode;
-  }
-  EXPECT_EQ(last, BehaviorMode::kFailed);
-}
-
-TEST(BehaviorTest, ACollisionAheadClearsTheCostmapsWaitsAndRetries) {
-  const BehaviorParams params{.recovery_wait = std::chrono::seconds(5), .max_retries = 2};
-  BehaviorState state;
-  BehaviorInput input = At(10.0, Vec2(1.0, 0.0));
-  input.collision_ahead = true;
-  BehaviorOutput out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
-  EXPECT_TRUE(out.clear_costmaps);
-  EXPECT_TRUE(out.hold);
-  EXPECT_EQ(out.retries, 1);
-  // while waiting: held, the costmaps cleared only once (the held controller reports no collision)
-  input.collision_ahead = false;
-  input.now = FromSeconds(14.9);
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
-  EXPECT_FALSE(out.clear_costmaps);
-  // after the wait: retry
-  input.now = FromSeconds(15.0);
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
-  EXPECT_FALSE(out.hold);
-  // still blocked: a second recovery, then the navigation fails for good
-  input.collision_ahead = true;
-  input.now = FromSeconds(15.3);
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.retries, 2);
-  input.now = FromSeconds(20.3);
-  input.collision_ahead = false;
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
-  input.now = FromSeconds(20.6);
-  input.collision_ahead = true;
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kFailed);
-  EXPECT_TRUE(out.hold);
-  EXPECT_TRUE(out.goals.empty());
-  input.collision_ahead = false;
-  input.now = FromSeconds(60.0);
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode, BehaviorMode::kFailed);
-}
-
-TEST(BehaviorTest, ProgressAfterARecoveryResetsTheRetries) {
-  const BehaviorParams params{.recovery_wait = std::chrono::seconds(1), .recovery_reset_m = 0.5};
-  BehaviorState state;
-  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
-  input.plan_failed = true;  // a failed plan recovers like a collision
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 1);
-  input.plan_failed = false;
-  input.now = FromSeconds(1.0);
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode, BehaviorMode::kDrive);
-  input.now = FromSeconds(2.0);
-  input.p_map = Vec2(1.4, 0.0);
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 1);
-  input.now = FromSeconds(3.0);
-  input.p_map = Vec2(1.6, 0.0);
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).retries, 0);
-}
-
-TEST(BehaviorTest, AFailedPlanCountsUntilTheNextReplyOrARecovery) {
-  const BehaviorParams params{.recovery_wait = std::chrono::seconds(1)};
-  BehaviorState state;
-  BehaviorInput input = At(0.0, Vec2(1.0, 0.0));
-  // A failed reply while the intersection is not free: the gate holds, the failure is kept ...
-  input.intersection_free = false;
-  input.plan_failed = true;
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode,
-            BehaviorMode::kIntersectionWait);
-  EXPECT_TRUE(state.plan_failed);
-  // ... and starts a recovery once the gate opens, with no new reply.
-  input.intersection_free = true;
-  input.plan_failed = std::nullopt;
-  input.now = FromSeconds(0.333);
-  BehaviorOutput out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kRecovery);
-  EXPECT_TRUE(out.clear_costmaps);
-  EXPECT_EQ(out.retries, 1);
-  EXPECT_FALSE(state.plan_failed);
-  // After the 1 s wait, still no reply: the old failure does not start a second recovery.
-  input.now = FromSeconds(1.4);
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
-  EXPECT_EQ(out.retries, 1);
-  // The newest reply counts: a failure held at the gate, then a success, drives on.
-  input.intersection_free = false;
-  input.plan_failed = true;
-  input.now = FromSeconds(1.7);
-  EXPECT_EQ(StepBehavior(params, Straight(10.0), input, &state).mode,
-            BehaviorMode::kIntersectionWait);
-  input.intersection_free = true;
-  input.plan_failed = false;
-  input.now = FromSeconds(2.0);
-  out = StepBehavior(params, Straight(10.0), input, &state);
-  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
-  EXPECT_EQ(out.retries, 1);
+  TreeRun tree(BehaviorParams{.max_retries = 2, .patient_in_queue = true});
+  tree.Run(0.0, 1.0);
+  tree.blocked = true;
+  EXPECT_EQ(tree.Run(1.01, 61.0).mode, BehaviorMode::kFailed);
 }
 
 TEST(BehaviorTest, TheOperatorEndsTheMission) {

@@ -143,17 +143,28 @@ TEST(ControllerServerTest, ACollisionAheadStopsAndIsReported) {
   input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 2.3; };
   ControllerServerOutput out = s.Step(input);
   EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  EXPECT_TRUE(out.status.failed);
   EXPECT_TRUE(out.status.collision_ahead);
   EXPECT_TRUE(out.status.follow_path);
+  // The action aborted (nav2_controller.cpp:395-398): silent, and still failed, until the
+  // behaviour starts a new one, even when the way is clear again.
+  input.is_lethal = {};
+  out = s.Step(input);
+  EXPECT_FALSE(out.cmd_vel.has_value());
+  EXPECT_TRUE(out.status.failed);
+  EXPECT_EQ(out.status.attempt, 0u);
 
-  // The LaneController from (1.2, 0), outside the area, straight at 0.25 m/s: within the 1 s
+  // The LaneController (a new action) from (1.2, 0), outside the area, straight at 0.25 m/s: within the 1 s
   // horizon the front reaches 1.2 + 0.265 + 0.25 = 1.715 m. A wall beyond 1.8 m is clear of it,
   // one beyond 1.65 m is not.
   const std::vector<Vec2> lanes{Vec2(0.6, 0.0)};
   input = DriveAt(1.2, 0.0);
+  input.attempt = 1;
   input.lanes = ControllerLanes{.points_base = lanes, .valid = true, .stamp = FromSeconds(9.9)};
   input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.8; };
   out = s.Step(input);
+  EXPECT_FALSE(out.status.failed);
+  EXPECT_EQ(out.status.attempt, 1u);
   EXPECT_FALSE(out.status.collision_ahead);
   EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25, kTol);
   input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.65; };
@@ -162,6 +173,36 @@ TEST(ControllerServerTest, ACollisionAheadStopsAndIsReported) {
   EXPECT_FALSE(out.status.follow_path);
   EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
   EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(9.9));
+}
+
+// Galactic's SimpleProgressChecker (simple_progress_checker.cpp:63-92) with the car's 0.5 m in
+// 10 s (nav2_car_params.yaml:67-70), reset by a new FollowPath action (nav2_controller.cpp:357):
+// a car that stands, e.g. because its LaneController sees no line, fails its action after 10 s.
+TEST(ControllerServerTest, ACarThatDoesNotMoveHalfAMetreInTenSecondsFailsItsAction) {
+  Server s;
+  ControllerServerInput input = DriveAt(1.2, 0.0);
+  input.lanes = ControllerLanes{.valid = false};  // no line: (0, 0)
+  for (int i = 0; i <= 200; ++i) {  // 10 s at 20 Hz, standing
+    input.now = FromSeconds(0.05 * i);
+    const ControllerServerOutput out = s.Step(input);
+    EXPECT_FALSE(out.status.failed) << input.now.count();
+  }
+  input.now = FromSeconds(10.05);
+  ControllerServerOutput out = s.Step(input);
+  EXPECT_TRUE(out.status.failed);
+  EXPECT_FALSE(out.status.collision_ahead);
+  ASSERT_TRUE(out.cmd_vel.has_value());
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+  // a new action starts the check again
+  input.attempt = 1;
+  input.now = FromSeconds(10.1);
+  EXPECT_FALSE(s.Step(input).status.failed);
+  // moving more than 0.5 m from the baseline renews it: 0.06 m per 1 s, never failing
+  for (int i = 1; i <= 400; ++i) {
+    input.now = FromSeconds(10.1 + 0.05 * i);
+    input.X_map_base = world::Pose2{1.2 + 0.003 * i, 0.0, 0.0};
+    EXPECT_FALSE(s.Step(input).status.failed) << i;
+  }
 }
 
 TEST(ControllerServerTest, LethalInLocalCostmapGoesThroughMapToOdom) {

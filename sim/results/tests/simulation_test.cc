@@ -276,7 +276,7 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
   const MetricsReport& board = record.boards[0].report;
   const std::vector<std::pair<const char*, double>> rates = {
       {"ekf_filter_node", 20.0}, {"controller_server", 20.0}, {"carcontroller", 30.0},
-      {"bt_navigator", 3.0},     {"local_costmap", 5.0},      {"vehicle_communication", 10.0}};
+      {"bt_navigator", 100.0},   {"local_costmap", 5.0},      {"vehicle_communication", 10.0}};
   for (const auto& [name, hz] : rates) {
     const NodeReport* node = board.FindNode(name);
     ASSERT_NE(node, nullptr) << name;
