@@ -123,6 +123,7 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   outcome.scenario_name = loaded.scenario.name;
   outcome.seed = loaded.scenario.seed;
   outcome.scenario_sha256 = loaded.sha256;
+  outcome.warnings = loaded.warnings;
   outcome.result_dir = out_dir;
   // The run streams its trajectory and events into its folder, or without one into a scratch
   // folder that goes with the run: memory stays bounded however long it runs.

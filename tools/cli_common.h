@@ -85,6 +85,7 @@ struct Outcome {
   std::optional<std::filesystem::path> report;  // its replay report, when one was written
   double wall_seconds{0.0};
   double sim_seconds{0.0};
+  std::vector<std::string> warnings;  // settings that do not go together (LoadedScenario)
   bool passed() const;
 };
 

@@ -151,6 +151,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
                o.passed() ? "PASS " : "FAIL ", o.file, o.expectations.size(), o.sim_seconds,
                o.wall_seconds);
     if (o.expectations.empty()) fmt::print("  warning: this scenario has no expectations\n");
+    for (const std::string& w : o.warnings) fmt::print("  warning: {}\n", w);
     if (!o.passed()) PrintVerdicts(o);
     if (!o.passed()) PrintReportPath(o);
   }

@@ -30,6 +30,10 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
     return kExitUnusableInput;
   }
   const double duration_s = ToSeconds(loaded->scenario.duration);
+  for (const std::string& w : loaded->warnings) fmt::print(stderr, "warning: {}\n", w);
+  if (!quiet && !loaded->preset_overrides.empty()) {
+    fmt::print(stderr, "autonomsim: {}\n", sim::DescribePresetOverrides(loaded->preset_overrides));
+  }
   if (!quiet) {
     const sim::V2IConfig& v2i = loaded->scenario.v2i;
     fmt::print(stderr, "autonomsim: running {} ({} cars, {:.0f} s simulated{}, seed {})\n",

@@ -175,6 +175,7 @@ RunSummary Summarize(const LoadedScenario& loaded, const RunRecord& record,
       (*summary.platform)[board.board] = ReportJson(board.report);
     }
   }
+  summary.preset_overrides = loaded.preset_overrides;
   summary.versions = {
       .autonomsim = AUTONOMSIM_VERSION,
       .box2d = fmt::format("{}.{}.{}", b2_version.major, b2_version.minor, b2_version.revision),

@@ -55,6 +55,9 @@ struct RunSummary {
   // defines. Left out when no car has a board.
   std::optional<std::map<std::string, nlohmann::json>> platform;
   SummaryVersions versions;
+  // The keys the scenario sets itself against its stack.preset (LoadedScenario::preset_overrides);
+  // written always ([] when none); missing in files written before it existed.
+  std::optional<std::vector<PresetOverride>> preset_overrides;
 };
 
 // The summary of a finished run; `wall_seconds` is the host time its simulation took (0: not
@@ -155,6 +158,14 @@ void Describe(V& v, RealTimeMetrics& r) {
 }
 
 template <class V>
+void Describe(V& v, PresetOverride& o) {
+  v("key", o.key);
+  v("preset", o.preset);
+  v("preset_value", o.preset_value);
+  v("value", o.value);
+}
+
+template <class V>
 void Describe(V& v, SummaryVersions& s) {
   v("autonomsim", s.autonomsim);
   v("box2d", s.box2d);
@@ -181,6 +192,7 @@ void Describe(V& v, RunSummary& s) {
   v("realtime", s.realtime, IfEmpty::kLeftOut);
   v("platform", s.platform, IfEmpty::kLeftOut);
   v("versions", s.versions);
+  v("preset_overrides", s.preset_overrides);
 }
 
 }  // namespace autonomsim::sim

@@ -412,7 +412,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   BreakAliases(root);
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);
-  ApplyStackPresets(root, source);
+  std::vector<PresetOverride> preset_overrides = ApplyStackPresets(root, source);
   const ScenarioSite site{root, source};
 
   Scenario read = ReadConfig<Scenario>(root, source);
@@ -431,8 +431,28 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   CheckExpectations(loaded, car_ids, site);
   CheckFaults(scenario, car_ids, site);
   loaded.key_locations = BoardNameLocations(scenario, site);
+  loaded.preset_overrides = std::move(preset_overrides);
+  loaded.warnings = StackMixWarnings(scenario);
   Resolve(&loaded);
   return loaded;
+}
+
+std::vector<std::string> StackMixWarnings(const Scenario& scenario) {
+  if (scenario.traffic_lights.policy != world::ServerPolicy::kFifo) return {};
+  std::string cars;
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    if (!scenario.cars[i].intersection_client.re_request) {
+      cars += (cars.empty() ? "" : ",") + std::to_string(i);
+    }
+  }
+  if (cars.empty()) return {};
+  return {"cars[" + cars +
+          "] run the lab's intersection client (intersection_client.re_request: false: it never "
+          "renews a grant) against the fifo server, whose lease (traffic_lights.lease_s " +
+          Num(ToSeconds(scenario.traffic_lights.lease)) +
+          " s) then expires while the car crosses and lets the next car in: set "
+          "traffic_lights.policy: original (the lab's vtl.py, as stack.preset: lab) or "
+          "intersection_client.re_request: true (as stack.preset: safe)"};
 }
 
 }  // namespace autonomsim::sim

@@ -253,7 +253,17 @@ struct LoadedScenario {
   ConfigError ErrorAt(const std::string& key_path, const std::string& message) const;
   using KeyPath = std::vector<std::variant<std::string, std::size_t>>;
   std::map<std::string, std::string> key_locations;  // key path -> "file:line:col: key path: "
+  // The keys the scenario sets itself against its stack.preset (ApplyStackPresets).
+  std::vector<PresetOverride> preset_overrides;
+  // Settings that do not go together (StackMixWarnings), for run and check to print.
+  std::vector<std::string> warnings;
 };
+
+// Warnings about a scenario whose cars and server come from different stacks in a way that breaks
+// the crossing: a lab intersection client (re_request false, it never renews its grant) against
+// the fifo server, whose lease then expires while the car crosses (the lab's client belongs with
+// vtl.py, policy original). Empty when the settings go together.
+std::vector<std::string> StackMixWarnings(const Scenario& scenario);
 
 // Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,
 // loads the track, resolves each car's route and start. Throws ConfigError on unusable input.

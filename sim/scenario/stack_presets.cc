@@ -1,6 +1,7 @@
 #include "sim/scenario/stack_presets.h"
 
 #include <algorithm>
+#include <set>
 #include <stdexcept>
 
 namespace autonomsim::sim {
@@ -26,6 +27,7 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.planner.start_escape_m", "0.0", "0.3"},
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
     {"stack.behavior.patient_in_queue", "false", "true"},
+    {"stack.behavior.recovery_reset_m", "0", "0.5"},
     {"stack.behavior.intersection_free_timeout_s", "0", "1.0"},
     {"stack.emergency_stop.enabled", "false", "true"},
     {"stack.lane_controller.collision.horizon_s", "1.0", "2.0"},
@@ -53,6 +55,47 @@ YAML::Node Build(const PresetOption (&options)[N], const std::string& name) {
     node[parts.back()] = YAML::Load(Pick(name, option.lab, option.safe));
   }
   return root;
+}
+
+// Whether two YAML scalars say the same value: as numbers when both are, else as text.
+bool SameScalar(const YAML::Node& a, const std::string& b_text) {
+  const YAML::Node b = YAML::Load(b_text);
+  if (!a.IsScalar() || !b.IsScalar()) return false;
+  double x = 0.0;
+  double y = 0.0;
+  if (YAML::convert<double>::decode(a, x) && YAML::convert<double>::decode(b, y)) return x == y;
+  bool p = false;
+  bool q = false;
+  if (YAML::convert<bool>::decode(a, p) && YAML::convert<bool>::decode(b, q)) return p == q;
+  return a.Scalar() == b.Scalar();
+}
+
+// The node at a dotted key path under `node`, or an invalid node.
+YAML::Node At(YAML::Node node, const std::vector<std::string>& parts) {
+  for (const std::string& part : parts) {
+    if (!node.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+    const YAML::Node next = node[part];
+    if (!next) return YAML::Node(YAML::NodeType::Undefined);
+    node.reset(next);
+  }
+  return node;
+}
+
+// The options of `options` that `node` (before the preset is merged) sets to another value.
+template <std::size_t N>
+void CollectOverrides(const PresetOption (&options)[N], const YAML::Node& node,
+                      const std::string& prefix, const std::string& preset,
+                      std::vector<PresetOverride>* out) {
+  for (const PresetOption& option : options) {
+    const YAML::Node mine = At(node, ParseOverridePath(option.key));
+    if (!mine.IsDefined() || mine.IsNull()) continue;
+    const std::string preset_value = Pick(preset, option.lab, option.safe);
+    if (SameScalar(mine, preset_value)) continue;
+    out->push_back({.key = detail::JoinPath(prefix, option.key),
+                    .preset = preset,
+                    .preset_value = preset_value,
+                    .value = mine.IsScalar() ? mine.Scalar() : YAML::Dump(mine)});
+  }
 }
 
 // The preset named at `node[key]` (a mapping entry), checked; none when absent.
@@ -107,18 +150,70 @@ void MergeBeneath(YAML::Node target, const YAML::Node& beneath) {
   }
 }
 
-void ApplyStackPresets(YAML::Node& root, const ConfigSource& source) {
+std::vector<PresetOverride> ApplyStackPresets(YAML::Node& root, const ConfigSource& source) {
+  std::vector<PresetOverride> overrides;
   const std::optional<std::string> fleet = PresetAt(root, "", source);
   const YAML::Node cars = root["cars"];
   if (cars && cars.IsSequence()) {
     for (std::size_t i = 0; i < cars.size(); ++i) {
       YAML::Node car = cars[i];
       if (!car.IsMap()) continue;  // the strict reader reports it
-      const std::optional<std::string> own = PresetAt(car, detail::JoinIndex("cars", i), source);
-      if (own || fleet) MergeBeneath(car, StackPresetForCar(own ? *own : *fleet));
+      const std::string path = detail::JoinIndex("cars", i);
+      const std::optional<std::string> own = PresetAt(car, path, source);
+      if (!own && !fleet) continue;
+      const std::string& preset = own ? *own : *fleet;
+      CollectOverrides(kCarOptions, car, path, preset, &overrides);
+      MergeBeneath(car, StackPresetForCar(preset));
     }
   }
-  if (fleet) MergeBeneath(root, StackPresetForScenario(*fleet));
+  if (fleet) {
+    CollectOverrides(kScenarioOptions, root, "", *fleet, &overrides);
+    MergeBeneath(root, StackPresetForScenario(*fleet));
+  }
+  return overrides;
+}
+
+std::string DescribePresetOverrides(const std::vector<PresetOverride>& overrides) {
+  // group the cars that set one key to one value: "cars[0,1].stack.x=v (lab: w)"
+  struct Group {
+    std::string prefix, rest, value, preset, preset_value;
+    std::vector<std::string> cars;
+  };
+  std::vector<Group> groups;
+  std::set<std::string> presets;
+  for (const PresetOverride& o : overrides) {
+    presets.insert(o.preset);
+    std::string car, rest = o.key;
+    if (o.key.rfind("cars[", 0) == 0) {
+      const std::size_t close = o.key.find(']');
+      car = o.key.substr(5, close - 5);
+      rest = o.key.substr(close + 2);
+    }
+    auto same = [&](const Group& g) {
+      return !car.empty() && !g.cars.empty() && g.rest == rest && g.value == o.value &&
+             g.preset == o.preset;
+    };
+    const auto found = std::find_if(groups.begin(), groups.end(), same);
+    if (found != groups.end()) {
+      found->cars.push_back(car);
+    } else {
+      groups.push_back({car.empty() ? "" : "cars", rest, o.value, o.preset, o.preset_value,
+                        car.empty() ? std::vector<std::string>{} : std::vector<std::string>{car}});
+    }
+  }
+  std::string names;
+  for (const std::string& p : presets) names += (names.empty() ? "" : " and ") + p;
+  std::string line = "the scenario sets " + std::to_string(overrides.size()) +
+                     " option(s) of stack.preset " + names +
+                     " itself (summary.json preset_overrides):";
+  for (const Group& g : groups) {
+    std::string cars;
+    for (const std::string& c : g.cars) cars += (cars.empty() ? "" : ",") + c;
+    line += " " + (g.cars.empty() ? g.rest : "cars[" + cars + "]." + g.rest) + "=" + g.value +
+            " (" + g.preset + ": " + g.preset_value + ");";
+  }
+  line.pop_back();
+  return line;
 }
 
 }  // namespace autonomsim::sim

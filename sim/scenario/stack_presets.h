@@ -41,9 +41,23 @@ YAML::Node StackPresetForScenario(const std::string& name);
 // Every option a preset sets, as key paths (car's, then scenario's), in docs/lab-stack.md's order.
 std::vector<std::string> StackPresetKeys();
 
-// Fills `root` (a scenario, overrides applied) from its presets, as described above. A preset
-// that is not a known name is a ConfigError at its key.
-void ApplyStackPresets(YAML::Node& root, const ConfigSource& source);
+// A key the scenario sets itself, beating its preset's value (a different one): the run says so on
+// stderr and in summary.json `preset_overrides`.
+struct PresetOverride {
+  std::string key;           // the key path, e.g. "cars[0].stack.localization.use_pose_fix"
+  std::string preset;        // "lab" or "safe"
+  std::string preset_value;  // the preset's value, as YAML text ("false")
+  std::string value;         // the scenario's ("true")
+};
+
+// Fills `root` (a scenario, overrides applied) from its presets, as described above, and returns
+// the keys it set itself that beat them, cars first, in preset-option order. A preset that is not
+// a known name is a ConfigError at its key.
+std::vector<PresetOverride> ApplyStackPresets(YAML::Node& root, const ConfigSource& source);
+
+// One line for stderr: how many options of which preset the scenario sets itself, and each, with
+// the cars that share a key and value grouped ("cars[0,1].stack...=true (lab: false)").
+std::string DescribePresetOverrides(const std::vector<PresetOverride>& overrides);
 
 // Copies into `target` every key of `beneath` it lacks, recursively through mappings; keys
 // `target` has keep their values.

@@ -83,6 +83,48 @@ TEST(StackPresetsTest, AnUnknownPresetIsAnErrorAtItsKey) {
   EXPECT_THROW(LoadScenario(file.path(), {"stack.preset=[lab]"}), ConfigError);
 }
 
+// Issue 30 item 2: a key the scenario sets beats the preset, and the run says which.
+TEST(StackPresetsTest, TheKeysAScenarioSetsAgainstItsPresetAreListed) {
+  ScenarioFile file("preset_overrides", kPresetTwoStackCars);
+  // lookahead 0.5 against the lab's 0.6 on both cars; a value equal to the preset's is no
+  // override; a car's own preset is the one it is compared with
+  const LoadedScenario loaded = LoadScenario(
+      file.path(), {"stack.preset=lab", "cars[0].stack.localization.use_pose_fix=false",
+                    "cars[1].stack.preset=safe", "traffic_lights.policy=fifo"});
+  std::vector<std::string> lines;
+  for (const PresetOverride& o : loaded.preset_overrides) {
+    lines.push_back(o.key + "=" + o.value + " (" + o.preset + ": " + o.preset_value + ")");
+  }
+  EXPECT_THAT(lines, ::testing::ElementsAre(
+                         "cars[0].stack.follow_path.pursuit.lookahead_dist_m=0.5 (lab: 0.6)",
+                         "cars[1].stack.follow_path.pursuit.lookahead_dist_m=0.5 (safe: 0.4)",
+                         "traffic_lights.policy=fifo (lab: original)"));
+  EXPECT_EQ(DescribePresetOverrides(loaded.preset_overrides),
+            "the scenario sets 3 option(s) of stack.preset lab and safe itself (summary.json "
+            "preset_overrides): cars[0].stack.follow_path.pursuit.lookahead_dist_m=0.5 (lab: "
+            "0.6); cars[1].stack.follow_path.pursuit.lookahead_dist_m=0.5 (safe: 0.4); "
+            "traffic_lights.policy=fifo (lab: original)");
+  // no preset: nothing to override
+  EXPECT_TRUE(LoadScenario(file.path()).preset_overrides.empty());
+}
+
+// Issue 30 item 7: `--set stack.preset=lab` on a scenario that names the fifo server gives the
+// lab's client (it never renews a grant) a server whose lease expires under it.
+TEST(StackPresetsTest, ALabClientAgainstTheFifoServerIsWarnedAbout) {
+  ScenarioFile file("preset_mix", kPresetTwoStackCars);
+  const LoadedScenario mixed =
+      LoadScenario(file.path(), {"stack.preset=lab", "traffic_lights.policy=fifo"});
+  ASSERT_EQ(mixed.warnings.size(), 1u);
+  EXPECT_THAT(mixed.warnings[0], HasSubstr("cars[0,1] run the lab's intersection client"));
+  EXPECT_THAT(mixed.warnings[0], HasSubstr("traffic_lights.policy: original"));
+  EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=lab"}).warnings.empty());
+  EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=safe"}).warnings.empty());
+  EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=lab", "traffic_lights.policy=fifo",
+                                         "cars[0].intersection_client.re_request=true",
+                                         "cars[1].intersection_client.re_request=true"})
+                  .warnings.empty());
+}
+
 TEST(StackPresetsTest, MergeBeneathFillsOnlyMissingKeys) {
   YAML::Node target = YAML::Load("{a: 1, b: {c: 2}}");
   MergeBeneath(target, YAML::Load("{a: 9, b: {c: 9, d: 3}, e: {f: 4}}"));
