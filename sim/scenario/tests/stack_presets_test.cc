@@ -125,6 +125,75 @@ TEST(StackPresetsTest, ALabClientAgainstTheFifoServerIsWarnedAbout) {
                   .warnings.empty());
 }
 
+// Every leaf of a preset's YAML, as (dotted path, scalar text).
+void Leaves(const YAML::Node& node, const std::string& path,
+            std::vector<std::pair<std::string, std::string>>* out) {
+  if (!node.IsMap()) {
+    out->emplace_back(path, node.Scalar());
+    return;
+  }
+  for (const auto& entry : node) {
+    const std::string key = entry.first.Scalar();
+    Leaves(entry.second, path.empty() ? key : path + "." + key, out);
+  }
+}
+
+// Whether a resolved JSON value says the same as a preset's YAML text.
+bool SameValue(const nlohmann::json& value, const std::string& text) {
+  if (value.is_boolean()) return value.get<bool>() == (text == "true");
+  if (value.is_number()) return value.get<double>() == std::stod(text);
+  return value.is_string() && value.get<std::string>() == text;
+}
+
+// Issue 30 item 2: each shipped scenario's header (its leading comment) names every option on
+// which its run departs from the lab's code, whether it sets it or leaves it at a default that is
+// not the lab's.
+TEST(StackPresetsTest, EveryShippedScenarioHeaderNamesItsDeparturesFromTheLab) {
+  std::vector<std::pair<std::string, std::string>> car_keys, scenario_keys, car_safe,
+      scenario_safe;
+  Leaves(StackPresetForCar("lab"), "", &car_keys);
+  Leaves(StackPresetForScenario("lab"), "", &scenario_keys);
+  Leaves(StackPresetForCar("safe"), "", &car_safe);
+  Leaves(StackPresetForScenario("safe"), "", &scenario_safe);
+  std::vector<fs::path> files;
+  for (const char* dir : {"scenarios", "scenarios/faults"}) {
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      if (entry.path().extension() == ".yaml") files.push_back(entry.path());
+    }
+  }
+  ASSERT_GT(files.size(), 8u) << "run from the repository root";
+  for (const fs::path& file : files) {
+    std::ifstream in(file);
+    std::string header, line;
+    while (std::getline(in, line) && line.rfind("#", 0) == 0) header += line + "\n";
+    const LoadedScenario loaded = LoadScenario(file);
+    const nlohmann::json& scenario = loaded.resolved["scenario"];
+    // a value that `stack.preset: safe` sets is named by the preset (docs/lab-stack.md)
+    auto check = [&](const nlohmann::json& root, const auto& keys, const auto& safe_keys,
+                     bool safe, const std::string& where) {
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        const auto& [key, lab] = keys[k];
+        nlohmann::json value = root;
+        for (const std::string& part : ParseOverridePath(key)) value = value.at(part);
+        if (SameValue(value, lab) || (safe && SameValue(value, safe_keys[k].second))) continue;
+        const std::string name = key.substr(key.rfind('.') + 1);
+        EXPECT_NE(header.find(name), std::string::npos)
+            << file << ": " << where << key << " is " << value.dump() << " (lab: " << lab
+            << "), and the header does not name `" << name << "`";
+      }
+    };
+    const std::optional<std::string>& fleet = loaded.scenario.stack.preset;
+    for (std::size_t i = 0; i < loaded.scenario.cars.size(); ++i) {
+      const CarConfig& car = loaded.scenario.cars[i];
+      if (car.driver != Driver::kStack) continue;
+      const std::optional<std::string>& own = car.stack.preset ? car.stack.preset : fleet;
+      check(scenario["cars"][i], car_keys, car_safe, own == "safe",
+            "cars[" + std::to_string(i) + "].");
+    }
+    check(scenario, scenario_keys, scenario_safe, fleet == "safe", "");
+  }
+}
+
 TEST(StackPresetsTest, MergeBeneathFillsOnlyMissingKeys) {
   YAML::Node target = YAML::Load("{a: 1, b: {c: 2}}");
   MergeBeneath(target, YAML::Load("{a: 9, b: {c: 9, d: 3}, e: {f: 4}}"));
