@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
+#include <sstream>
 
 #include "sim/scenario/scenario.h"
 #include "sim/scenario/tests/scenario_file.h"
@@ -211,6 +213,68 @@ TEST(StackPresetsTest, ReadmeListsEveryOptionAPresetSets) {
   ASSERT_NE(section, std::string::npos);
   for (const std::string& key : StackPresetKeys()) {
     EXPECT_NE(text.find("| `" + key + "`", section), std::string::npos) << key;
+  }
+}
+
+// The text of every test source under the module folders, for looking tests up by name.
+std::string AllTestSources() {
+  std::string all;
+  for (const char* dir : {"sim", "stack", "world", "vehicle", "tools"}) {
+    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+      const std::string name = entry.path().filename().string();
+      if (!entry.is_regular_file() || name.size() < 8 ||
+          name.substr(name.size() - 8) != "_test.cc") {
+        continue;
+      }
+      std::ifstream in(entry.path());
+      all.append(std::istreambuf_iterator<char>(in), {});
+    }
+  }
+  return all;
+}
+
+// Issue 30 item 3: docs/lab-stack.md's fidelity table has a row for every preset option, and
+// every row a source (path:line, or "unknown" with why) and tests that exist.
+TEST(StackPresetsTest, TheFidelityTableCoversEveryOptionWithASourceAndATest) {
+  std::ifstream page("docs/lab-stack.md");
+  ASSERT_TRUE(page) << "run from the repository root";
+  const std::string text((std::istreambuf_iterator<char>(page)), {});
+  const std::size_t section = text.find("## Fidelity");
+  ASSERT_NE(section, std::string::npos);
+  std::istringstream table(text.substr(section));
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(table, line);) {
+    if (line.rfind("| ", 0) != 0 || line.rfind("| behaviour", 0) == 0) continue;
+    std::vector<std::string> cells;
+    std::size_t at = 1;
+    for (std::size_t bar; (bar = line.find(" | ", at)) != std::string::npos; at = bar + 3) {
+      cells.push_back(line.substr(at, bar - at));
+    }
+    cells.push_back(line.substr(at, line.size() - at - 2));
+    ASSERT_EQ(cells.size(), 6u) << line;
+    rows.push_back(cells);
+  }
+  ASSERT_GT(rows.size(), 10u);
+  for (const std::string& key : StackPresetKeys()) {
+    const bool has_row = std::any_of(rows.begin(), rows.end(), [&](const auto& row) {
+      return row[0].find("`" + key + "`") != std::string::npos;
+    });
+    EXPECT_TRUE(has_row) << "no fidelity row for " << key;
+  }
+  const std::string tests = AllTestSources();
+  const std::regex path_line(R"([\w./-]+:\d+)");
+  const std::regex test_name(R"(`(\w+)\.(\w+)`)");
+  for (const auto& row : rows) {
+    EXPECT_TRUE(std::regex_search(row[1], path_line) || row[1].find("unknown") != std::string::npos)
+        << row[0] << ": no path:line and no \"unknown\"";
+    int named = 0;
+    for (std::sregex_iterator m(row[5].begin(), row[5].end(), test_name), end; m != end; ++m) {
+      ++named;
+      const std::string suite = (*m)[1], name = (*m)[2];
+      EXPECT_NE(tests.find(suite + ", " + name + ")"), std::string::npos)
+          << row[0] << ": no test " << suite << "." << name;
+    }
+    EXPECT_GT(named, 0) << row[0] << ": no test named";
   }
 }
 
