@@ -412,7 +412,7 @@ stack::ControllerServerInput ControllerInput(const ControllerNodeState& s,
         .points_base = s.lanes->points_base, .valid = s.lanes->valid, .stamp = s.lanes->stamp};
   }
   if (s.path) input.path = stack::ControllerPath{.points_map = *s.path->path, .id = s.path->id};
-  if (s.costmap) input.is_lethal = stack::LethalInLocalCostmap(s.costmap, X_map_odom);
+  if (s.costmap) input.cell_cost = stack::LocalCostmapCost(s.costmap, X_map_odom);
   return input;
 }
 
