@@ -88,8 +88,8 @@ int NodeGraph::AddTopicImpl(TopicSpec spec) {
     }
   }
   if (metrics_) {
-    topic.metrics_index =
-        metrics_->AddTopic(spec.name, std::string(ToName(spec.transport)), spec.type.bytes);
+    topic.metrics_index = metrics_->AddTopic(spec.name, std::string(ToName(spec.transport)),
+                                             spec.type.bytes, spec.depth);
   }
   topics_.push_back(std::move(topic));
   return static_cast<int>(topics_.size()) - 1;
