@@ -302,6 +302,28 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
   EXPECT_LT(car.max_lateral_error_m, 0.2);  // as the shipped scenarios (lab_two_cars.yaml)
 }
 
+// Where the car stops before stack_obstacle.yaml's box depends on the collision check's model:
+// the lab's centre point against INSCRIBED cells (lane_controller.cpp:364-443) reaches ~0.35 m
+// ahead of base_link, only ~0.09 m beyond the bumper, and the braking after the stop (~0.15 m: the
+// PID's integral term, then the 1 s watchdog) carries the car into the box; the footprint against
+// LETHAL cells reaches 0.515 m, and the car comes to rest 0.15 m short of it.
+TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox) {
+  auto run = [](const char* model) {
+    const std::string m = model;
+    return RunScenario(LoadScenario(
+        "scenarios/stack_obstacle.yaml",
+        {"duration_s=27", "expect=[]", "cars[0].stack.follow_path.collision.model=" + m,
+         "cars[0].stack.lane_controller.collision.model=" + m}));
+  };
+  const RunRecord lab = run("centre");
+  const RunRecord safe = run("footprint");
+  ASSERT_TRUE(lab.cars[0].min_obstacle_gap_m && safe.cars[0].min_obstacle_gap_m);
+  EXPECT_EQ(lab.cars[0].collisions, 1);
+  EXPECT_EQ(*lab.cars[0].min_obstacle_gap_m, 0.0);
+  EXPECT_EQ(safe.cars[0].collisions, 0);
+  EXPECT_NEAR(*safe.cars[0].min_obstacle_gap_m, 0.15, 0.03);
+}
+
 // Without the fix (the real car) the estimate drifts with the IMU's heading; with it, it stays
 // within the fix's noise.
 TEST(SimulationStackTest, WithoutThePoseFixTheEstimateDrifts) {
