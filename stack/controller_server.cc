@@ -88,7 +88,7 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
                                                      .path_id = input.path->id,
                                                      .X_F_base = input.X_map_base,
                                                      .speed_mps = input.speed_mps,
-                                                     .is_lethal = input.is_lethal},
+                                                     .cell_cost = input.cell_cost},
                                                     &state->follower);
       twist = {r.speed_mps, r.yaw_rate_rad_per_s};
       collision = r.collision_ahead;
@@ -99,7 +99,7 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
                                                     .lanes_valid = input.lanes->valid,
                                                     .speed_mps = input.speed_mps,
                                                     .X_F_base = input.X_map_base,
-                                                    .is_lethal = input.is_lethal});
+                                                    .cell_cost = input.cell_cost});
     twist = {r.speed_mps, r.yaw_rate_rad_per_s};
     collision = r.collision_ahead;
     out.cmd_vel_stamp = input.lanes->stamp;
@@ -117,12 +117,10 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   return out;
 }
 
-LethalQuery LethalInLocalCostmap(std::shared_ptr<const Costmap2D> costmap,
-                                 const world::Pose2& X_map_odom) {
+CostQuery LocalCostmapCost(std::shared_ptr<const Costmap2D> costmap,
+                           const world::Pose2& X_map_odom) {
   return [costmap = std::move(costmap), X_map_odom](const world::Vec2& p_map) {
-    const std::optional<std::uint8_t> cost =
-        costmap->CostAt(OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
-    return cost && *cost == kLethalObstacle;
+    return costmap->CostAt(OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
   };
 }
 

@@ -23,7 +23,7 @@
 //   status    every cycle, stamped with the odometry: the attempt, whether it failed (and by a
 //             collision), FollowPath selected (all false while held).
 // Differences from the real node: the real node reads its costmap in-process; here the caller
-// passes the lethal-point query (LethalInLocalCostmap on the latest local costmap).
+// passes the cost query (LocalCostmapCost on the latest local costmap).
 #pragma once
 
 #include <cstdint>
@@ -88,7 +88,7 @@ struct ControllerServerInput {
   double speed_mps{0.0};
   std::optional<ControllerLanes> lanes;  // none: no lane points received yet
   std::optional<ControllerPath> path;    // none: no successful plan received yet
-  LethalQuery is_lethal;                 // map frame; empty: no costmap yet, no collision check
+  CostQuery cell_cost;                   // map frame; empty: no costmap yet, no collision check
 };
 
 // geometry_msgs/Twist on cmd_vel.
@@ -132,9 +132,9 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
                                             const ControllerServerInput& input,
                                             ControllerServerState* state);
 
-// Whether a map-frame point is LETHAL in the local costmap (odom frame) through the static
-// map→odom transform; points outside the costmap are not. Keeps the costmap alive.
-LethalQuery LethalInLocalCostmap(std::shared_ptr<const Costmap2D> costmap,
-                                 const world::Pose2& X_map_odom);
+// The local costmap's (odom frame) cost at a map-frame point, through the static map→odom
+// transform; nullopt outside the costmap. Keeps the costmap alive.
+CostQuery LocalCostmapCost(std::shared_ptr<const Costmap2D> costmap,
+                           const world::Pose2& X_map_odom);
 
 }  // namespace autonomsim::stack

@@ -43,7 +43,7 @@ LaneControllerOutput StepLaneController(const LaneControllerParams& params,
   out.curvature_per_m = PurePursuitCurvature(*out.carrot_base);
   const PursuitCommand command =
       RegulatedPursuitCommand(params.pursuit, params.collision, out.curvature_per_m, lookahead_m,
-                              out.carrot_base->norm(), input.X_F_base, input.is_lethal);
+                              out.carrot_base->norm(), input.X_F_base, input.cell_cost);
   out.speed_mps = command.speed_mps;
   out.yaw_rate_rad_per_s = command.yaw_rate_rad_per_s;
   out.collision_ahead = command.collision_ahead;

@@ -8,8 +8,9 @@
 //   speed      RegulatedSpeed (0.25 m/s; Nav2's curvature slow-down below radius 0.9 m, v scaled
 //              by r / r_min, floored at regulated_min_speed_mps; approach scaling); ω = v·κ;
 //   no carrot  (lanes invalid, or no point far enough): v = 0, ω = 0;
-//   collision  the real plugin runs the same arc check as FollowPath (stack/path_follower.h) and
-//              stops; here when the caller passes `is_lethal`.
+//   collision  the real plugin runs the same arc check as FollowPath (lane_controller.cpp:364-443,
+//              stack/path_follower.h IsCollisionImminent, by collision.model) and stops; here
+//              when the caller passes `cell_cost`.
 #pragma once
 
 #include <optional>
@@ -38,9 +39,9 @@ struct LaneControllerInput {
   std::span<const world::Vec2> lane_points_base;
   bool lanes_valid{false};
   double speed_mps{0.0};  // measured forward speed (velocity-scaled lookahead only)
-  // For the collision check: the pose in the frame of `is_lethal` (empty: no check).
+  // For the collision check: the pose in the frame of `cell_cost` (empty: no check).
   world::Pose2 X_F_base;
-  LethalQuery is_lethal;
+  CostQuery cell_cost;
 };
 
 struct LaneControllerOutput {

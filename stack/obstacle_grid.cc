@@ -242,6 +242,20 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
 void ObstacleLayerParams::Validate() const {
   Require(lethal_above_count >= 0 && lethal_above_count <= 254,
           [&] { return "lethal_above_count must be in [0, 254], got " + Num(lethal_above_count); });
+  Require(transform_timeout > Duration{0}, [&] {
+    return "transform_timeout_s must be > 0, got " + Num(ToSeconds(transform_timeout));
+  });
+}
+
+std::optional<world::Pose2> TransformAt(const std::optional<StampedPose>& before,
+                                        const StampedPose& newest, Time now) {
+  if (newest.stamp == now) return newest.X_odom_base;
+  if (newest.stamp < now || !before || before->stamp > now) return std::nullopt;
+  const double f = ToSeconds(now - before->stamp) / ToSeconds(newest.stamp - before->stamp);
+  const world::Pose2& a = before->X_odom_base;
+  const world::Pose2& b = newest.X_odom_base;
+  return world::Pose2{a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m),
+                      world::WrapAngle(a.yaw_rad + f * world::WrapAngle(b.yaw_rad - a.yaw_rad))};
 }
 
 std::vector<CostmapMark> StepObstacleLayer(const ObstacleLayerParams& layer,

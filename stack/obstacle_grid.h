@@ -28,12 +28,14 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "stack/costmap.h"
 #include "stack/point_cloud.h"
 #include "world/geometry.h"
+#include "world/time.h"
 
 namespace autonomsim::stack {
 
@@ -130,14 +132,36 @@ struct ObstacleLayerParams {
   // reference §4: the real layer marks the cell's lower corner (see the top of this file);
   // true marks the centre instead.
   bool mark_at_cell_centre{false};
+  // How long a grid waits for the transform at its arrival (TransformAt) before it is dropped:
+  // canTransform("odom", "base_link", now, 1 s), obstacle_layer.cpp:46.
+  Duration transform_timeout{std::chrono::seconds(1)};
 
   template <class V>
   void Describe(V& v) {
     v("lethal_above_count", lethal_above_count);
     v("mark_at_cell_centre", mark_at_cell_centre);
+    v("transform_timeout_s", transform_timeout);
   }
-  void Validate() const;  // lethal_above_count in [0, 254]: 255 would make no cell lethal
+  // lethal_above_count in [0, 254] (255 would make no cell lethal); transform_timeout > 0
+  void Validate() const;
 };
+
+// An odom→base_link transform as the EKF publishes it, stamped with its measurement time.
+struct StampedPose {
+  Time stamp{kZeroTime};
+  world::Pose2 X_odom_base;
+};
+
+// The transform the layer places a grid with (obstacle_layer.cpp:40-65): the grid callback reads
+// the node's clock (`now`), waits in canTransform("odom", "base_link", now, 1 s) and places every
+// cell with the transform at `now`, not at the frame's stamp. tf2 has it once a transform stamped
+// at or after `now` is in its buffer, with one at or before it: the two are interpolated (the
+// position linearly, the yaw along the shorter arc, as slerp turns a planar rotation). From the
+// newest transform received and the one before it: the transform at `now`, or nullopt while it is
+// not available yet (the callback waits for the next transform, or drops the grid after
+// transform_timeout; `before` older than `now` is never missing after the first transform).
+std::optional<world::Pose2> TransformAt(const std::optional<StampedPose>& before,
+                                        const StampedPose& newest, Time now);
 
 // The costmap layer's step (reference §4): all 234 cells as costmap marks (stack/costmap.h), in
 // Index order, each LETHAL or FREE at its point in base_link moved into odom by X_odom_base (the

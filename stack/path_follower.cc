@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "stack/costmap.h"
 #include "world/validation.h"
 
 namespace autonomsim::stack {
@@ -37,31 +38,47 @@ double Distance(const world::Pose2& X, const world::Vec2& p) {
   return std::hypot(p.x() - X.x_m, p.y() - X.y_m);
 }
 
-bool FootprintHits(const std::vector<world::Vec2>& samples, const world::Pose2& X_F_base,
-                   const LethalQuery& is_lethal) {
-  const double c = std::cos(X_F_base.yaw_rad);
-  const double s = std::sin(X_F_base.yaw_rad);
-  for (const world::Vec2& p : samples) {
-    const world::Vec2 p_F{X_F_base.x_m + c * p.x() - s * p.y(),
-                          X_F_base.y_m + s * p.x() + c * p.y()};
-    if (is_lethal(p_F)) return true;
-  }
-  return false;
+// Whether the cell containing p_F collides under the model (the lab's inCollision for centre).
+bool CellCollides(CollisionModel model, const CostQuery& cell_cost, const world::Vec2& p_F) {
+  const std::optional<std::uint8_t> cost = cell_cost(p_F);
+  if (!cost) return false;  // outside the costmap (Nav2: worldToMap fails, no collision)
+  return model == CollisionModel::kCentre ? *cost >= kInscribedInflatedObstacle
+                                          : *cost == kLethalObstacle;
 }
 
-// Evenly spaced points over the footprint rectangle, edges included, at most `spacing` apart.
-std::vector<world::Vec2> FootprintSamples(const CollisionCheckParams& params) {
-  auto axis = [&](double half) {
-    const int n = static_cast<int>(std::ceil(2.0 * half / params.footprint_sample_spacing_m));
-    std::vector<double> v;
-    for (int i = 0; i <= n; ++i) v.push_back(-half + 2.0 * half * i / n);
-    return v;
+// The footprint's sample grid: (nx + 1) × (ny + 1) points evenly spaced over the rectangle, edges
+// included, at most footprint_sample_spacing_m apart.
+struct FootprintGrid {
+  int nx{0};
+  int ny{0};
+};
+
+FootprintGrid FootprintGridOf(const CollisionCheckParams& params) {
+  auto intervals = [&](double half) {
+    return static_cast<int>(std::ceil(2.0 * half / params.footprint_sample_spacing_m));
   };
-  std::vector<world::Vec2> samples;
-  for (double x : axis(params.footprint_half_length_m)) {
-    for (double y : axis(params.footprint_half_width_m)) samples.emplace_back(x, y);
+  return {intervals(params.footprint_half_length_m), intervals(params.footprint_half_width_m)};
+}
+
+// Whether the pose X_F_base collides under params.model.
+bool PoseCollides(const CollisionCheckParams& params, const FootprintGrid& grid,
+                  const world::Pose2& X_F_base, const CostQuery& cell_cost) {
+  if (params.model == CollisionModel::kCentre) {
+    return CellCollides(params.model, cell_cost, X_F_base.position());
   }
-  return samples;
+  const double c = std::cos(X_F_base.yaw_rad);
+  const double s = std::sin(X_F_base.yaw_rad);
+  const double hl = params.footprint_half_length_m;
+  const double hw = params.footprint_half_width_m;
+  for (int i = 0; i <= grid.nx; ++i) {
+    const double x = -hl + 2.0 * hl * i / grid.nx;
+    for (int j = 0; j <= grid.ny; ++j) {
+      const double y = -hw + 2.0 * hw * j / grid.ny;
+      const world::Vec2 p_F{X_F_base.x_m + c * x - s * y, X_F_base.y_m + s * x + c * y};
+      if (CellCollides(params.model, cell_cost, p_F)) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -131,10 +148,9 @@ double RegulatedSpeed(const RegulatedPurePursuitParams& params, double curvature
 }
 
 bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2& X_F_base,
-                         double speed_mps, double yaw_rate_rad_per_s,
-                         const LethalQuery& is_lethal) {
-  const std::vector<world::Vec2> samples = FootprintSamples(params);
-  if (FootprintHits(samples, X_F_base, is_lethal)) return true;
+                         double speed_mps, double yaw_rate_rad_per_s, const CostQuery& cell_cost) {
+  const FootprintGrid grid = FootprintGridOf(params);
+  if (PoseCollides(params, grid, X_F_base, cell_cost)) return true;
   if (speed_mps == 0.0) return false;
   const double dt_s = params.step_m / std::abs(speed_mps);
   world::Pose2 X = X_F_base;
@@ -142,7 +158,7 @@ bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2&
     X.x_m += dt_s * speed_mps * std::cos(X.yaw_rad);
     X.y_m += dt_s * speed_mps * std::sin(X.yaw_rad);
     X.yaw_rad += dt_s * yaw_rate_rad_per_s;
-    if (FootprintHits(samples, X, is_lethal)) return true;
+    if (PoseCollides(params, grid, X, cell_cost)) return true;
   }
   return false;
 }
@@ -218,7 +234,7 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
   // speed and the collision check on the resulting arc
   const PursuitCommand command =
       RegulatedPursuitCommand(params.pursuit, params.collision, out.curvature_per_m, lookahead_m,
-                              p_base_carrot.norm(), X, input.is_lethal);
+                              p_base_carrot.norm(), X, input.cell_cost);
   out.speed_mps = command.speed_mps;
   out.yaw_rate_rad_per_s = command.yaw_rate_rad_per_s;
   out.collision_ahead = command.collision_ahead;
@@ -229,10 +245,10 @@ PursuitCommand RegulatedPursuitCommand(const RegulatedPurePursuitParams& pursuit
                                        const CollisionCheckParams& collision,
                                        double curvature_per_m, double lookahead_dist_m,
                                        double carrot_dist_m, const world::Pose2& X_F_base,
-                                       const LethalQuery& is_lethal) {
+                                       const CostQuery& cell_cost) {
   const double speed = RegulatedSpeed(pursuit, curvature_per_m, lookahead_dist_m, carrot_dist_m);
   const double yaw_rate = speed * curvature_per_m;
-  if (is_lethal && IsCollisionImminent(collision, X_F_base, speed, yaw_rate, is_lethal)) {
+  if (cell_cost && IsCollisionImminent(collision, X_F_base, speed, yaw_rate, cell_cost)) {
     return PursuitCommand{.collision_ahead = true};
   }
   return PursuitCommand{.speed_mps = speed, .yaw_rate_rad_per_s = yaw_rate};

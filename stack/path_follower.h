@@ -13,27 +13,63 @@
 //   carrot     the first remaining point at range >= the lookahead distance, else the last kept;
 //   curvature  κ = 2·y / L² in base_link (0 when L² <= 0.001 m², as Nav2);
 //   speed      RegulatedSpeed below; ω = v·κ;
-//   collision  the (v, ω) arc for horizon_s against `is_lethal` with the car's footprint → (0, 0)
-//              and collision_ahead (the real controller throws, the controller server then
-//              publishes zero velocity and the behaviour tree recovers).
+//   collision  IsCollisionImminent on the (v, ω) arc for horizon_s, by the CollisionModel below,
+//              against the local costmap's `cell_cost` → (0, 0) and collision_ahead (the real
+//              controller throws, the controller server then publishes zero velocity and the
+//              behaviour tree recovers).
 // Nav2 options the car switches off (rotate to heading, reversing, cost-regulated scaling) are
-// not modelled. Frames: the path, the pose and `is_lethal` share one frame F (the planner's map
+// not modelled. Frames: the path, the pose and `cell_cost` share one frame F (the planner's map
 // frame; the node wraps the odom-frame local costmap through the static map→odom transform).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <optional>
 #include <span>
+#include <string_view>
+#include <utility>
 #include <vector>
 
+#include "world/enum_names.h"
 #include "world/geometry.h"
 
 namespace autonomsim::stack {
 
-// Is this point (in the frame the caller gave the pose in) lethal in the local costmap?
-using LethalQuery = std::function<bool(const world::Vec2& p)>;
+// The local costmap's cost (Nav2's cost values, stack/costmap.h) of the cell containing p, in the
+// frame the caller gave the pose in; nullopt outside the costmap.
+using CostQuery = std::function<std::optional<std::uint8_t>(const world::Vec2& p)>;
+
+// What the arc collision check tests at each pose (stack.*.collision.model):
+//   centre     the lab's: the robot's centre point against cells of cost >= INSCRIBED (253), so
+//              also LETHAL (254) and NO_INFORMATION (255, the local costmap has
+//              track_unknown_space false); a point outside the costmap does not collide
+//              (lane_controller.cpp:364-443 isCollisionImminent/inCollision, a copy of Galactic's
+//              regulated_pure_pursuit_controller.cpp:372-452). The inflation layer marks every
+//              cell within the inscribed radius (0.135 m) of a LETHAL cell INSCRIBED (two 0.05 m
+//              cells straight ahead), so this tests the footprint's inscribed circle, not its
+//              corners: a LETHAL cell stops the car when it is at most two cells beyond the cell
+//              of the arc's last point (0.25 m ahead at 0.25 m/s), so its near edge is 0.30-0.35 m
+//              ahead of base_link (reference §6 estimates 0.25 + 0.135 ≈ 0.385 m), inside the
+//              depth camera's ≈ 0.445 m near limit (0.6 m range, camera 0.155 m behind base_link);
+//   footprint  ours, the safe choice: every sample of the footprint rectangle against LETHAL
+//              cells, so the corners are checked too and the car stops further away: reach
+//              0.265 + 0.25 = 0.515 m ahead of base_link, beyond the camera's near limit.
+enum class CollisionModel { kCentre, kFootprint };
+
+}  // namespace autonomsim::stack
+
+namespace autonomsim {
+template <>
+struct NameTable<stack::CollisionModel> {
+  static constexpr std::array<std::pair<stack::CollisionModel, std::string_view>, 2> kEntries{
+      {{stack::CollisionModel::kCentre, "centre"},
+       {stack::CollisionModel::kFootprint, "footprint"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::stack {
 
 // The pure pursuit and speed regulation both controllers share. Defaults: nav2_car_params.yaml,
 // identical for LaneController and FollowPath.
@@ -76,21 +112,24 @@ struct RegulatedPurePursuitParams {
   void Validate() const;
 };
 
-// Nav2 RPP's isCollisionImminent, with the footprint instead of the centre cell.
+// Nav2 RPP's isCollisionImminent (Galactic), with the point test chosen by `model`.
 struct CollisionCheckParams {
+  // reference §6: the lab's centre point against INSCRIBED (lane_controller.cpp:364-443);
+  // footprint: ours (see CollisionModel).
+  CollisionModel model{CollisionModel::kCentre};
   double horizon_s{1.0};  // reference §6: the arc 1.0 s ahead (max_allowed_time_to_collision)
   // Nav2 steps the arc by one costmap cell: 0.05 m (reference §6, local costmap).
   double step_m{0.05};
-  double footprint_half_length_m{0.265};  // reference §2: planner footprint ±0.265 × ±0.135 m
+  // The footprint model only. reference §2: planner footprint ±0.265 × ±0.135 m.
+  double footprint_half_length_m{0.265};
   double footprint_half_width_m{0.135};
-  // Assumed: one costmap cell; the footprint is tested as a grid of points this far apart (edges
-  // included), so no 0.05 m lethal cell fits between them. Nav2 Galactic tests only the centre
-  // point against the inscribed-inflated cost, which the inflation layer derives from the same
-  // footprint; with a caller's lethal-point query the footprint has to be explicit.
+  // The footprint model only. Assumed: one costmap cell; the footprint is tested as a grid of
+  // points this far apart (edges included), so no 0.05 m lethal cell fits between them.
   double footprint_sample_spacing_m{0.05};
 
   template <class V>
   void Describe(V& v) {
+    v("model", model);
     v("horizon_s", horizon_s);
     v("step_m", step_m);
     v("footprint_half_length_m", footprint_half_length_m);
@@ -112,15 +151,17 @@ double PurePursuitCurvature(const world::Vec2& p_base_carrot);
 double RegulatedSpeed(const RegulatedPurePursuitParams& params, double curvature_per_m,
                       double lookahead_dist_m, double carrot_dist_m);
 
-// Whether the car's footprint meets a lethal point at X_F_base or along the (v, ω) arc from it:
-// poses every step_m / |v| seconds (Euler, as Nav2) while the elapsed time is <= horizon_s. At
-// v = 0 only the current pose is tested.
+// Whether the car collides (by params.model) at X_F_base or along the (v, ω) arc from it: poses
+// every step_m / |v| seconds (Euler, as Nav2) while the elapsed time is <= horizon_s. At v = 0
+// only the current pose is tested. Allocates nothing; calls `cell_cost` once per point tested
+// (centre: 1 + ⌊horizon·|v| / step_m⌋ points; footprint: 12 × 7 samples per pose with the
+// defaults).
 bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2& X_F_base,
-                         double speed_mps, double yaw_rate_rad_per_s, const LethalQuery& is_lethal);
+                         double speed_mps, double yaw_rate_rad_per_s, const CostQuery& cell_cost);
 
 // What both controllers command for a carrot: the regulated speed along κ and ω = v·κ, or (0, 0)
-// with collision_ahead when that arc meets a lethal point within the horizon (no check when
-// is_lethal is empty).
+// with collision_ahead when that arc collides within the horizon (no check when cell_cost is
+// empty).
 struct PursuitCommand {
   double speed_mps{0.0};
   double yaw_rate_rad_per_s{0.0};
@@ -130,7 +171,7 @@ PursuitCommand RegulatedPursuitCommand(const RegulatedPurePursuitParams& pursuit
                                        const CollisionCheckParams& collision,
                                        double curvature_per_m, double lookahead_dist_m,
                                        double carrot_dist_m, const world::Pose2& X_F_base,
-                                       const LethalQuery& is_lethal);
+                                       const CostQuery& cell_cost);
 
 struct PathFollowerParams {
   RegulatedPurePursuitParams pursuit;
@@ -160,7 +201,7 @@ struct PathFollowerInput {
   world::Pose2 X_F_base;               // the pose estimate in F
   double speed_mps{0.0};               // measured forward speed (velocity-scaled lookahead only)
   std::optional<double> goal_yaw_rad;  // the goal's yaw in F, if the goal checker should test it
-  LethalQuery is_lethal;               // in F; empty: no collision check
+  CostQuery cell_cost;                 // in F; empty: no collision check
 };
 
 struct PathFollowerOutput {

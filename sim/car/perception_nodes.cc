@@ -75,8 +75,10 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                                          const SensorSuite& sensors,
                                          TopicId<CameraFrame> depth_image,
                                          std::function<void(const stack::Grid234&, Time)> hook) {
-  const auto obstacles =
-      graph.AddTopic<stack::Grid234>({.name = "/local_costmap/obstacles", .type = msg::Grid234()});
+  // depth 1: the costmap's obstacle layer subscribes with QoS(1), best effort
+  // (code/ros_ws/src/obstacle_layer/src/obstacle_layer.cpp:32-37)
+  const auto obstacles = graph.AddTopic<stack::Grid234>(
+      {.name = "/local_costmap/obstacles", .type = msg::Grid234(), .depth = 1});
   GridParams params{
       .grid = config.obstacle_grid, .P = sensors.depth_camera().Info().P, .hook = std::move(hook)};
 
@@ -156,8 +158,11 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                                         const std::map<std::string, NodeMappingConfig>& mapping,
                                         const SensorSuite& sensors, TopicId<CameraFrame> image,
                                         std::function<void(const stack::LanePoints&, Time)> hook) {
-  const auto lanes =
-      graph.AddTopic<stack::LanePoints>({.name = kLanePointsTopic, .type = msg::LanePoints()});
+  // depth 1: the LaneController subscribes with depth 1 (autonomros_lane_detection/src/
+  // lane_controller.cpp:179); the ROS 2 lane detector publishes with depth 1
+  // (lane_detector.cpp:31-32)
+  const auto lanes = graph.AddTopic<stack::LanePoints>(
+      {.name = kLanePointsTopic, .type = msg::LanePoints(), .depth = 1});
   LaneParams params{.tables = std::make_shared<const stack::LaneDetectorTables>(
                         config.lane_detection, LaneCalibration(sensors.color_camera().model())),
                     .reads = nullptr,
@@ -216,6 +221,10 @@ vehicle::ColourLabel LaneLineClass(std::shared_ptr<const stack::LaneDetectorTabl
   return [detector = std::move(detector)](const vehicle::Bgr& c) {
     return detector->ClassOf(c[0], c[1], c[2]);
   };
+}
+
+int ColorImageDepth(const std::map<std::string, NodeMappingConfig>& mapping) {
+  return mapping.count("lane_detection") != 0 ? 1 : TopicSpec{}.depth;
 }
 
 stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera) {

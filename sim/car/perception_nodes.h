@@ -19,7 +19,9 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
+#include <string>
 
 #include "sim/car/perception_config.h"
 #include "sim/car/sensors.h"
@@ -56,6 +58,15 @@ vehicle::RowSpans LaneDetectorReads(const stack::LaneDetectorTables& detector, i
 // The detector's line class of a colour (LaneDetectorTables::ClassOf) as a renderer's label
 // (vehicle::CameraRenderer::RenderLabels); the label keeps the tables alive.
 vehicle::ColourLabel LaneLineClass(std::shared_ptr<const stack::LaneDetectorTables> detector);
+
+// The keep-last depth of the colour camera's topic (/image): 1 when the lab's ROS 2 lane detector
+// reads it (mapping `lane_detection`: autonomros_lane_detection/src/lane_detector.cpp:26-30
+// subscribes KeepLast(1), best effort; the camera publishes KeepLast(1), camera/src/
+// cam2image.cpp:56); else the graph's default, as the hardware lane planner's subscription is
+// ReconROS's (build.cfg), not the lab's code. The depth camera's topic keeps the default for the
+// same reason (its publisher is depth 1, astra_pro/src/astra_pro_publisher.cpp:52-53; its reader
+// is ReconROS's point cloud thread).
+int ColorImageDepth(const std::map<std::string, NodeMappingConfig>& mapping);
 
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a

@@ -345,46 +345,98 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
       });
 }
 
-// local_costmap: the obstacle layer from the grid + inflation, rolling, 5 Hz.
-void AddLocalCostmapNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                         const StackConfig& config, const stack::ObstacleGridParams& grid_params) {
-  struct State {
-    std::unique_ptr<stack::LocalCostmap> costmap;
-    std::vector<stack::CostmapMark> pending;
-    std::optional<stack::LocalizationEkfOutput> odom;
+// What the local costmap's node and its transform listener share.
+struct LocalCostmapState {
+  std::unique_ptr<stack::LocalCostmap> costmap;
+  // The obstacle layer's obstacles_: the newest grid's marks, written into the layer at every
+  // update until the next grid replaces them (obstacle_layer.cpp:45-62, 75-87); empty after a
+  // grid whose transform never came. A costmap clear keeps them (the layer's reset() only resets
+  // its grid, obstacle_layer.cpp:98-101).
+  std::vector<stack::CostmapMark> obstacles;
+  // The listener's two newest odom→base_link transforms (the newest also centres the window).
+  std::optional<stack::LocalizationEkfOutput> odom;
+  std::optional<stack::StampedPose> before;
+  struct WaitingGrid {
+    stack::Grid234 grid;
+    Time now{kZeroTime};  // when its callback ran: the time it is placed at
   };
+  std::optional<WaitingGrid> waiting;  // a grid callback blocked in canTransform
+};
+
+// Places `grid` with the transform at `now` if the listener has it (stack::TransformAt).
+bool PlaceGrid(LocalCostmapState* s, const stack::ObstacleLayerParams& layer,
+               const stack::ObstacleGridParams& grid_params, const stack::Grid234& grid, Time now) {
+  if (!s->odom) return false;
+  const std::optional<world::Pose2> X_odom_base =
+      stack::TransformAt(s->before, {s->odom->stamp, s->odom->X_odom_base}, now);
+  if (!X_odom_base) return false;
+  s->obstacles = stack::StepObstacleLayer(layer, grid_params, grid, *X_odom_base);
+  return true;
+}
+
+// local_costmap's TF listener (the lab's tf2_ros::TransformListener spins a node and thread of its
+// own, so the transforms arrive while the costmap's executor waits): keeps the transforms and ends
+// a grid callback's wait once the transform at its time has come.
+void AddLocalCostmapListener(NodeGraph& graph, Cache& cache, const StackTopics& topics,
+                             const StackConfig& config,
+                             const stack::ObstacleGridParams& grid_params, NodeId costmap_node,
+                             std::shared_ptr<LocalCostmapState> state) {
+  NodeSpec spec = SoftwareNode("local_costmap_tf");
+  spec.cost = graph.platform().profile().Component("subscription_cache");
+  const NodeId node = graph.AddNode(std::move(spec));
+  cache.Keep<stack::LocalizationEkfOutput>(
+      node, topics.odometry,
+      [state, &graph, costmap_node, layer = config.obstacle_layer, grid_params](
+          const stack::LocalizationEkfOutput& o, Time) {
+        LocalCostmapState& s = *state;
+        if (s.odom) s.before = stack::StampedPose{s.odom->stamp, s.odom->X_odom_base};
+        s.odom = o;
+        if (s.waiting && PlaceGrid(&s, layer, grid_params, s.waiting->grid, s.waiting->now)) {
+          s.waiting.reset();
+          graph.ReleaseJob(costmap_node);
+        }
+      });
+}
+
+// local_costmap: the obstacle layer from the grid + inflation, rolling, 5 Hz. A grid's callback
+// clears the layer's obstacles and waits, holding the node (the lab's costmap executor blocks in
+// canTransform and its update blocks on the layer's mutex), until the transform at the time it
+// ran arrives (stack::TransformAt) or transform_timeout passes, when the grid is dropped
+// (obstacle_layer.cpp:40-65).
+void AddLocalCostmapNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
+                         const StackConfig& config, const stack::ObstacleGridParams& grid_params,
+                         const Kernel& kernel) {
   // once here: StepObstacleLayer takes them as validated
   config.obstacle_layer.Validate();
   grid_params.Validate();
-  auto state = std::make_shared<State>();
+  auto state = std::make_shared<LocalCostmapState>();
   state->costmap = std::make_unique<stack::LocalCostmap>(config.local_costmap);
   const NodeId node = graph.AddNode(SoftwareNode("local_costmap"));
-  cache.KeepLatest(node, topics.odometry, state, &State::odom);
-  cache.Keep<stack::Grid234>(
-      node, topics.perception.obstacles,
-      [state, layer = config.obstacle_layer, grid_params](const stack::Grid234& grid, Time) {
-        if (!state->odom) return;  // no transform for it yet
-        std::vector<stack::CostmapMark> marks =
-            stack::StepObstacleLayer(layer, grid_params, grid, state->odom->X_odom_base);
-        state->pending.insert(state->pending.end(), marks.begin(), marks.end());
-      });
+  cache.Keep<stack::Grid234>(node, topics.perception.obstacles,
+                             [state, &graph, &kernel, node, layer = config.obstacle_layer,
+                              grid_params](const stack::Grid234& grid, Time) {
+                               const Time now = kernel.Now();
+                               state->obstacles.clear();
+                               if (PlaceGrid(state.get(), layer, grid_params, grid, now)) return;
+                               state->waiting = LocalCostmapState::WaitingGrid{grid, now};
+                               graph.HoldJob(node, layer.transform_timeout,
+                                             [state] { state->waiting.reset(); });
+                             });
   cache.Keep<stack::BehaviorOutput>(
       node, topics.behavior,
       [state, params = config.local_costmap](const stack::BehaviorOutput& o, Time) {
-        if (!o.clear_costmaps) return;
-        state->costmap = std::make_unique<stack::LocalCostmap>(params);
-        state->pending.clear();
+        if (o.clear_costmaps) state->costmap = std::make_unique<stack::LocalCostmap>(params);
       });
   const auto out = graph.AddPublisher(node, topics.costmap);
   const Duration period = FromSeconds(1.0 / config.local_costmap.update_rate_hz);
   graph.AddTimer(node, period, period, [state, out](Time, Outbox& outbox) {
     if (!state->odom) return;
     const stack::Costmap2D& grid = state->costmap->Step(
-        {.p_robot = state->odom->X_odom_base.position(), .marks = std::move(state->pending)});
-    state->pending.clear();
+        {.p_robot = state->odom->X_odom_base.position(), .marks = state->obstacles});
     outbox.Publish(out, CostmapMessage{std::make_shared<const stack::Costmap2D>(grid)},
                    state->odom->stamp);
   });
+  AddLocalCostmapListener(graph, cache, topics, config, grid_params, node, std::move(state));
 }
 
 // What the controller server's node keeps of its messages for the next cycle.
@@ -426,7 +478,7 @@ stack::ControllerServerInput ControllerInput(const ControllerNodeState& s, Time 
         .points_base = s.lanes->points_base, .valid = s.lanes->valid, .stamp = s.lanes->stamp};
   }
   if (s.path) input.path = stack::ControllerPath{.points_map = *s.path->path, .id = s.path->id};
-  if (s.costmap) input.is_lethal = stack::LethalInLocalCostmap(s.costmap, X_map_odom);
+  if (s.costmap) input.cell_cost = stack::LocalCostmapCost(s.costmap, X_map_odom);
   return input;
 }
 
@@ -598,7 +650,7 @@ StackControls AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackC
   AddVehicleCommunicationNode(graph, cache, topics, context, std::move(hooks.intersection_client));
   AddBehaviorNode(graph, cache, topics, config.behavior, context, hooks);
   AddPlannerNode(graph, cache, topics, config, *context.static_map);
-  AddLocalCostmapNode(graph, cache, topics, config, *context.obstacle_grid);
+  AddLocalCostmapNode(graph, cache, topics, config, *context.obstacle_grid, kernel);
   AddControllerNode(graph, cache, topics, config, context, std::move(hooks.on_control));
   AddCruiseControlNode(graph, cache, topics, config.cruise_control, kernel, emergency);
   AddActuatorNode(graph, topics, std::move(hooks.actuate));

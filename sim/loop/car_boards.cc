@@ -27,16 +27,19 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
   const std::string name = "car" + std::to_string(config.id);
   auto board = std::make_unique<Board>(kernel, name, config.platform, profile, &streams);
   NodeGraph& graph = board->graph();
-  // The camera drivers: each publishes its frames, captured at its stream's instants.
-  const auto camera_topic = [&](const SensorStream& stream) {
+  // The camera drivers: each publishes its frames, captured at its stream's instants. The QoS
+  // depth of each: ColorImageDepth (sim/car/perception_nodes.h).
+  const auto camera_topic = [&](const SensorStream& stream, int depth) {
     return graph.AddTopic<CameraFrame>(
-        {.name = stream.topic, .type = MessageType{stream.type.name, stream.type.bytes, true}});
+        {.name = stream.topic,
+         .type = MessageType{stream.type.name, stream.type.bytes, true},
+         .depth = depth});
   };
   const NodeMappingConfig camera_cost{.cost = "camera_publisher"};
   const SensorStream& color = suite->color_stream();
   const SensorStream& depth = suite->depth_stream();
-  const TopicId<CameraFrame> image = camera_topic(color);
-  const TopicId<CameraFrame> depth_image = camera_topic(depth);
+  const TopicId<CameraFrame> image = camera_topic(color, ColorImageDepth(config.platform.mapping));
+  const TopicId<CameraFrame> depth_image = camera_topic(depth, TopicSpec{}.depth);
   AddSourceNode(
       graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
       image, color.first, color.period, [suite, agent](Time) {

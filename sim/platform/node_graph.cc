@@ -88,8 +88,8 @@ int NodeGraph::AddTopicImpl(TopicSpec spec) {
     }
   }
   if (metrics_) {
-    topic.metrics_index =
-        metrics_->AddTopic(spec.name, std::string(ToName(spec.transport)), spec.type.bytes);
+    topic.metrics_index = metrics_->AddTopic(spec.name, std::string(ToName(spec.transport)),
+                                             spec.type.bytes, spec.depth);
   }
   topics_.push_back(std::move(topic));
   return static_cast<int>(topics_.size()) - 1;
@@ -197,6 +197,37 @@ NodeGraph::Node& NodeGraph::NodeNamed(const std::string& name) {
   throw std::invalid_argument("no node '" + name + "' on the graph");
 }
 
+void NodeGraph::HoldJob(NodeId node, Duration timeout, std::function<void()> on_timeout) {
+  Node& n = nodes_.at(static_cast<std::size_t>(node.index));
+  if (!n.job || n.held) {
+    throw std::logic_error("HoldJob: node '" + n.name + "' has no running job or already holds");
+  }
+  n.held = true;
+  n.hold_timeout = kernel_.ScheduleIn(
+      timeout,
+      [this, node, on_timeout = std::move(on_timeout)] {
+        if (on_timeout) on_timeout();
+        ReleaseJob(node);
+      },
+      kPriorityPlatform);
+}
+
+void NodeGraph::ReleaseJob(NodeId node) {
+  Node& n = nodes_.at(static_cast<std::size_t>(node.index));
+  if (!n.held) return;
+  n.held = false;
+  kernel_.Cancel(n.hold_timeout);
+  if (!n.finish_held || n.hung) return;  // it finishes when its work (or the hang) ends
+  n.finish_held = false;
+  // after the current event: the caller may be another node's handler
+  kernel_.ScheduleIn(
+      Duration{0}, [this, index = node.index] { FinishJob(index); }, kPriorityPlatform);
+}
+
+bool NodeGraph::held(NodeId node) const {
+  return nodes_.at(static_cast<std::size_t>(node.index)).held;
+}
+
 void NodeGraph::HangNode(const std::string& name) {
   Node& n = NodeNamed(name);
   if (!n.crashed) n.hung = true;
@@ -207,6 +238,7 @@ void NodeGraph::ResumeNode(const std::string& name) {
   if (!n.hung) return;
   n.hung = false;
   const int node = static_cast<int>(&n - nodes_.data());
+  if (n.held) return;  // its job still waits for ReleaseJob
   if (n.finish_held) {
     n.finish_held = false;
     FinishJob(node);  // and from there the node takes its next work
@@ -220,6 +252,10 @@ void NodeGraph::CrashNode(const std::string& name) {
   if (n.crashed) return;
   n.crashed = true;
   n.hung = false;
+  if (n.held) {
+    n.held = false;
+    kernel_.Cancel(n.hold_timeout);
+  }
   for (int s : n.subscriptions) subscriptions_[static_cast<std::size_t>(s)].queue.clear();
   for (int t : n.timers) timers_[static_cast<std::size_t>(t)].pending = false;
   if (n.finish_held) {
@@ -434,7 +470,7 @@ void NodeGraph::RunPublish(int node) {
 
 void NodeGraph::FinishJob(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
-  if (n.hung) {
+  if (n.hung || n.held) {
     n.finish_held = true;
     return;
   }

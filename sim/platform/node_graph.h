@@ -181,6 +181,19 @@ class NodeGraph {
   void AddTimer(NodeId node, Time first, Duration period,
                 std::function<void(Time, Outbox&)> handler);
 
+  // A job that blocks in its callback until something outside its node's executor happens (a
+  // thread waiting on a condition, tf2's canTransform with a timeout). Called from the handler of
+  // `node`'s running job: that job does not finish (its outputs wait with it) and the node starts
+  // nothing (messages queue, timer ticks wait or count as overruns) until ReleaseJob(node), or
+  // until `timeout` after now, when `on_timeout` runs and the job is released. The job's own cost
+  // is unchanged: the wait itself takes no CPU. std::logic_error outside a running job or when it
+  // already holds.
+  void HoldJob(NodeId node, Duration timeout, std::function<void()> on_timeout);
+  // Ends the hold of `node`'s job (nothing if it holds none): the job finishes at once if its
+  // work is done (after the current event), else when it is.
+  void ReleaseJob(NodeId node);
+  bool held(NodeId node) const;
+
   // Faults (sim/loop/faults.h), by node name; std::invalid_argument for a name not on the graph.
   // Hang: the node's executor blocks: its running job does not finish (its outputs wait with it)
   // and no job starts; messages still queue (keep-last drops counted) and timer ticks count as
@@ -265,9 +278,12 @@ class NodeGraph {
     std::deque<ReceiveItem> receive_queue;
     bool receiving{false};
     Time receive_start{0};
+    // HoldJob: the running job waits beyond its work until ReleaseJob or hold_timeout
+    bool held{false};
+    EventId hold_timeout;
     // faults
     bool hung{false};
-    bool finish_held{false};  // its job ended while hung: it finishes when the hang ends
+    bool finish_held{false};  // its job ended while hung or held: it finishes when both end
     bool crashed{false};
   };
   Node& NodeNamed(const std::string& name);

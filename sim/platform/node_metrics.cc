@@ -49,9 +49,10 @@ int RunMetrics::AddNode(const std::string& name, const std::string& mapping) {
   return static_cast<int>(nodes_.size()) - 1;
 }
 
-int RunMetrics::AddTopic(const std::string& name, const std::string& transport,
-                         std::int64_t bytes) {
-  topics_.push_back(TopicData{.name = name, .transport = transport, .bytes = bytes});
+int RunMetrics::AddTopic(const std::string& name, const std::string& transport, std::int64_t bytes,
+                         int depth) {
+  topics_.push_back(
+      TopicData{.name = name, .transport = transport, .bytes = bytes, .depth = depth});
   return static_cast<int>(topics_.size()) - 1;
 }
 
@@ -224,6 +225,7 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     r.name = t.name;
     r.transport = t.transport;
     r.bytes = t.bytes;
+    r.depth = t.depth;
     r.published = t.published;
     r.drops = t.drops;
     r.loan_failures = t.loan_failures;
@@ -292,6 +294,7 @@ nlohmann::json ReportJson(const MetricsReport& report) {
     topics.push_back({{"name", t.name},
                       {"transport", t.transport},
                       {"bytes", t.bytes},
+                      {"depth", t.depth},
                       {"published", t.published},
                       {"rate_hz", t.rate_hz},
                       {"latency_ms", StatsJson(t.latency_ms)},

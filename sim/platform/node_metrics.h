@@ -40,7 +40,9 @@ class RunMetrics {
 
   // Registration; the returned index names the node (also the CPU owner) or the topic below.
   int AddNode(const std::string& name, const std::string& mapping);
-  int AddTopic(const std::string& name, const std::string& transport, std::int64_t bytes);
+  // `depth`: the topic's keep-last QoS depth (TopicSpec::depth).
+  int AddTopic(const std::string& name, const std::string& transport, std::int64_t bytes,
+               int depth);
   void SetCores(int cores) { cores_ = cores; }
 
   // CPU accounting: `cores` of the CPU were busy for `node` from t0 to t1 (a node owns its jobs and
@@ -77,6 +79,7 @@ class RunMetrics {
     std::string name;
     std::string transport;
     std::int64_t bytes{0};
+    int depth{0};
     std::uint64_t published{0}, drops{0}, loan_failures{0};
     DurationHistogram latency;  // publish time minus the sensor stamp
     // Latency over time, per load bin from t = 0 (whole run): count, sum and max in ns.
@@ -147,6 +150,7 @@ struct TopicReport {
   std::string name;
   std::string transport;
   std::int64_t bytes{0};
+  int depth{0};  // keep-last QoS depth of its subscriptions
   std::uint64_t published{0}, drops{0}, loan_failures{0};
   double rate_hz{0.0};
   Stats latency_ms;  // publish time minus the sensor stamp it derives from
@@ -190,8 +194,8 @@ std::string NodesCsv(const std::vector<BoardReport>& boards);
 // cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
 // min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
 // arrivals, timer_ticks, drops, loan_failures, timer_overruns}], topics: [{name, transport, bytes,
-// published, rate_hz, latency_ms: {...}, latency_per_bin_ms: {mean: [...], max: [...]} (null for a
-// bin without messages), drops, loan_failures}]}.
+// depth, published, rate_hz, latency_ms: {...}, latency_per_bin_ms: {mean: [...], max: [...]} (null
+// for a bin without messages), drops, loan_failures}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

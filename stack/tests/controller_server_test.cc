@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -131,16 +132,24 @@ TEST(ControllerServerTest, FollowPathInsideAnIntersectionOnThePlan) {
   EXPECT_FALSE(fresh.state.follower.path_id.has_value());
 }
 
+// LETHAL beyond x_m in the map, FREE before it.
+CostQuery WallBeyond(double x_m) {
+  return [x_m](const Vec2& p_map) { return p_map.x() > x_m ? kLethalObstacle : kFreeSpace; };
+}
+
 TEST(ControllerServerTest, ACollisionAheadStopsAndIsReported) {
+  // Each controller checks with its own collision model: FollowPath here with the footprint,
+  // the LaneController with the lab's centre point (its default).
   // FollowPath from (2, 0) at 1/12 m/s (as above) against a wall beyond x = 2.3 m: the arc is
   // tested every 0.05 m, and the first pose ahead puts the footprint's front (+0.265 m) at
   // 2.315 m.
   const std::vector<Vec2> path{Vec2(1.7, 0.0), Vec2(2.1, 0.0), Vec2(2.4, 0.0), Vec2(3.0, 0.0),
                                Vec2(3.6, 0.0)};
   Server s;
+  s.params.follow_path.collision.model = CollisionModel::kFootprint;
   ControllerServerInput input = DriveAt(2.0, 0.0);
   input.path = ControllerPath{.points_map = path, .id = 1};
-  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 2.3; };
+  input.cell_cost = WallBeyond(2.3);
   ControllerServerOutput out = s.Step(input);
   EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
   EXPECT_TRUE(out.status.failed);
@@ -148,26 +157,26 @@ TEST(ControllerServerTest, ACollisionAheadStopsAndIsReported) {
   EXPECT_TRUE(out.status.follow_path);
   // The action aborted (nav2_controller.cpp:395-398): silent, and still failed, until the
   // behaviour starts a new one, even when the way is clear again.
-  input.is_lethal = {};
+  input.cell_cost = {};
   out = s.Step(input);
   EXPECT_FALSE(out.cmd_vel.has_value());
   EXPECT_TRUE(out.status.failed);
   EXPECT_EQ(out.status.attempt, 0u);
 
-  // The LaneController (a new action) from (1.2, 0), outside the area, straight at 0.25 m/s: within the 1 s
-  // horizon the front reaches 1.2 + 0.265 + 0.25 = 1.715 m. A wall beyond 1.8 m is clear of it,
-  // one beyond 1.65 m is not.
+  // The LaneController (a new action) from (1.2, 0), outside the area, straight at 0.25 m/s:
+  // within the 1 s horizon the centre point reaches 1.2 + 0.25 = 1.45 m (the footprint's front
+  // would reach 1.715 m). A wall beyond 1.5 m is clear of it, one beyond 1.44 m is not.
   const std::vector<Vec2> lanes{Vec2(0.6, 0.0)};
   input = DriveAt(1.2, 0.0);
   input.attempt = 1;
   input.lanes = ControllerLanes{.points_base = lanes, .valid = true, .stamp = FromSeconds(9.9)};
-  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.8; };
+  input.cell_cost = WallBeyond(1.5);
   out = s.Step(input);
   EXPECT_FALSE(out.status.failed);
   EXPECT_EQ(out.status.attempt, 1u);
   EXPECT_FALSE(out.status.collision_ahead);
   EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25, kTol);
-  input.is_lethal = [](const Vec2& p_map) { return p_map.x() > 1.65; };
+  input.cell_cost = WallBeyond(1.44);
   out = s.Step(input);
   EXPECT_TRUE(out.status.collision_ahead);
   EXPECT_FALSE(out.status.follow_path);
@@ -205,18 +214,17 @@ TEST(ControllerServerTest, ACarThatDoesNotMoveHalfAMetreInTenSecondsFailsItsActi
   }
 }
 
-TEST(ControllerServerTest, LethalInLocalCostmapGoesThroughMapToOdom) {
+TEST(ControllerServerTest, LocalCostmapCostGoesThroughMapToOdom) {
   // A 10 × 10 grid of 0.1 m cells at the odom origin, lethal in cell (3, 4): odom point
   // (0.35, 0.45). With map→odom = (1, 2, 90°) that point is at (1 − 0.45, 2 + 0.35) in the map.
   auto costmap = std::make_shared<Costmap2D>(10, 10, 0.1, Vec2(0.0, 0.0));
   costmap->SetCost(3, 4, kLethalObstacle);
   costmap->SetCost(2, 4, kInscribedInflatedObstacle);
-  const LethalQuery lethal =
-      LethalInLocalCostmap(costmap, world::Pose2{1.0, 2.0, 1.5707963267948966});
-  EXPECT_TRUE(lethal(Vec2(0.55, 2.35)));
-  EXPECT_FALSE(lethal(Vec2(0.55, 2.25)));  // odom (0.25, 0.45): inscribed, not lethal
-  EXPECT_FALSE(lethal(Vec2(0.55, 2.55)));  // odom (0.55, 0.45): free
-  EXPECT_FALSE(lethal(Vec2(5.0, 5.0)));    // outside the grid
+  const CostQuery cost = LocalCostmapCost(costmap, world::Pose2{1.0, 2.0, 1.5707963267948966});
+  EXPECT_EQ(cost(Vec2(0.55, 2.35)), kLethalObstacle);
+  EXPECT_EQ(cost(Vec2(0.55, 2.25)), kInscribedInflatedObstacle);  // odom (0.25, 0.45)
+  EXPECT_EQ(cost(Vec2(0.55, 2.55)), kFreeSpace);                  // odom (0.55, 0.45)
+  EXPECT_EQ(cost(Vec2(5.0, 5.0)), std::nullopt);                  // outside the grid
 }
 
 TEST(ControllerServerTest, ParamsValidateBothControllers) {

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "stack/costmap.h"
+
 namespace autonomsim::stack {
 namespace {
 
@@ -34,12 +36,12 @@ std::vector<Vec2> LanePoints(double r_m) {
 }
 
 LaneControllerOutput Control(const std::vector<Vec2>& points, bool valid = true,
-                             LaneControllerParams params = {}, LethalQuery lethal = {}) {
+                             LaneControllerParams params = {}, CostQuery cost = {}) {
   LaneControllerInput input;
   input.lane_points_base = points;
   input.lanes_valid = valid;
   input.speed_mps = 0.25;
-  input.is_lethal = std::move(lethal);
+  input.cell_cost = std::move(cost);
   return StepLaneController(params, input);
 }
 
@@ -132,14 +134,27 @@ TEST(LaneControllerTest, NoCarrotOrInvalidLanesStop) {
   EXPECT_EQ(Control({}).speed_mps, 0.0);
 }
 
+// LETHAL where x_min_m <= x <= x_max_m, FREE elsewhere.
+CostQuery Wall(double x_min_m, double x_max_m) {
+  return [=](const Vec2& p) {
+    return p.x() >= x_min_m && p.x() <= x_max_m ? kLethalObstacle : kFreeSpace;
+  };
+}
+
 TEST(LaneControllerTest, CollisionAheadStops) {
-  LethalQuery wall = [](const Vec2& p) { return p.x() >= 0.45 && p.x() <= 0.5; };
-  LaneControllerOutput out = Control(LanePoints(0.0), true, {}, wall);
+  // lane_controller.cpp:364-443: the centre point along the 1 s arc, 0.25 m at 0.25 m/s.
+  LaneControllerOutput out = Control(LanePoints(0.0), true, {}, Wall(0.18, 0.3));
   EXPECT_TRUE(out.collision_ahead);
   EXPECT_EQ(out.speed_mps, 0.0);
   EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
-  LethalQuery far_wall = [](const Vec2& p) { return p.x() >= 0.6; };
-  out = Control(LanePoints(0.0), true, {}, far_wall);
+  out = Control(LanePoints(0.0), true, {}, Wall(0.45, 0.5));  // beyond the centre's arc
+  EXPECT_FALSE(out.collision_ahead);
+  EXPECT_EQ(out.speed_mps, 0.25);
+  // The footprint model: the front (0.265 m) sweeps to 0.515 m.
+  LaneControllerParams footprint;
+  footprint.collision.model = CollisionModel::kFootprint;
+  EXPECT_TRUE(Control(LanePoints(0.0), true, footprint, Wall(0.45, 0.5)).collision_ahead);
+  out = Control(LanePoints(0.0), true, footprint, Wall(0.6, 1.0));
   EXPECT_FALSE(out.collision_ahead);
   EXPECT_EQ(out.speed_mps, 0.25);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -222,6 +223,36 @@ TEST(ObstacleGridLayerTest, MarksAreTheCellsLowerCornersInOdom) {
       ObstacleLayerParams{.mark_at_cell_centre = true}, ObstacleGridParams{}, grid, X_odom_base);
   EXPECT_NEAR(centres[Grid234::Index(0, 0)].p.x(), 1.3, 1e-12);
   EXPECT_NEAR(centres[Grid234::Index(0, 0)].p.y(), 2.325, 1e-12);
+}
+
+// obstacle_layer.cpp:40-65: the callback waits in canTransform("odom", "base_link", now, 1 s) and
+// places the grid with the transform at `now`, the time it runs, between the two transforms that
+// bracket it.
+TEST(ObstacleGridLayerTest, TheGridIsPlacedWithTheTransformAtTheCallbacksTime) {
+  const StampedPose a{FromSeconds(1.00), world::Pose2{1.0, 2.0, 0.1}};
+  const StampedPose b{FromSeconds(1.05), world::Pose2{1.02, 2.01, 0.2}};
+  const Time now = FromSeconds(1.02);
+  // the newest transform is older than now: wait for the next
+  EXPECT_EQ(TransformAt(std::nullopt, a, now), std::nullopt);
+  // the next one is newer: 40 % of the way from a to b
+  const std::optional<world::Pose2> X = TransformAt(a, b, now);
+  ASSERT_TRUE(X.has_value());
+  EXPECT_NEAR(X->x_m, 1.008, 1e-12);
+  EXPECT_NEAR(X->y_m, 2.004, 1e-12);
+  EXPECT_NEAR(X->yaw_rad, 0.14, 1e-12);
+  // exactly at a transform's stamp: that transform
+  EXPECT_EQ(TransformAt(a, b, FromSeconds(1.05))->x_m, 1.02);
+  EXPECT_EQ(TransformAt(std::nullopt, a, FromSeconds(1.0))->x_m, 1.0);
+  // the yaw across ±π takes the shorter arc
+  const StampedPose c{FromSeconds(2.0), world::Pose2{0.0, 0.0, 3.1}};
+  const StampedPose d{FromSeconds(2.1), world::Pose2{0.0, 0.0, -3.1}};
+  EXPECT_NEAR(std::abs(TransformAt(c, d, FromSeconds(2.05))->yaw_rad), std::numbers::pi, 1e-12);
+  // nothing at or before now (only newer transforms): tf2 would extrapolate into the past, so the
+  // wait can only time out
+  EXPECT_EQ(TransformAt(std::nullopt, b, now), std::nullopt);
+  EXPECT_EQ(TransformAt(b, StampedPose{FromSeconds(1.1), world::Pose2{}}, now), std::nullopt);
+  EXPECT_THROW(ObstacleLayerParams{.transform_timeout = Duration{0}}.Validate(),
+               std::invalid_argument);
 }
 
 // --- on rendered frames of the lab track ---

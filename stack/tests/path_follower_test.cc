@@ -4,11 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "stack/costmap.h"
 
 namespace autonomsim::stack {
 namespace {
@@ -37,21 +42,49 @@ std::vector<Vec2> ArcPath(double r_m, double length_m) {
   return path;
 }
 
-// Lethal inside an axis-aligned box.
-LethalQuery Obstacle(double x_min, double x_max, double y_min, double y_max) {
-  return [=](const Vec2& p) {
-    return p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max;
+// `cost` inside an axis-aligned box, FREE elsewhere.
+CostQuery Obstacle(double x_min, double x_max, double y_min, double y_max,
+                   std::uint8_t cost = kLethalObstacle) {
+  return [=](const Vec2& p) -> std::optional<std::uint8_t> {
+    const bool inside = p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max;
+    return inside ? cost : kFreeSpace;
   };
 }
 
-PathFollowerOutput Follow(const std::vector<Vec2>& path, const Pose2& X, LethalQuery lethal = {},
+// The local costmap's geometry (reference §6: 0.05 m cells, edges on multiples of 0.05 m here)
+// over 5 m × 5 m around the origin, LETHAL in the cells that contain `obstacles`, inflated as the
+// local costmap is (inscribed radius 0.135 m, inflation radius 0.3 m, scale 5.0).
+CostQuery InflatedCostmap(const std::vector<Vec2>& obstacles) {
+  auto grid = std::make_shared<Costmap2D>(100, 100, 0.05, Vec2(-2.5, -2.5));
+  for (const Vec2& p : obstacles) {
+    const std::optional<CellIndex> cell = grid->WorldToMap(p);
+    grid->SetCost(cell->mx, cell->my, kLethalObstacle);
+  }
+  Inflation(InflationParams{.inflation_radius_m = 0.3, .cost_scaling_factor = 5.0}, 0.135, 0.05)
+      .Apply(grid.get());
+  return [grid](const Vec2& p) { return grid->CostAt(p); };
+}
+
+CollisionCheckParams WithModel(CollisionModel model) {
+  CollisionCheckParams params;
+  params.model = model;
+  return params;
+}
+
+PathFollowerParams FollowerWithModel(CollisionModel model) {
+  PathFollowerParams params;
+  params.collision.model = model;
+  return params;
+}
+
+PathFollowerOutput Follow(const std::vector<Vec2>& path, const Pose2& X, CostQuery cost = {},
                           PathFollowerParams params = {}) {
   PathFollowerState state;
   PathFollowerInput input;
   input.path = path;
   input.X_F_base = X;
   input.speed_mps = 0.25;
-  input.is_lethal = std::move(lethal);
+  input.cell_cost = std::move(cost);
   return StepPathFollower(params, input, &state);
 }
 
@@ -61,6 +94,7 @@ TEST(PathFollowerParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.pursuit.lookahead_dist_m, 0.6);
   EXPECT_EQ(params.pursuit.regulated_min_radius_m, 0.9);
   EXPECT_EQ(params.goal_tolerance_m, 0.25);
+  EXPECT_EQ(params.collision.model, CollisionModel::kCentre);  // the lab's
   EXPECT_EQ(params.collision.horizon_s, 1.0);
   EXPECT_EQ(params.collision.footprint_half_length_m, 0.265);
   EXPECT_EQ(params.collision.footprint_half_width_m, 0.135);
@@ -75,6 +109,14 @@ TEST(PathFollowerParamsTest, DefaultsKeysAndValidation) {
   auto visit_pursuit = [&](const std::string& key, auto&) { pursuit_keys.push_back(key); };
   params.pursuit.Describe(visit_pursuit);
   EXPECT_EQ(pursuit_keys.size(), 12u);
+  std::vector<std::string> collision_keys;
+  auto visit_collision = [&](const std::string& key, auto&) { collision_keys.push_back(key); };
+  params.collision.Describe(visit_collision);
+  EXPECT_THAT(collision_keys, ElementsAre("model", "horizon_s", "step_m", "footprint_half_length_m",
+                                          "footprint_half_width_m", "footprint_sample_spacing_m"));
+  EXPECT_EQ(FromName<CollisionModel>("centre"), CollisionModel::kCentre);
+  EXPECT_EQ(FromName<CollisionModel>("footprint"), CollisionModel::kFootprint);
+  EXPECT_EQ(NameList<CollisionModel>(), "'centre' or 'footprint'");
 
   params.pursuit.min_lookahead_dist_m = 1.0;
   try {
@@ -192,33 +234,100 @@ TEST(PathFollowerTest, GoalReachedWithinTolerance) {
   EXPECT_TRUE(StepPathFollower(PathFollowerParams{}, input, &state).goal_reached);
 }
 
-TEST(PathFollowerTest, CollisionAheadStopsAndClearGoes) {
+TEST(PathFollowerTest, FootprintModelStopsForLethalCellsUnderTheSweptFootprint) {
   const std::vector<Vec2> path = StraightPath(0.0, 3.0);
   const Pose2 X{0.0, 0.0, 0.0};
+  const PathFollowerParams params = FollowerWithModel(CollisionModel::kFootprint);
   // In 1 s at 0.25 m/s the front (0.265 m) sweeps to 0.515 m.
-  PathFollowerOutput out = Follow(path, X, Obstacle(0.45, 0.5, -0.02, 0.02));
+  PathFollowerOutput out = Follow(path, X, Obstacle(0.45, 0.5, -0.02, 0.02), params);
   EXPECT_TRUE(out.collision_ahead);
   EXPECT_EQ(out.speed_mps, 0.0);
   EXPECT_EQ(out.yaw_rate_rad_per_s, 0.0);
-  out = Follow(path, X, Obstacle(0.55, 0.6, -0.02, 0.02));  // beyond the 1 s arc
+  out = Follow(path, X, Obstacle(0.55, 0.6, -0.02, 0.02), params);  // beyond the 1 s arc
   EXPECT_FALSE(out.collision_ahead);
   EXPECT_EQ(out.speed_mps, 0.25);
   // Beside the path: the footprint is ±0.135 m wide.
-  EXPECT_FALSE(Follow(path, X, Obstacle(0.3, 0.35, 0.15, 0.2)).collision_ahead);
-  EXPECT_TRUE(Follow(path, X, Obstacle(0.3, 0.35, 0.12, 0.2)).collision_ahead);
+  EXPECT_FALSE(Follow(path, X, Obstacle(0.3, 0.35, 0.15, 0.2), params).collision_ahead);
+  EXPECT_TRUE(Follow(path, X, Obstacle(0.3, 0.35, 0.12, 0.2), params).collision_ahead);
   // A 5 cm cell under the car now: the footprint's sample grid is at most 5 cm apart.
-  EXPECT_TRUE(Follow(path, X, Obstacle(-0.1, -0.05, 0.0, 0.05)).collision_ahead);
+  EXPECT_TRUE(Follow(path, X, Obstacle(-0.1, -0.05, 0.0, 0.05), params).collision_ahead);
+  // Only LETHAL counts: INSCRIBED and NO_INFORMATION under the footprint do not stop it.
+  for (const std::uint8_t cost : {kInscribedInflatedObstacle, kNoInformation}) {
+    EXPECT_FALSE(Follow(path, X, Obstacle(0.3, 0.35, -0.02, 0.02, cost), params).collision_ahead);
+  }
+}
+
+// lane_controller.cpp:364-443 (and Galactic's regulated_pure_pursuit_controller.cpp:372-452):
+// inCollision(x, y) of the centre point at the pose and every 0.05 m along the 1 s arc, cost >=
+// INSCRIBED with track_unknown_space false.
+TEST(PathFollowerTest, CentreModelStopsForAnInscribedCellOnTheArcOnly) {
+  const std::vector<Vec2> path = StraightPath(0.0, 3.0);
+  const Pose2 X{0.0, 0.0, 0.0};
+  // The arc's points: x = 0, 0.05, ..., 0.25 m on y = 0.
+  for (const std::uint8_t cost : {kInscribedInflatedObstacle, kLethalObstacle, kNoInformation}) {
+    const PathFollowerOutput out = Follow(path, X, Obstacle(0.18, 0.22, -0.02, 0.02, cost));
+    EXPECT_TRUE(out.collision_ahead) << int{cost};
+    EXPECT_EQ(out.speed_mps, 0.0);
+  }
+  EXPECT_FALSE(
+      Follow(path, X, Obstacle(0.18, 0.22, -0.02, 0.02, kMaxNonInscribedCost)).collision_ahead);
+  // LETHAL beyond the arc's last point (0.25 m): the footprint's front would reach it.
+  EXPECT_FALSE(Follow(path, X, Obstacle(0.3, 0.5, -0.02, 0.02)).collision_ahead);
+  EXPECT_TRUE(Follow(path, X, Obstacle(0.3, 0.5, -0.02, 0.02),
+                     FollowerWithModel(CollisionModel::kFootprint))
+                  .collision_ahead);
+  // A LETHAL cell under the footprint's front corner, off the centre line, uninflated: only the
+  // footprint model sees it.
+  EXPECT_FALSE(Follow(path, X, Obstacle(0.2, 0.25, 0.1, 0.15)).collision_ahead);
+  EXPECT_TRUE(
+      Follow(path, X, Obstacle(0.2, 0.25, 0.1, 0.15), FollowerWithModel(CollisionModel::kFootprint))
+          .collision_ahead);
+  // Outside the costmap: no collision (Nav2: worldToMap fails).
+  const CostQuery outside = [](const Vec2&) { return std::optional<std::uint8_t>(); };
+  EXPECT_FALSE(Follow(path, X, outside).collision_ahead);
+}
+
+// The reach of each model on an inflated local costmap (0.05 m cells), the car at (0.01, 0.01)
+// heading +x at 0.25 m/s, so that no arc point lies on a cell edge. Centre: the arc ends at
+// x = 0.26 m, in the cell [0.25, 0.30); the INSCRIBED cells reach two cells (0.10 m <= 0.135 m)
+// from a LETHAL one, so a LETHAL cell [0.35, 0.40) stops the car, 0.34 m ahead of base_link, and
+// [0.40, 0.45), 0.39 m ahead, does not. Footprint: the front sweeps to 0.01 + 0.265 + 0.25 =
+// 0.525 m, LETHAL only: [0.50, 0.55) stops it, [0.55, 0.60) does not.
+TEST(CollisionCheckTest, ReachOnAnInflatedCostmapByModel) {
+  const Pose2 X{0.01, 0.01, 0.0};
+  const CollisionCheckParams centre = WithModel(CollisionModel::kCentre);
+  const CollisionCheckParams footprint = WithModel(CollisionModel::kFootprint);
+  auto imminent = [&](const CollisionCheckParams& params, const Vec2& obstacle) {
+    return IsCollisionImminent(params, X, 0.25, 0.0, InflatedCostmap({obstacle}));
+  };
+  EXPECT_TRUE(imminent(centre, Vec2(0.37, 0.01)));
+  EXPECT_FALSE(imminent(centre, Vec2(0.42, 0.01)));
+  EXPECT_TRUE(imminent(footprint, Vec2(0.52, 0.01)));
+  EXPECT_FALSE(imminent(footprint, Vec2(0.57, 0.01)));
+  // Sideways, the centre sees the inscribed circle: two cells off the centre line ([0.10, 0.15),
+  // the footprint's edge at 0.145 m) it stops, three ([0.15, 0.20)) it does not.
+  EXPECT_TRUE(imminent(centre, Vec2(0.12, 0.12)));
+  EXPECT_FALSE(imminent(centre, Vec2(0.12, 0.17)));
+  // The footprint's front corner at the arc's end (0.525, 0.145): a LETHAL cell there stops the
+  // footprint model; the centre's cells are four cells away from it.
+  EXPECT_TRUE(imminent(footprint, Vec2(0.47, 0.12)));
+  EXPECT_FALSE(imminent(centre, Vec2(0.47, 0.12)));
 }
 
 TEST(CollisionCheckTest, ArcIsSteppedForOneSecond) {
-  const CollisionCheckParams params;
+  const CollisionCheckParams params = WithModel(CollisionModel::kFootprint);
   // Exactly at the 1 s horizon: the front reaches 0.265 + 0.25 = 0.515 m.
   EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, 0.25, 0.0, Obstacle(0.514, 0.6, -0.1, 0.1)));
   EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.25, 0.0, Obstacle(0.52, 0.6, -0.1, 0.1)));
+  // The centre point: 0.25 m (5 steps of 0.2 s, the last at exactly 1 s).
+  const CollisionCheckParams centre = WithModel(CollisionModel::kCentre);
+  EXPECT_TRUE(IsCollisionImminent(centre, Pose2{}, 0.25, 0.0, Obstacle(0.249, 0.6, -0.1, 0.1)));
+  EXPECT_FALSE(IsCollisionImminent(centre, Pose2{}, 0.25, 0.0, Obstacle(0.26, 0.6, -0.1, 0.1)));
   // Standing still: only the current footprint.
   EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.0, 0.5, Obstacle(0.3, 0.6, -0.1, 0.1)));
   // Reversing sweeps the rear.
   EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, -0.25, 0.0, Obstacle(-0.5, -0.45, -0.1, 0.1)));
+  EXPECT_TRUE(IsCollisionImminent(centre, Pose2{}, -0.25, 0.0, Obstacle(-0.3, -0.2, -0.1, 0.1)));
   // Turning left at ω = 1 rad/s (R = 0.25 m) sweeps to the left, not straight ahead.
   EXPECT_FALSE(IsCollisionImminent(params, Pose2{}, 0.25, 1.0, Obstacle(0.5, 0.6, -0.1, 0.1)));
   EXPECT_TRUE(IsCollisionImminent(params, Pose2{}, 0.25, 1.0, Obstacle(0.0, 0.6, 0.3, 0.4)));
@@ -226,6 +335,7 @@ TEST(CollisionCheckTest, ArcIsSteppedForOneSecond) {
   const Pose2 X{1.0, 2.0, std::numbers::pi / 2.0};
   EXPECT_TRUE(IsCollisionImminent(params, X, 0.25, 0.0, Obstacle(0.9, 1.1, 2.45, 2.5)));
   EXPECT_FALSE(IsCollisionImminent(params, X, 0.25, 0.0, Obstacle(1.45, 1.5, 1.9, 2.1)));
+  EXPECT_TRUE(IsCollisionImminent(centre, X, 0.25, 0.0, Obstacle(0.95, 1.05, 2.2, 2.3)));
 }
 
 TEST(PathFollowerTest, PruningNeverGoesBackOnTheSamePath) {

@@ -67,6 +67,28 @@ TEST(PerceptionNodesTest, InSoftwareTheGraphIsTheRos2NodesAndSlower) {
               static_cast<double>(hw.cars[0].perception->lane_valid_frames), 2.0);
 }
 
+// The lab's KeepLast(1) subscriptions: the obstacle layer's (obstacle_layer.cpp:32-37), the
+// LaneController's (lane_controller.cpp:179) and the ROS 2 lane detector's camera image
+// (lane_detector.cpp:26-30); the ReconROS threads' subscriptions keep the graph's default.
+TEST(PerceptionNodesTest, TheLabsKeepLastOneTopicsHaveDepthOne) {
+  const RunRecord hw = RunScenario(LoadScenario(kDefault, WithPerception({"duration_s=1"})));
+  const RunRecord sw = RunScenario(LoadScenario(
+      kDefault,
+      WithPerception({"duration_s=1", "cars[0].platform.mapping.lane_detection.target=sw"})));
+  auto depth = [](const RunRecord& record, const char* topic) {
+    const TopicReport* report = record.boards.at(0).report.FindTopic(topic);
+    if (report == nullptr) throw std::runtime_error(std::string("no topic ") + topic);
+    return report->depth;
+  };
+  for (const RunRecord* record : {&hw, &sw}) {
+    EXPECT_EQ(depth(*record, "/local_costmap/obstacles"), 1);
+    EXPECT_EQ(depth(*record, "/lane_detector/central_line/point_cloud"), 1);
+    EXPECT_EQ(depth(*record, "/depth/image_raw"), 3);
+  }
+  EXPECT_EQ(depth(hw, "/image"), 3);  // read by the lane planner, a ReconROS thread
+  EXPECT_EQ(depth(sw, "/image"), 1);  // read by the lab's ROS 2 lane detector
+}
+
 TEST(PerceptionNodesTest, LaneDetectionInHardwareMustBeMappedAsItsTwoSlots) {
   EXPECT_THROW(
       RunScenario(LoadScenario(

@@ -187,6 +187,52 @@ TEST(NodeGraph, TimerTicksWhileItsJobWaitsAreCoalescedAndCounted) {
   EXPECT_EQ(n->timer_overruns, 5u);
 }
 
+TEST(NodeGraph, AHeldJobFinishesAtItsReleaseOrItsTimeout) {
+  // "holder" takes 10 ms per message and then holds its job (a callback waiting in tf2's
+  // canTransform) for at most 50 ms; "releaser" releases it at 30 ms. Frames at 0 and 100 ms: the
+  // first job runs 0-10 ms and finishes at the release (30 ms); the second runs 100-110 ms and
+  // finishes at its timeout (150 ms). A frame arriving while held waits in the queue.
+  PlatformProfile profile = FreeTransportProfile();
+  profile.components["holder"] = ComponentCost{.sw = SwCost{.work_s = 0.010}};
+  profile.components["releaser"] = ComponentCost{.sw = SwCost{}};
+  profile.components["sink"] = ComponentCost{.sw = SwCost{}};
+  Rig rig(profile);
+  auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
+  auto out = rig.graph.AddTopic<int>({.name = "/out", .type = {"I", 8, true}});
+  int next = 0;
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, in, kZeroTime, milliseconds(100),
+                [&next](Time) { return next++; });
+  const NodeId holder = rig.graph.AddNode(NodeSpec{.name = "holder"});
+  const auto publisher = rig.graph.AddPublisher(holder, out);
+  std::vector<int> timeouts;
+  rig.graph.AddSubscription<int>(holder, in, [&](const int& v, Time stamp, Outbox& outbox) {
+    outbox.Publish(publisher, v, stamp);
+    rig.graph.HoldJob(holder, milliseconds(50), [&timeouts, v] { timeouts.push_back(v); });
+    EXPECT_THROW(rig.graph.HoldJob(holder, milliseconds(50), {}), std::logic_error);
+  });
+  const NodeId releaser = rig.graph.AddNode(NodeSpec{.name = "releaser"});
+  rig.graph.AddTimer(releaser, milliseconds(30), milliseconds(1000),
+                     [&](Time, Outbox&) { rig.graph.ReleaseJob(holder); });
+  std::vector<std::pair<int, Time>> seen;
+  const NodeId sink = rig.graph.AddNode(NodeSpec{.name = "sink"});
+  rig.graph.AddSubscription<int>(
+      sink, out, [&](const int& v, Time, Outbox&) { seen.emplace_back(v, rig.kernel.Now()); });
+
+  rig.kernel.RunUntil(milliseconds(29));
+  EXPECT_TRUE(rig.graph.held(holder));
+  EXPECT_TRUE(seen.empty());
+  rig.kernel.RunUntil(milliseconds(199));
+  EXPECT_FALSE(rig.graph.held(holder));
+  EXPECT_THAT(seen, ElementsAre(std::pair<int, Time>{0, milliseconds(30)},
+                                std::pair<int, Time>{1, milliseconds(150)}));
+  EXPECT_THAT(timeouts, ElementsAre(1));
+  EXPECT_THROW(rig.graph.HoldJob(holder, milliseconds(50), {}), std::logic_error);  // no job
+  const MetricsReport report = BuildReport(rig.metrics, milliseconds(199));
+  EXPECT_DOUBLE_EQ(report.FindNode("holder")->turnaround_ms.max, 50.0);  // 100-150 ms
+  // the wait takes no CPU: two jobs of 10 ms in 199 ms
+  EXPECT_NEAR(report.FindNode("holder")->cpu_percent, 100.0 * 0.020 / 0.199, 1e-9);
+}
+
 TEST(NodeGraph, ZeroCopyNeedsFixedSizeTypesAndFittingChunks) {
   Rig rig(FreeTransportProfile());
   try {

@@ -112,7 +112,7 @@ TEST(Metrics, LatencyOverTimeIsBinnedOverTheWholeRun) {
   MetricsOptions options;
   options.measure_from = std::chrono::seconds(1);  // the bins ignore the warm-up window
   RunMetrics metrics(options);
-  const int topic = metrics.AddTopic("/cmd", "dds", 16);
+  const int topic = metrics.AddTopic("/cmd", "dds", 16, 3);
   using std::chrono::milliseconds;
   metrics.Published(0, topic, milliseconds(500), milliseconds(480));    // bin 0: 20 ms
   metrics.Published(0, topic, milliseconds(2100), milliseconds(2090));  // bin 2: 10 ms
