@@ -382,5 +382,50 @@ TEST(PathFollowerTest, NoPathStopsAndBadInputThrows) {
                std::invalid_argument);
 }
 
+// stack.*.collision.horizon_s: the lab's 1.0 s (lane_controller.cpp:85-86; Galactic
+// regulated_pure_pursuit_controller.cpp:81-82) checks 0.25 m of arc at 0.25 m/s, safe's 2.0 s
+// 0.5 m: an INSCRIBED band 0.40-0.45 m ahead of the centre stops only the latter.
+TEST(CollisionCheckTest, TheHorizonSetsHowFarAheadTheArcIsChecked) {
+  const CostQuery band = Obstacle(0.40, 0.45, -1.0, 1.0, kInscribedInflatedObstacle);
+  CollisionCheckParams lab = WithModel(CollisionModel::kCentre);
+  CollisionCheckParams safe = lab;
+  safe.horizon_s = 2.0;
+  EXPECT_FALSE(IsCollisionImminent(lab, Pose2{0.0, 0.0, 0.0}, 0.25, 0.0, band));
+  EXPECT_TRUE(IsCollisionImminent(safe, Pose2{0.0, 0.0, 0.0}, 0.25, 0.0, band));
+}
+
+// The lab's lookahead 0.6 m (nav2_car_params.yaml:103) against safe's 0.4 m on the intersection
+// turn (a 0.9 m arc between straights): driven kinematically at the follower's command, the car
+// cuts the corner towards the arc's centre by more with the longer lookahead.
+TEST(PathFollowerTest, TheLabsLookaheadCutsTheIntersectionTurnMore) {
+  std::vector<Vec2> path = StraightPath(-1.0, 0.0);
+  for (const Vec2& p : ArcPath(0.9, 0.9 * 1.5707963267948966)) path.push_back(p);
+  for (int i = 1; i <= 20; ++i) path.emplace_back(0.9, 0.9 + 0.05 * i);
+  auto cut = [&](double lookahead_m) {
+    PathFollowerParams params;
+    params.pursuit.lookahead_dist_m = lookahead_m;
+    PathFollowerState state;
+    Pose2 pose{-0.8, 0.0, 0.0};
+    double worst = 0.0;  // how far inside the arc (towards its centre (0, 0.9)) the car gets
+    for (int step = 0; step < 400 && pose.y_m < 1.5; ++step) {
+      const PathFollowerOutput out =
+          StepPathFollower(params, {.path = path, .path_id = 1, .X_F_base = pose}, &state);
+      pose.x_m += 0.05 * out.speed_mps * std::cos(pose.yaw_rad);
+      pose.y_m += 0.05 * out.speed_mps * std::sin(pose.yaw_rad);
+      pose.yaw_rad += 0.05 * out.yaw_rate_rad_per_s;
+      if (pose.x_m > 0.0 && pose.y_m < 0.9) {
+        worst = std::max(worst, 0.9 - std::hypot(pose.x_m, pose.y_m - 0.9));
+      }
+    }
+    return worst;
+  };
+  const double lab = cut(0.6);
+  const double safe = cut(0.4);
+  // kinematically 0.041 m against 0.017 m; in the closed loop, with the car's steering, up to
+  // 0.27 m (docs/lab-stack.md)
+  EXPECT_GT(lab, 0.03);
+  EXPECT_GT(lab, 1.5 * safe) << "lab " << lab << " m, safe " << safe << " m";
+}
+
 }  // namespace
 }  // namespace autonomsim::stack

@@ -306,7 +306,10 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
 // the lab's centre point against INSCRIBED cells (lane_controller.cpp:364-443) reaches ~0.35 m
 // ahead of base_link, only ~0.09 m beyond the bumper, and the braking after the stop (~0.15 m: the
 // PID's integral term, then the 1 s watchdog) carries the car into the box; the footprint against
-// LETHAL cells reaches 0.515 m, and the car comes to rest 0.15 m short of it.
+// LETHAL cells reaches 0.515 m and stops the car 0.30 m short of it; the lab's recovery then
+// clears the local costmap and retries at once (drive_to_pose_test.xml:17-33), each restart runs
+// FollowPath for one tick before the gate's RateController halts it, and with the PID's integral
+// term the car creeps on to ~0.05 m short of the box, where it waits out the RoundRobin's 5 s.
 TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox) {
   auto run = [](const char* model) {
     const std::string m = model;
@@ -321,7 +324,8 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
   EXPECT_EQ(lab.cars[0].collisions, 1);
   EXPECT_EQ(*lab.cars[0].min_obstacle_gap_m, 0.0);
   EXPECT_EQ(safe.cars[0].collisions, 0);
-  EXPECT_NEAR(*safe.cars[0].min_obstacle_gap_m, 0.15, 0.03);
+  EXPECT_GT(*safe.cars[0].min_obstacle_gap_m, 0.03);
+  EXPECT_LT(*safe.cars[0].min_obstacle_gap_m, 0.10);
 }
 
 // Without the fix (the real car) the estimate drifts with the IMU's heading; with it, it stays
