@@ -66,6 +66,7 @@ void IntersectionClientParams::Validate() const {
 }
 
 void ValidateAgainstLease(const IntersectionClientParams& params, Duration server_lease) {
+  if (params.blocking) return;  // the lab's client asks once: no retry, no keepalive
   auto require_shorter = [&](Duration d, const char* key) {
     if (d >= server_lease) {
       throw std::invalid_argument(std::string(key) + " (" + Num(ToSeconds(d)) +
@@ -184,6 +185,66 @@ class ClientStep {
   IntersectionClientOutput& out_;
 };
 
+// Where the lab's client finds the car (intersection_checker.cpp:138-215): the first box of its
+// if/else chain that strictly contains p: per intersection in track order, the area, then the
+// stop zones.
+struct LabZone {
+  enum class Kind { kOutside, kArea, kStopZone };
+  Kind kind{Kind::kOutside};
+  int intersection{-1};
+};
+
+LabZone LocateAsTheLab(const std::vector<world::IntersectionSpec>& intersections,
+                       const world::Vec2& p) {
+  for (const auto& spec : intersections) {
+    if (spec.area.Contains(p)) return {LabZone::Kind::kArea, spec.id};
+    if (InStopZone(spec, p)) return {LabZone::Kind::kStopZone, spec.id};
+  }
+  return {};
+}
+
+// The blocking wait's consume_message loop (intersection_checker.cpp:84-104) over what is queued:
+// true when it took a grant for this car.
+bool TakeQueuedGrant(IntersectionClientState* s) {
+  if (s->queued_grants == 0) return false;
+  --s->queued_grants;
+  s->phase = Phase::kHolding;  // bt_call(1), switch_controller = true (:92-93)
+  return true;
+}
+
+// The lab's client (blocking: true; see the header).
+IntersectionClientOutput StepBlockingClient(
+    int car_id, const std::vector<world::IntersectionSpec>& intersections,
+    const IntersectionClientInput& input, IntersectionClientState* s) {
+  IntersectionClientOutput out;
+  // the MQTT client queues every broadcast; a wait drops all but this car's grants
+  for (const world::Response& response : input.responses) {
+    if (response.car == car_id && response.granted) ++s->queued_grants;
+  }
+  // still in the wait a request began: it returns only with a grant, then the missed tick runs
+  if (s->phase == Phase::kWaiting && !TakeQueuedGrant(s)) {
+    out.stuck = true;
+    out.may_proceed = false;
+    out.waiting_for = s->intersection;
+    return out;
+  }
+  const LabZone zone = LocateAsTheLab(intersections, input.p_map);
+  if (zone.kind == LabZone::Kind::kOutside && s->phase == Phase::kHolding) {
+    out.frees.push_back(world::Free{car_id});  // vtl_free (:211-214): new_intersection again
+    s->phase = Phase::kIdle;
+    s->intersection = -1;
+  } else if (zone.kind == LabZone::Kind::kStopZone && s->phase == Phase::kIdle) {
+    s->phase = Phase::kWaiting;  // bt_call(0), the request, then the wait (:69-84)
+    s->intersection = zone.intersection;
+    s->last_request_sent = input.now;
+    out.requests.push_back(world::Request{car_id, zone.intersection});
+    TakeQueuedGrant(s);  // a stale grant ends the wait at once
+  }
+  out.may_proceed = s->phase != Phase::kWaiting;
+  if (!out.may_proceed) out.waiting_for = s->intersection;
+  return out;
+}
+
 }  // namespace
 
 IntersectionClientOutput StepIntersectionClient(
@@ -194,6 +255,7 @@ IntersectionClientOutput StepIntersectionClient(
     throw std::invalid_argument("car_id must be a single digit 0..9, got " +
                                 std::to_string(car_id));
   }
+  if (params.blocking) return StepBlockingClient(car_id, intersections, input, state);
   IntersectionClientOutput out;
   if (state->retired) return out;
   ClientStep step(params, car_id, intersections, input, state, &out);

@@ -1,44 +1,57 @@
 // The car's side of the /vtl/ protocol (reference §7: vehicle communication + intersection_checker)
-// as a pure step, run every tick_period on the car's estimated position. Where it departs from the
-// lab's client, a parameter says so and its other value is the lab's behaviour (stack.preset: lab
-// selects all of them, docs/lab-stack.md#the-options):
+// as a pure step, run every tick_period on the car's estimated position. Two clients:
+//   blocking: false  ours (below), the default;
+//   blocking: true   the lab's intersection_checker.cpp as it runs (see "The blocking client").
+// Where ours departs from the lab's client, a parameter says so (stack.preset: lab selects the
+// lab's values, docs/lab-stack.md#the-options):
 //   re_request          the original requests once and then waits forever; ours asks again after
 //                       a denial or a lost message and keeps a held intersection alive against
 //                       the server's lease;
 //   release_margin_m,   the original frees on the first tick outside the boxes (margins 0);
 //   exit_margin_m
-//   latch_wait          the original lets the car go whenever its estimate is outside the stop
-//                       zone, so a waiting car whose estimate jitters across the zone's edge
-//                       creeps forward tick by tick; latched, a car held in a stop zone stays
-//                       held until it is granted;
+//   latch_wait          ours, unlatched, lets the car go whenever its estimate is outside the stop
+//                       zone, so a waiting car whose estimate jitters across the zone's edge creeps
+//                       forward tick by tick; latched, a car held in a stop zone stays held until
+//                       it is granted. (The lab's client holds the car until granted wherever its
+//                       estimate goes, because it blocks: `blocking`, not this option.);
 //   release_on_failure  the original client runs on when the car's navigation has failed; with
 //                       it, a car that can no longer drive frees what it holds and asks no more
 //                       (unless it stands inside the intersection's area, which it blocks: then
 //                       it keeps its grant alive).
+// Under blocking: true none of these five applies (the lab's client has none of them), nor do
+// retry_period_s and keepalive_period_s: blocking overrides them, whatever they are set to.
 //
-// State machine (one intersection at a time: a response names no intersection, so it answers the
-// one pending request; a free names none either, so it releases everything the car holds):
-//   kIdle        --p in a stop zone of i-------------------------> kWaiting(i)  send Request{i}
-//   kWaiting(i)  --"<car>1"------------------------------------> kHolding(i)
-//   kWaiting(i)  --"<car>0"------------------------------------> kWaiting(i)  (FIFO grants later)
-//   kWaiting(i)  --retry_period since the last Request----------> kWaiting(i)  send Request{i}
-//   kWaiting(i)  --p outside i's stop zones and area (gave up)----> kIdle       send Free
-//   kHolding(i)  --keepalive_period since last Request-----------> kHolding(i)  send Request{i}
-//   kHolding(i)  --p outside i's stop zones and area--------------> kIdle       send Free
-//                  (outside them by release_margin_m before the car has been in the area,
-//                  by exit_margin_m after)
-//   kHolding(i)  --"<car>0" (grant lost: lease expired)----------> kWaiting(i)
-//   kIdle        --"<car>1" (late or stale grant)-----------------> kIdle       send Free
-//   any          --navigation failed (release_on_failure)---------> retired     send Free if
-//                                                    not kIdle (in the area: keeps its grant)
-// Without re_request, the two re-request transitions never fire.
-// Responses are applied first, in arrival order, then the position. Entering a stop zone uses the
-// real cars' strict Box::Contains; being still in i (stop zone or area) uses the closed boxes, so
-// a car sampled exactly on the edge a stop zone shares with its area (lab: y = -0.6) neither frees
-// mid-crossing nor rolls on while waiting. Leaving i straight into a stop zone of another
-// intersection j frees i and requests j in the same step. may_proceed is false only while in a
-// stop zone of i in kWaiting(i); a car that overshot into the area keeps going (stopping inside
-// the intersection helps nobody) and keeps asking until it leaves.
+// The blocking client (intersection_checker.cpp, lab commit 02c5ab4; lines below):
+//   - Entering a stop zone (strict, as the lab's `>`/`<` tests, :143-205) while new_intersection
+//     is set (kIdle): "not free" to the behaviour (:73), Request{i} once (:76-81), then the
+//     timer callback blocks in `while (true) consume_message()` (:84-104) until "<car>1": denials
+//     are logged and ignored (:96-99), other cars' messages dropped (:101-103), nothing is asked
+//     again, no zone is checked, nothing is freed and nothing published. The grant publishes
+//     "free" (:92) and sets switch_controller (:93). new_intersection stays false (:148) until
+//     the car frees: the client asks for no other intersection in between.
+//   - Responses received while not blocked stay in the MQTT client's queue and the next wait
+//     consumes them first, in arrival order (paho's consume_message): a stale "<car>1" lets the
+//     car go at its next stop line at once. Only this car's grants can end a wait, so the state
+//     keeps their number (queued_grants) instead of the queue.
+//   - Inside an intersection's area nothing happens (:138-140, :173-176); inside a stop zone with
+//     new_intersection unset, nothing either. On the first tick outside every area and stop zone
+//     of every intersection (the else branch, :207-215) after a grant (switch_controller) it sends
+//     Free (:107-117, which also sets new_intersection again).
+//   - The boxes are tested in the lab's order: per intersection in track order, the area, then
+//     its stop zones (the if/else chain of :138-205). Strict tests throughout: a point on a
+//     box's edge is outside it.
+//   How "blocked" is modelled: the step that sends the request enters kWaiting. Every later step
+//   in kWaiting is the same blocked callback: it takes the responses received since the last step
+//   and, without a grant, returns `stuck` (the node publishes nothing, may_proceed stays false).
+//   With a grant it returns as the lab's wait does, then runs the tick rclcpp owes the timer at
+//   once (a wall timer that missed periods fires once on return, not once per missed period) on
+//   the position now: a car whose estimate is outside every box by then frees at once. The
+//   simulated timer keeps its 100 ms grid meanwhile, so a grant is taken at the first tick after
+//   it arrives: up to one tick_period later than the lab's client, which wakes on the message.
+//   A blocked job still costs its node's CPU time on the platform model (the lab's thread sleeps).
+//   Publishing: ours publishes may_proceed every tick; the lab's client publishes only on a change
+//   (:48, :73, :92). The behaviour keeps the last message, so every unstuck tick republishing the
+//   current value is the same permission, and it keeps intersection_free_timeout_s fed.
 #pragma once
 
 #include <optional>
@@ -78,6 +91,9 @@ struct IntersectionClientParams {
   bool latch_wait{false};
   // Beyond the lab's client: a car whose navigation failed frees its intersection and retires.
   bool release_on_failure{false};
+  // The lab's client as it runs (above): the node blocks from its request until its grant.
+  // Default false, ours, as the other options whose defaults are ours.
+  bool blocking{false};
 
   template <class V>
   void Describe(V& v) {
@@ -89,12 +105,14 @@ struct IntersectionClientParams {
     v("re_request", re_request);
     v("latch_wait", latch_wait);
     v("release_on_failure", release_on_failure);
+    v("blocking", blocking);
   }
   void Validate() const;
 };
 
 // Cross-struct check for whoever assembles cars and server: retry_period_s and keepalive_period_s
-// must be shorter than the server's lease_s. Throws std::invalid_argument naming the key.
+// must be shorter than the server's lease_s (unless blocking, which uses neither). Throws
+// std::invalid_argument naming the key.
 void ValidateAgainstLease(const IntersectionClientParams& params, Duration server_lease);
 
 struct IntersectionClientInput {
@@ -113,6 +131,9 @@ struct IntersectionClientOutput {
   std::vector<world::Free> frees;
   bool may_proceed{true};
   std::optional<int> waiting_for;  // the intersection id while kWaiting
+  // blocking: the node spent this tick stuck in its wait for a grant and publishes nothing (its
+  // "not free" went out when the wait began). Always false for our client.
+  bool stuck{false};
 };
 
 struct IntersectionClientState {
@@ -123,6 +144,10 @@ struct IntersectionClientState {
   bool crossed{false};                // has been inside `intersection`'s area
   bool held{false};     // latch_wait: was held in a stop zone while waiting for `intersection`
   bool retired{false};  // release_on_failure: the navigation failed; nothing more is sent
+  // blocking: this car's grants waiting in the MQTT client's queue (received while not blocked;
+  // the next wait takes one at once). kIdle is new_intersection set, kWaiting the blocked wait,
+  // kHolding switch_controller set.
+  int queued_grants{0};
 };
 
 // car_id must be 0..9 (std::invalid_argument otherwise). `intersections` are the track's, in

@@ -5,7 +5,8 @@
 // process around it: options, connection, timer, signals, logs.
 //
 // Exit codes: 0 after SIGINT/SIGTERM, 2 for unusable options or credentials the broker refused,
-// 1 for anything else.
+// 1 for anything else, among it (--policy original) a message the lab's vtl.py would have died on:
+// vtl.py's uncaught exception ends Python with status 1 too.
 #include <pthread.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -129,7 +130,7 @@ void LogStart(const Options& o) {
 void ServeUntilStopped(Service& service, sim::MqttClient& client, const StopSignalThread& signals,
                        Clock::time_point start) {
   auto wall_now = [&] { return std::chrono::duration_cast<Duration>(Clock::now() - start); };
-  while (!signals.stopped()) {
+  while (!signals.stopped() && !service.exit_reason()) {
     const std::optional<Time> next = service.NextTimer();
     const Clock::time_point wake = next ? start + *next : Clock::now() + kIdleWake;
     std::vector<sim::MqttMessage> out;
@@ -202,6 +203,10 @@ int Serve(const Options& o) {
     return kExitFailure;
   }
   SignOff(*service, *client);
+  if (service->exit_reason()) {
+    spdlog::critical("{}", *service->exit_reason());  // the last line, as vtl.py's traceback
+    return kExitFailure;
+  }
   return kExitOk;
 }
 

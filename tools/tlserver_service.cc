@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "world/validation.h"
+#include "world/vtl_py.h"
 
 namespace autonomsim::tlserver {
 namespace {
@@ -31,13 +32,17 @@ std::optional<int> CarOfUser(const std::string& user) {
   return std::nullopt;
 }
 
-// The payload as it may appear in a log line.
+// The payload as it may appear in a log line: other bytes than printable ASCII as \xNN.
 std::string Printable(const std::string& text) {
   constexpr std::size_t kMaxShown = 40;
   std::string out;
   for (std::size_t i = 0; i < text.size() && i < kMaxShown; ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
-    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+    if (c >= 0x20 && c < 0x7f && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      out += fmt::format("\\x{:02x}", c);
+    }
   }
   return "'" + out + (text.size() > kMaxShown ? "...'" : "'");
 }
@@ -104,6 +109,7 @@ std::vector<std::string> Service::Subscriptions() {
 }
 
 std::vector<MqttMessage> Service::OnMessage(const MqttMessage& message, Time wall_now) {
+  if (exit_reason_) return {};  // vtl.py is dead
   std::vector<MqttMessage> out;
   if (Suffix(message.topic, world::kVtlRequestTopic)) {
     out = OnCarMessage(message, true, wall_now);
@@ -167,6 +173,16 @@ std::vector<MqttMessage> Service::OnCarMessage(const MqttMessage& message, bool 
   std::optional<sim::StepTag> tag;
   std::vector<MqttMessage> answer;
   if (!ReadStep(message, &tag, &answer)) return answer;
+
+  // the lab's vtl.py (policy original) dies on what it cannot parse
+  if (server_.params().policy == world::ServerPolicy::kOriginal) {
+    if (const std::optional<std::string> reason =
+            world::VtlPyExitReason(base, message.payload, intersections_)) {
+      exit_reason_ = "vtl.py would have died on this message: " + message.topic + " " +
+                     Printable(message.payload) + " (" + *reason + "); stopping as it did";
+      return tag ? ErrorAck(tag->epoch, tag->seq, *exit_reason_) : std::vector<MqttMessage>{};
+    }
+  }
 
   // the payload, and whether this user may send it
   const CarMessage car = DecodeCarMessage(message, request, user, base);

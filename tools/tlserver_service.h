@@ -16,7 +16,11 @@
 // last simulated time, and counted as unclocked.
 //
 // Nothing a client sends stops the service: a malformed payload, a refused one and a step out of
-// order are logged and counted, and a simulation's step is answered with an error instead.
+// order are logged and counted, and a simulation's step is answered with an error instead. Except
+// under policy original, which is the lab's vtl.py: a /vtl/request or /vtl/free payload (on the
+// lab's topic or a car's) that vtl.py would have died on (world/vtl_py.h) ends the service, as it
+// ended vtl.py: it is not served, exit_reason() says why, nothing is served after it (a
+// simulation's step is answered with an error first), and tlserver exits.
 #pragma once
 
 #include <cstdint>
@@ -65,6 +69,8 @@ class Service {
   sim::MqttMessage Status(bool online) const;
 
   const ServiceCounters& counters() const { return counters_; }
+  // Policy original: the line saying which message vtl.py would have died on; nullopt otherwise.
+  const std::optional<std::string>& exit_reason() const { return exit_reason_; }
   const world::TrafficLightServer& server() const { return server_; }
   bool sim_clock() const { return options_.sim_clock; }
 
@@ -104,6 +110,7 @@ class Service {
   Time last_now_{0};
   std::vector<sim::MqttMessage> last_step_outputs_;  // answered again for a repeated step
   std::string published_status_key_;
+  std::optional<std::string> exit_reason_;
 };
 
 }  // namespace autonomsim::tlserver

@@ -137,11 +137,16 @@ std::vector<Response> TrafficLightServer::OnFree(Time now, const Free& free) {
     if (slot.holder != free.car) continue;
     if (record.intersection < 0) {
       record.intersection = id;
-    } else {
+    } else if (fifo_) {
       record.also_released.push_back(id);
     }
   }
-  records_.push_back(std::move(record));
+  records_.push_back(record);
+  if (!fifo_) {
+    // vtl.py:15-22: if/elif over slot 0, then slot 1: the first slot the car holds, only
+    if (record.intersection >= 0) slots_.at(record.intersection).holder.reset();
+    return out;
+  }
   for (auto& [id, slot] : slots_) {
     std::erase(slot.queue, free.car);
     slot.last_request.erase(free.car);

@@ -18,9 +18,15 @@
 //   - Free("<car>") releases every intersection that car holds and withdraws it from every queue
 //     (the protocol's free names no intersection; it never touches another car's grant);
 //   - a request for an unknown intersection is counted and answered "<car>0".
-// Policy "original" (the lab's vtl.py): grant if the slot is empty or held by the same car, deny
-// otherwise; no queue, no lease; Free releases the car's slots. A denied car is never granted
-// unless it asks again.
+// Policy "original" (the lab's vtl.py, code/vtl_ws/vtl.py at lab commit 02c5ab4): grant if the
+// slot is empty or held by the same car, deny otherwise (vtl.py:28-36); no queue, no lease. A
+// denied car is never granted unless it asks again. Free releases only the first slot the car
+// holds, the lowest intersection id (vtl.py:15-22: `if` slot 0 `elif` slot 1), so a car holding
+// two intersections keeps the other until it frees again. vtl.py raises, and exits, on a request
+// for an intersection it has no slot for (IndexError, vtl.py:28); here such a request is counted
+// and denied under both policies: the embedded link never sends one (cars ask only for their
+// track's intersections, which the server serves), and tlserver stops before it gets here
+// (world/vtl_py.h).
 //
 // Expiries are applied lazily too: every On*(now) first applies what expired at `now`, so the
 // outcome depends only on the timestamps of the calls, not on whether OnTick ran in between.

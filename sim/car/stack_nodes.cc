@@ -216,9 +216,11 @@ std::function<void(double, double, double)> AddLocalizationNode(
 
 // vehicle_communication: the intersection client every 100 ms on the estimated position (and,
 // with the client's release_on_failure, on whether the behaviour reported a failed navigation).
+// The lab's blocking client (intersection_client.blocking) stuck in its wait publishes nothing:
+// its timer callback has not returned (stack/intersection_client.h).
 void AddVehicleCommunicationNode(
     NodeGraph& graph, Cache& cache, const StackTopics& topics, const StackContext& context,
-    std::function<bool(const world::Vec2&, bool)> intersection_client) {
+    std::function<std::optional<bool>(const world::Vec2&, bool)> intersection_client) {
   struct State {
     std::optional<stack::LocalizationEkfOutput> odom;
     bool navigation_failed{false};
@@ -239,9 +241,10 @@ void AddVehicleCommunicationNode(
   graph.AddTimer(node, period, period,
                  [state, out, client = std::move(intersection_client)](Time, Outbox& outbox) {
                    if (!state->odom) return;
-                   const IntersectionFree free{
-                       client(state->odom->X_map_base.position(), state->navigation_failed)};
-                   outbox.Publish(out, free, state->odom->stamp);
+                   const std::optional<bool> may_proceed =
+                       client(state->odom->X_map_base.position(), state->navigation_failed);
+                   if (!may_proceed) return;  // stuck in the blocking wait
+                   outbox.Publish(out, IntersectionFree{*may_proceed}, state->odom->stamp);
                  });
 }
 

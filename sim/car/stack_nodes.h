@@ -72,9 +72,11 @@ struct StackContext {
 // How the stack reaches the car and the simulation around it.
 struct StackHooks {
   // The intersection client's step on the estimated position (and whether the navigation has
-  // failed, as far as the node knows); returns may_proceed. It sends its requests and frees over
-  // the V2I link itself.
-  std::function<bool(const world::Vec2& p_map, bool navigation_failed)> intersection_client;
+  // failed, as far as the node knows); returns may_proceed, or nothing while the lab's blocking
+  // client is stuck in its wait (the node publishes nothing then). It sends its requests and
+  // frees over the V2I link itself.
+  std::function<std::optional<bool>(const world::Vec2& p_map, bool navigation_failed)>
+      intersection_client;
   // The actuator command, when rt_carcontrol receives it.
   std::function<void(const vehicle::ActuatorCommand&)> actuate;
   // Whether the operator has ended the drive (laps done).

@@ -93,7 +93,8 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
       .obstacle_grid = &config.perception.obstacle_grid,
       .X_map_odom = agent->car->pose(),  // the start pose
       .intersection_client_period = config.intersection_client.tick_period,
-      .intersection_client_watches_navigation = config.intersection_client.release_on_failure,
+      .intersection_client_watches_navigation =
+          config.intersection_client.release_on_failure && !config.intersection_client.blocking,
       .true_pose = [agent] { return agent->car->pose(); },
       .pose_fix_noise = streams.Stream("car" + std::to_string(id) + "/pose_fix/noise")};
   StackHooks hooks{

@@ -197,8 +197,8 @@ void Simulation::Impl::ScheduleWorldStep() {
       kZeroTime, physics.step(), [this] { StepWorld(); }, kPriorityPhysics);
 }
 
-bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
-                                  bool navigation_failed) {
+std::optional<bool> Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
+                                                 bool navigation_failed) {
   const int id = agent->config->id;
   stack::IntersectionClientInput input;
   input.now = kernel.Now();
@@ -217,6 +217,7 @@ bool Simulation::Impl::StepClient(CarAgent* agent, const world::Vec2& p_map,
   for (const world::Free& free : out.frees) to_server->SendToServer(id, world::ToMessage(free));
   agent->waits.Observe(kernel.Now(), !out.may_proceed, out.waiting_for.value_or(-1), id, emit_event,
                        &agent->metrics);
+  if (out.stuck) return std::nullopt;
   return out.may_proceed;
 }
 

@@ -92,7 +92,9 @@ struct Simulation::Impl {
   void MeasureObstacleGaps();
   void StepDriver(CarAgent* agent);
   std::optional<double> ObstacleGap(const CarAgent& agent) const;
-  bool StepClient(CarAgent* agent, const world::Vec2& p_map, bool navigation_failed = false);
+  // may_proceed, or nothing while a blocking client is stuck in its wait.
+  std::optional<bool> StepClient(CarAgent* agent, const world::Vec2& p_map,
+                                 bool navigation_failed = false);
   void AddStack(CarAgent* agent, SensorSuite* suite, const PerceptionTopics& perception,
                 NodeGraph* graph);
   void Sample();

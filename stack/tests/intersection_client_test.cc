@@ -79,9 +79,10 @@ TEST(IntersectionClientParamsTest, DefaultsKeysAndValidation) {
   std::vector<std::string> keys;
   auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
   params.Describe(visit);
-  EXPECT_THAT(
-      keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s", "release_margin_m",
-                        "exit_margin_m", "re_request", "latch_wait", "release_on_failure"));
+  EXPECT_THAT(keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s",
+                                "release_margin_m", "exit_margin_m", "re_request", "latch_wait",
+                                "release_on_failure", "blocking"));
+  EXPECT_FALSE(params.blocking);
 
   params.retry_period = Duration::zero();
   try {
@@ -112,6 +113,8 @@ TEST(IntersectionClientParamsTest, PeriodsMustBeShorterThanTheServerLease) {
   params = {};
   params.retry_period = std::chrono::seconds(6);
   EXPECT_THROW(ValidateAgainstLease(params, std::chrono::seconds(5)), std::invalid_argument);
+  params.blocking = true;  // asks once: neither period is used
+  EXPECT_NO_THROW(ValidateAgainstLease(params, std::chrono::seconds(5)));
 }
 
 TEST(IntersectionClientTest, RejectsACarIdThatIsNotOneDigit) {
@@ -248,7 +251,7 @@ TEST(IntersectionClientTest, HolderSendsKeepalivesWhileStoppedInTheZone) {
 }
 
 TEST(IntersectionClientTest, WithoutReRequestADeniedCarAsksOnceAndAHolderNeverRenews) {
-  Client client;  // the lab's client (reference §7): one request, then it waits
+  Client client;  // asks as the lab's client does (reference §7): one request, then it waits
   client.params.re_request = false;
   const Vec2 in_zone{0.9, -0.31};
   EXPECT_THAT(client.Step(0.0, in_zone).requests, ElementsAre(Request{kCar, 0}));
@@ -462,6 +465,153 @@ TEST(IntersectionClientTest, LeavingStraightIntoAnotherStopZoneFreesThenRequests
   EXPECT_THAT(out.requests, ElementsAre(Request{kCar, 5}));
   EXPECT_FALSE(out.may_proceed);
   EXPECT_EQ(out.waiting_for, 5);
+}
+
+// ---- the lab's blocking client (blocking: true): intersection_checker.cpp, lab commit 02c5ab4
+// ----
+
+// The lab's client. Our options are left at their defaults: blocking overrides them.
+Client Blocking() {
+  Client client;
+  client.params.blocking = true;
+  return client;
+}
+
+// Inner lane northbound into intersection 1 (x = -1.42): stop zone y in (-1.35, -0.7), then a
+// 0.1 m gap outside every box, then the area from y = -0.6 (reference §1).
+Vec2 InnerNorthLeft(double y_m) { return {-1.42, y_m}; }
+
+TEST(BlockingIntersectionClientTest, IgnoresDenialsAndHoldsTheCarUntilItsGrant) {
+  // :84-104: the wait consumes messages until "<car>1"; "<car>0" is logged (:96-99) and other
+  // cars' grants are dropped (:101-103). Nothing is asked again (no re_request, though it is on).
+  Client client = Blocking();
+  const Vec2 in_zone = OuterNorth(-1.0);
+  auto out = client.Step(0.0, in_zone);
+  EXPECT_THAT(out.requests, ElementsAre(Request{kCar, 0}));
+  EXPECT_FALSE(out.may_proceed);  // bt_call(0) (:73) went out before the wait
+  EXPECT_FALSE(out.stuck);
+  for (int k = 1; k <= 100; ++k) {
+    std::vector<Response> heard;
+    if (k % 10 == 1) heard = {Response{kCar, false}, Response{1, true}};
+    out = client.Step(0.1 * k, in_zone, heard);
+    EXPECT_TRUE(out.stuck) << "k = " << k;
+    EXPECT_FALSE(out.may_proceed);
+    EXPECT_EQ(out.waiting_for, 0);
+    EXPECT_THAT(out.requests, IsEmpty()) << "k = " << k;
+  }
+  out = client.Step(10.1, in_zone, {Response{kCar, false}, Response{kCar, true}});
+  EXPECT_FALSE(out.stuck);
+  EXPECT_TRUE(out.may_proceed);  // bt_call(1) (:92)
+  EXPECT_EQ(out.waiting_for, std::nullopt);
+  EXPECT_EQ(client.state.phase, Phase::kHolding);  // switch_controller (:93)
+  EXPECT_EQ(client.state.queued_grants, 0);
+}
+
+TEST(BlockingIntersectionClientTest, SendsNoFreeAndNoRequestWhileBlocked) {
+  // :84-104 never return without a grant: no zone is checked, whatever the estimate does, and a
+  // failed navigation changes nothing (release_on_failure does not apply)
+  Client client = Blocking();
+  client.params.release_on_failure = true;
+  client.Step(0.0, OuterNorth(-1.0));
+  const std::vector<Vec2> wanderings = {OuterNorth(-3.0),      // outside every box
+                                        OuterNorth(0.0),       // in the area
+                                        InnerNorthLeft(-1.0),  // another intersection's zone
+                                        OuterNorth(-1.0)};
+  double t = 0.0;
+  for (const Vec2& p : wanderings) {
+    t += 0.1;
+    const auto out = StepIntersectionClient(
+        client.params, kCar, client.intersections,
+        IntersectionClientInput{At(t), p, {Response{kCar, false}}, true}, &client.state);
+    EXPECT_TRUE(out.stuck) << p.transpose();
+    EXPECT_FALSE(out.may_proceed);
+    EXPECT_THAT(out.requests, IsEmpty()) << p.transpose();
+    EXPECT_THAT(out.frees, IsEmpty()) << p.transpose();
+  }
+  EXPECT_EQ(client.state.phase, Phase::kWaiting);
+  EXPECT_EQ(client.state.intersection, 0);
+}
+
+TEST(BlockingIntersectionClientTest, AStaleQueuedGrantReleasesTheCarAtItsNextStopLine) {
+  // A response that arrives while the client is not waiting stays in the MQTT client's queue;
+  // the next wait consumes it first (:85), so a grant that answered nothing now releases the car
+  // before the server has answered its new request.
+  Client client = Blocking();
+  client.Step(0.0, OuterNorth(-1.0));
+  client.Step(0.1, OuterNorth(-1.0), {Response{kCar, true}});
+  // a second "<car>1" (a repeated request's answer) arrives while it holds: queued, not acted on
+  auto out = client.Step(0.2, OuterNorth(0.0), {Response{kCar, true}, Response{kCar, false}});
+  EXPECT_TRUE(out.may_proceed);
+  EXPECT_EQ(client.state.queued_grants, 1);
+  out = client.Step(0.3, OuterNorth(1.6));  // out of every box: frees intersection 0
+  EXPECT_THAT(out.frees, ElementsAre(Free{kCar}));
+  // at the next stop line the wait takes the stale grant at once
+  out = client.Step(10.0, InnerNorthLeft(-1.0));
+  EXPECT_THAT(out.requests, ElementsAre(Request{kCar, 1}));
+  EXPECT_TRUE(out.may_proceed);
+  EXPECT_FALSE(out.stuck);
+  EXPECT_EQ(client.state.phase, Phase::kHolding);
+  EXPECT_EQ(client.state.queued_grants, 0);
+  // the server's real answer (occupied) comes too late to stop it, and is ignored
+  EXPECT_TRUE(client.Step(10.1, InnerNorthLeft(-0.9), {Response{kCar, false}}).may_proceed);
+}
+
+TEST(BlockingIntersectionClientTest, FreesOnTheFirstTickOutsideEveryBoxAfterAGrant) {
+  // check_position (:120-223): nothing happens in an area or a stop zone; the else branch
+  // (:207-215) frees when switch_controller is set. The 0.1 m gap between intersection 1's inner
+  // stop zone and its area is outside every box: the lab's client frees there, before the car
+  // has entered the area. Strict tests: the edge y = -0.6 is outside as well.
+  Client client = Blocking();
+  client.Step(0.0, InnerNorthLeft(-1.0));
+  auto out = client.Step(0.1, InnerNorthLeft(-1.0), {Response{kCar, true}});
+  EXPECT_THAT(out.frees, IsEmpty());
+  EXPECT_THAT(client.Step(0.2, InnerNorthLeft(-0.75)).frees, IsEmpty());  // in the stop zone
+  out = client.Step(0.3, InnerNorthLeft(-0.65));                          // in the gap
+  EXPECT_THAT(out.frees, ElementsAre(Free{kCar}));
+  EXPECT_THAT(out.requests, IsEmpty());
+  EXPECT_EQ(client.state.phase, Phase::kIdle);  // new_intersection again (:114)
+  // crossing the area and leaving: nothing more (switch_controller was reset, :213)
+  for (const double y : {-0.5, 0.0, 0.5, 0.65}) {
+    out = client.Step(0.4, InnerNorthLeft(y));
+    EXPECT_THAT(out.frees, IsEmpty()) << y;
+    EXPECT_THAT(out.requests, IsEmpty()) << y;
+    EXPECT_TRUE(out.may_proceed);
+  }
+  // and at intersection 0, the shared edge of stop zone and area frees too
+  Client edge = Blocking();
+  edge.Step(0.0, OuterNorth(-1.0));
+  edge.Step(0.1, OuterNorth(-1.0), {Response{kCar, true}});
+  EXPECT_THAT(edge.Step(0.2, OuterNorth(-0.6)).frees, ElementsAre(Free{kCar}));
+}
+
+TEST(BlockingIntersectionClientTest, AsksForNoSecondIntersectionUntilItHasFreed) {
+  // new_intersection is reset when the request goes out (:148) and set again only by vtl_free
+  // (:114): a car that reaches another stop zone without a tick outside every box asks nothing
+  Client client = Blocking();
+  client.Step(0.0, OuterNorth(-1.0));
+  client.Step(0.1, OuterNorth(-1.0), {Response{kCar, true}});
+  auto out = client.Step(0.2, InnerNorthLeft(-1.0));  // a jump of the estimate
+  EXPECT_THAT(out.requests, IsEmpty());
+  EXPECT_THAT(out.frees, IsEmpty());
+  EXPECT_TRUE(out.may_proceed);
+  out = client.Step(0.3, InnerNorthLeft(-2.0));  // outside: frees (what it holds: intersection 0)
+  EXPECT_THAT(out.frees, ElementsAre(Free{kCar}));
+  out = client.Step(0.4, InnerNorthLeft(-1.0));
+  EXPECT_THAT(out.requests, ElementsAre(Request{kCar, 1}));
+  EXPECT_FALSE(out.may_proceed);
+}
+
+TEST(BlockingIntersectionClientTest, AGrantTakenOutsideEveryBoxFreesInTheTickTheTimerOwes) {
+  // The wait returns on the grant; rclcpp then runs the missed timer tick once, on the position
+  // then: an estimate that wandered out of every box while blocked frees at once (:207-215).
+  Client client = Blocking();
+  client.Step(0.0, OuterNorth(-1.0));
+  client.Step(0.1, OuterNorth(-3.0));
+  const auto out = client.Step(0.2, OuterNorth(-3.0), {Response{kCar, true}});
+  EXPECT_FALSE(out.stuck);
+  EXPECT_THAT(out.frees, ElementsAre(Free{kCar}));
+  EXPECT_TRUE(out.may_proceed);
+  EXPECT_EQ(client.state.phase, Phase::kIdle);
 }
 
 // ---- client and server together, by message passing (no simulator) ----

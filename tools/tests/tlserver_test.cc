@@ -1,5 +1,6 @@
 // tlserver: its message handling alone (Service), then the real program on a real broker, driven
 // with mosquitto_pub / mosquitto_sub as an operator would and with the ACL of tools/mosquitto/acl.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/spdlog.h>
 
@@ -118,6 +119,52 @@ TEST_F(ServiceTest, TheOriginalPolicyIsSelectable) {
             (std::vector<std::string>{"10"}));
   EXPECT_TRUE(Responses(s.OnMessage(Msg("/vtl/free", "0"), FromSeconds(2))).empty());  // no queue
   EXPECT_FALSE(s.NextTimer());                                                         // no lease
+}
+
+// vtl.py:27-28 (lab commit 02c5ab4) decodes and indexes a request unchecked, and an exception in
+// a paho callback ends the script (reference §7). The original policy stops where vtl.py died;
+// fifo counts and ignores the same messages (MalformedPayloadsAreCountedAndServingGoesOn).
+TEST_F(ServiceTest, TheOriginalPolicyStopsOnAMessageVtlPyWouldHaveDiedOn) {
+  ServiceOptions o = Options();
+  o.params.policy = world::ServerPolicy::kOriginal;
+  for (const char* fatal : {"0x", "02", "0", ""}) {
+    Service s(o);
+    EXPECT_EQ(Responses(s.OnMessage(Msg("/vtl/request", "00"), FromSeconds(0.1))),
+              (std::vector<std::string>{"01"}));
+    EXPECT_FALSE(s.exit_reason());
+    EXPECT_TRUE(Responses(s.OnMessage(Msg("/vtl/request", fatal), FromSeconds(0.2))).empty());
+    ASSERT_TRUE(s.exit_reason()) << fatal;
+    EXPECT_THAT(*s.exit_reason(),
+                ::testing::StartsWith(std::string("vtl.py would have died on this message: "
+                                                  "/vtl/request '") +
+                                      fatal + "' ("));
+    // the script is gone: nothing more is served
+    EXPECT_TRUE(Responses(s.OnMessage(Msg("/vtl/request", "11"), FromSeconds(0.3))).empty());
+    EXPECT_EQ(s.server().Holder(1), std::nullopt);
+  }
+  // what vtl.py survives is served or, where we cannot read it, counted as under fifo
+  Service s(o);
+  EXPECT_TRUE(Responses(s.OnMessage(Msg("/vtl/free", "x"), FromSeconds(0.1))).empty());
+  EXPECT_TRUE(Responses(s.OnMessage(Msg("/vtl/request/car0", "a1"), FromSeconds(0.1))).empty());
+  EXPECT_EQ(s.counters().malformed, 2u);
+  EXPECT_FALSE(s.exit_reason());
+  // a free that is not UTF-8 is fatal too (vtl.py:15), on a car's topic as on the lab's
+  s.OnMessage(Msg("/vtl/free/car0", "\xff"), FromSeconds(0.2));
+  ASSERT_TRUE(s.exit_reason());
+  EXPECT_THAT(*s.exit_reason(), ::testing::HasSubstr("/vtl/free/car0 '\\xff' (UnicodeDecodeError"));
+}
+
+TEST_F(ServiceTest, AStepThatWouldHaveKilledVtlPyIsAnsweredWithAnError) {
+  ServiceOptions o = Options(true);
+  o.params.policy = world::ServerPolicy::kOriginal;
+  Service s(o);
+  sim::SimReset reset{"run1", {}, {0, 1}};
+  reset.params.policy = world::ServerPolicy::kOriginal;
+  s.OnMessage(Msg(std::string(sim::kSimResetTopic), sim::EncodeReset(reset)), {});
+  const std::optional<sim::SimAck> ack = Ack(s.OnMessage(Step("/vtl/request", "07", 1, 0.5), {}));
+  ASSERT_TRUE(ack);
+  EXPECT_THAT(ack->error, ::testing::HasSubstr("vtl.py would have died on this message"));
+  EXPECT_TRUE(s.exit_reason());
 }
 
 TEST_F(ServiceTest, StatusIsRetainedAndPublishedWhenTheStateChanges) {
@@ -318,6 +365,24 @@ TEST_F(TlserverProcessTest, TheOriginalPolicyNeverGrantsADeniedCarUnlessItAsksAg
   t::Pub(*broker_, "car2", "/vtl/request/car2", "21");
   EXPECT_TRUE(sub->WaitFor("/vtl/response 21"));
   EXPECT_EQ(sub->Output().find("/vtl/response 11"), std::string::npos) << sub->Output();
+}
+
+// vtl.py:28 (lab commit 02c5ab4): int('x') raises in the callback, and the script ends.
+TEST_F(TlserverProcessTest, TheOriginalPolicyExitsOnAMessageVtlPyWouldHaveDiedOn) {
+  auto server = Start({"--policy", "original"});
+  auto sub = Watch("responses");
+  t::Pub(*broker_, "car0", "/vtl/request/car0", "00");
+  EXPECT_TRUE(sub->WaitFor("/vtl/response 01")) << sub->Output();
+  t::Pub(*broker_, "car0", "/vtl/request/car0", "0x");
+  const std::optional<int> code = server->Wait(t::kWait);
+  ASSERT_TRUE(code) << server->LogTail();
+  EXPECT_EQ(*code, 1) << server->LogTail();
+  EXPECT_NE(server->LogTail().find("vtl.py would have died on this message: /vtl/request/car0 "
+                                   "'0x' (ValueError: invalid literal for int() with base 10: "
+                                   "'x' (vtl.py:28)); stopping as it did"),
+            std::string::npos)
+      << server->LogTail();
+  EXPECT_NE(Status().find("\"online\":false"), std::string::npos);
 }
 
 TEST_F(TlserverProcessTest, ForgedResponsesAndRequestsForAnotherCarAreRefused) {

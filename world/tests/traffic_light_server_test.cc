@@ -340,5 +340,25 @@ TEST(TrafficLightServerOriginalTest, FreeReleasesOnlyTheCarsSlots) {
   EXPECT_EQ(server.Holder(kI1), std::nullopt);
 }
 
+TEST(TrafficLightServerOriginalTest, AFreeReleasesOnlyTheFirstSlotTheCarHolds) {
+  // vtl.py:15-22 (lab commit 02c5ab4): `if` slot 0 `elif` slot 1, so one free clears one slot,
+  // slot 0 first, whichever the car asked for first.
+  auto server = MakeServer("original");
+  server.OnRequest(At(0.0), {5, kI1});
+  server.OnRequest(At(0.1), {5, kI0});
+  EXPECT_THAT(server.OnFree(At(1.0), {5}), IsEmpty());
+  EXPECT_EQ(server.Holder(kI0), std::nullopt);
+  EXPECT_EQ(server.Holder(kI1), 5);  // still held: car 6 is denied
+  EXPECT_THAT(server.OnRequest(At(1.1), {6, kI1}), ElementsAre(Denied(6)));
+  EXPECT_EQ(server.TakeRecords().at(4),
+            (ServerRecord{ServerRecord::Kind::kFree, 5, kI0, {}}));  // one slot, no others
+  // a second free clears the other slot; a third finds nothing (vtl.py:21-22 prints an error)
+  server.OnFree(At(2.0), {5});
+  EXPECT_EQ(server.Holder(kI1), std::nullopt);
+  server.OnFree(At(3.0), {5});
+  EXPECT_EQ(server.counters().frees, 3u);
+  EXPECT_THAT(server.OnRequest(At(3.1), {6, kI1}), ElementsAre(Granted(6)));
+}
+
 }  // namespace
 }  // namespace autonomsim::world
