@@ -326,6 +326,7 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
   EXPECT_EQ(safe.cars[0].collisions, 0);
   EXPECT_GT(*safe.cars[0].min_obstacle_gap_m, 0.03);
   EXPECT_LT(*safe.cars[0].min_obstacle_gap_m, 0.10);
+}
 
 // The lab's intersection client as it runs (intersection_checker.cpp:69-105 and :120-223, lab
 // commit 02c5ab4: one request, blocked until granted, free on the first tick outside every box)
