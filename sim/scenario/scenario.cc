@@ -441,18 +441,19 @@ std::vector<std::string> StackMixWarnings(const Scenario& scenario) {
   if (scenario.traffic_lights.policy != world::ServerPolicy::kFifo) return {};
   std::string cars;
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
-    if (!scenario.cars[i].intersection_client.re_request) {
+    const auto& client = scenario.cars[i].intersection_client;
+    if (client.blocking || !client.re_request) {
       cars += (cars.empty() ? "" : ",") + std::to_string(i);
     }
   }
   if (cars.empty()) return {};
   return {"cars[" + cars +
-          "] run the lab's intersection client (intersection_client.re_request: false: it never "
-          "renews a grant) against the fifo server, whose lease (traffic_lights.lease_s " +
+          "] run the lab's intersection client (intersection_client.blocking: true or "
+          "re_request: false: it never renews a grant) against the fifo server, whose lease (traffic_lights.lease_s " +
           Num(ToSeconds(scenario.traffic_lights.lease)) +
           " s) then expires while the car crosses and lets the next car in: set "
           "traffic_lights.policy: original (the lab's vtl.py, as stack.preset: lab) or "
-          "intersection_client.re_request: true (as stack.preset: safe)"};
+          "intersection_client.blocking: false and re_request: true (as stack.preset: safe)"};
 }
 
 }  // namespace autonomsim::sim

@@ -260,9 +260,9 @@ struct LoadedScenario {
 };
 
 // Warnings about a scenario whose cars and server come from different stacks in a way that breaks
-// the crossing: a lab intersection client (re_request false, it never renews its grant) against
-// the fifo server, whose lease then expires while the car crosses (the lab's client belongs with
-// vtl.py, policy original). Empty when the settings go together.
+// the crossing: a lab intersection client (blocking, or re_request false: it never renews its
+// grant) against the fifo server, whose lease then expires while the car crosses (the lab's client
+// belongs with vtl.py, policy original). Empty when the settings go together.
 std::vector<std::string> StackMixWarnings(const Scenario& scenario);
 
 // Reads `file`, applies `overrides` (key=value, see ApplyOverride) and then `seed` if given,

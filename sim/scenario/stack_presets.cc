@@ -34,6 +34,7 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.follow_path.collision.horizon_s", "1.0", "2.0"},
     {"stack.lane_controller.collision.model", "centre", "footprint"},
     {"stack.follow_path.collision.model", "centre", "footprint"},
+    {"intersection_client.blocking", "true", "false"},
     {"intersection_client.re_request", "false", "true"},
     {"intersection_client.release_margin_m", "0.0", "0.3"},
     {"intersection_client.exit_margin_m", "0.0", "0.15"},

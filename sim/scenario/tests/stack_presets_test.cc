@@ -122,8 +122,10 @@ TEST(StackPresetsTest, ALabClientAgainstTheFifoServerIsWarnedAbout) {
   EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=lab"}).warnings.empty());
   EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=safe"}).warnings.empty());
   EXPECT_TRUE(LoadScenario(file.path(), {"stack.preset=lab", "traffic_lights.policy=fifo",
-                                         "cars[0].intersection_client.re_request=true",
-                                         "cars[1].intersection_client.re_request=true"})
+                                         "cars[0].intersection_client={blocking: false, "
+                                         "re_request: true}",
+                                         "cars[1].intersection_client={blocking: false, "
+                                         "re_request: true}"})
                   .warnings.empty());
 }
 
