@@ -25,6 +25,7 @@ void BehaviorParams::Validate() const {
   if (intersection_free_timeout < kZeroTime) {
     throw std::invalid_argument("intersection_free_timeout_s must be >= 0 (0: off)");
   }
+  if (queue_wait < kZeroTime) throw std::invalid_argument("queue_wait_s must be >= 0");
   if (!(queue_margin_m >= 0.0 && queue_margin_m <= 5.0)) {
     throw std::invalid_argument("queue_margin_m must be in [0, 5] m");
   }
@@ -57,7 +58,7 @@ const char* ToString(RecoveryAction action) {
     case RecoveryAction::kClearBoth:
       return "clear both costmaps";
     case RecoveryAction::kWait:
-      return "wait";
+      return "round-robin wait";
     case RecoveryAction::kWaitInLine:
       return "wait in line";
   }
@@ -99,7 +100,7 @@ class Tick {
     if (s_.mode == BehaviorMode::kRecovery) {
       if (in_.now < s_.recovery_until) return;
       if (s_.recovery_counts) ++s_.retries;  // the Wait succeeded: the outer node counts it
-      s_.plan_failed = false;  // the planner was not asked during the wait
+      s_.plan_failed = false;                // the planner was not asked during the wait
       Restart();
     }
     if (HandlePlanFailure()) return;
@@ -148,7 +149,7 @@ class Tick {
   void StartWait(bool counts) {
     Restart();
     s_.mode = BehaviorMode::kRecovery;
-    s_.recovery_until = in_.now + p_.recovery_wait;
+    s_.recovery_until = in_.now + (counts ? p_.recovery_wait : p_.queue_wait);
     s_.recovery_counts = counts;
   }
 
@@ -167,8 +168,8 @@ class Tick {
 
   // FollowPath failed (the controller's report for the running attempt).
   bool HandleFollowPathFailure() {
-    if (!in_.follow_path_failure ||
-        in_.follow_path_failure->attempt != s_.attempt || s_.failed_attempt == s_.attempt) {
+    if (!in_.follow_path_failure || in_.follow_path_failure->attempt != s_.attempt ||
+        s_.failed_attempt == s_.attempt) {
       return false;
     }
     s_.failed_attempt = s_.attempt;

@@ -74,6 +74,11 @@ struct BehaviorParams {
   // light otherwise uses up its retries while it waits in line.
   bool patient_in_queue{false};
   double queue_margin_m{1.5};  // assumed: three cars' lengths back from a stop box
+  // Beyond the lab's BT (patient_in_queue only): how long a car waiting in line waits before it
+  // tries again. The line moves when the light ahead changes, not on the recovery's 5 s clock;
+  // with 5 s the outer-loop car of a six-car fleet lost up to 20 s a lap in line (2 of 20 seeds
+  // short of two laps in 200 s). Assumed 2 s.
+  Duration queue_wait{std::chrono::seconds(5)};
   // Beyond the lab's BT (0: off, the lab's IntersectionFree keeps the last message for ever): in a
   // stop zone, a permission older than this counts as "not free", so a car whose intersection
   // client died (a crashed or hung vehicle_communication node) waits at the next stop line
@@ -96,6 +101,7 @@ struct BehaviorParams {
     v("tracking_window_m", tracking_window_m);
     v("patient_in_queue", patient_in_queue);
     v("queue_margin_m", queue_margin_m);
+    v("queue_wait_s", queue_wait);
     v("intersection_free_timeout_s", intersection_free_timeout);
   }
   void Validate() const;
@@ -172,9 +178,9 @@ struct BehaviorState {
   Time gate_start{kZeroTime};
   bool gate_ticked{false};
   bool gate_waiting{false};
-  bool following{false};             // FollowPath is running (not halted)
-  std::uint64_t attempt{0};          // the newest FollowPath action
-  std::uint64_t failed_attempt{0};   // the newest attempt whose failure was handled (0: none)
+  bool following{false};            // FollowPath is running (not halted)
+  std::uint64_t attempt{0};         // the newest FollowPath action
+  std::uint64_t failed_attempt{0};  // the newest attempt whose failure was handled (0: none)
 };
 
 // Throws std::invalid_argument on a non-finite position.

@@ -59,9 +59,8 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
     state->baseline.reset();
   }
   const auto failed_status = [&] {
-    return ControllerStatus{.attempt = state->attempt,
-                            .failed = true,
-                            .collision_ahead = state->failed_by_collision};
+    return ControllerStatus{
+        .attempt = state->attempt, .failed = true, .collision_ahead = state->failed_by_collision};
   };
   if (state->failed) {  // aborted: silent until the behaviour tries again
     out.status = failed_status();

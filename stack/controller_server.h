@@ -42,7 +42,7 @@ namespace autonomsim::stack {
 
 // Nav2's SimpleProgressChecker with the car's parameters (reference §6).
 struct ProgressCheckerParams {
-  double required_movement_radius_m{0.5};            // nav2_car_params.yaml:69
+  double required_movement_radius_m{0.5};                      // nav2_car_params.yaml:69
   Duration movement_time_allowance{std::chrono::seconds(10)};  // nav2_car_params.yaml:70
 
   template <class V>
@@ -79,8 +79,8 @@ struct ControllerPath {
 };
 
 struct ControllerServerInput {
-  Time now{kZeroTime};  // the cycle's time (the progress checker's clock)
-  bool hold{true};      // the behaviour's newest hold; true before its first output
+  Time now{kZeroTime};       // the cycle's time (the progress checker's clock)
+  bool hold{true};           // the behaviour's newest hold; true before its first output
   std::uint64_t attempt{0};  // the behaviour's FollowPath action: a new one resets the checks
   // The newest odometry (the node runs no cycle before the first).
   Time odometry_stamp{kZeroTime};

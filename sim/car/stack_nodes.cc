@@ -453,7 +453,7 @@ struct ControllerNodeState {
   std::optional<Lanes> lanes;
   std::optional<PathMessage> path;  // the newest successful plan
   std::shared_ptr<const stack::Costmap2D> costmap;
-  bool hold{true};  // nothing to do before the behaviour's first goals
+  bool hold{true};           // nothing to do before the behaviour's first goals
   std::uint64_t attempt{0};  // the behaviour's FollowPath action
   stack::ControllerServerState server;
 };
@@ -501,12 +501,11 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
   });
   cache.Keep<CostmapMessage>(
       node, topics.costmap, [state](const CostmapMessage& c, Time) { state->costmap = c.costmap; });
-  cache.Keep<stack::BehaviorOutput>(
-      node, topics.behavior,
-      [state](const stack::BehaviorOutput& o, Time) {
-        state->hold = o.hold;
-        state->attempt = o.attempt;
-      });
+  cache.Keep<stack::BehaviorOutput>(node, topics.behavior,
+                                    [state](const stack::BehaviorOutput& o, Time) {
+                                      state->hold = o.hold;
+                                      state->attempt = o.attempt;
+                                    });
   const auto out = graph.AddPublisher(node, topics.cmd_vel);
   const auto status_out = graph.AddPublisher(node, topics.status);
   const stack::ControllerServerParams params{
@@ -514,21 +513,21 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       .follow_path = config.follow_path,
       .zone_margin_m = config.controller_selector.zone_margin_m,
       .progress_checker = config.progress_checker};
-  graph.AddTimer(
-      node, config.controller_period, config.controller_period,
-      [state, out, status_out, params, intersections = context.intersections,
-       X_map_odom = context.X_map_odom,
-       on_control = std::move(on_control)](Time now, Outbox& outbox) {
-        if (!state->odom) return;
-        const stack::ControllerServerOutput r = stack::StepControllerServer(
-            params, *intersections, ControllerInput(*state, now, X_map_odom), &state->server);
-        if (on_control && r.controller != stack::ActiveController::kNone) {
-          on_control(r.controller == stack::ActiveController::kFollowPath,
-                     r.status.collision_ahead);
-        }
-        if (r.cmd_vel) outbox.Publish(out, *r.cmd_vel, r.cmd_vel_stamp);
-        outbox.Publish(status_out, r.status, r.status_stamp);
-      });
+  graph.AddTimer(node, config.controller_period, config.controller_period,
+                 [state, out, status_out, params, intersections = context.intersections,
+                  X_map_odom = context.X_map_odom,
+                  on_control = std::move(on_control)](Time now, Outbox& outbox) {
+                   if (!state->odom) return;
+                   const stack::ControllerServerOutput r = stack::StepControllerServer(
+                       params, *intersections, ControllerInput(*state, now, X_map_odom),
+                       &state->server);
+                   if (on_control && r.controller != stack::ActiveController::kNone) {
+                     on_control(r.controller == stack::ActiveController::kFollowPath,
+                                r.status.collision_ahead);
+                   }
+                   if (r.cmd_vel) outbox.Publish(out, *r.cmd_vel, r.cmd_vel_stamp);
+                   outbox.Publish(status_out, r.status, r.status_stamp);
+                 });
 }
 
 // carcontroller: the PID on speed, 30 Hz, with its watchdog (stack/cruise_control.h).

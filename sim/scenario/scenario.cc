@@ -449,7 +449,8 @@ std::vector<std::string> StackMixWarnings(const Scenario& scenario) {
   if (cars.empty()) return {};
   return {"cars[" + cars +
           "] run the lab's intersection client (intersection_client.blocking: true or "
-          "re_request: false: it never renews a grant) against the fifo server, whose lease (traffic_lights.lease_s " +
+          "re_request: false: it never renews a grant) against the fifo server, whose lease "
+          "(traffic_lights.lease_s " +
           Num(ToSeconds(scenario.traffic_lights.lease)) +
           " s) then expires while the car crosses and lets the next car in: set "
           "traffic_lights.policy: original (the lab's vtl.py, as stack.preset: lab) or "

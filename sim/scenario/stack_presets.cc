@@ -28,6 +28,7 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
     {"stack.behavior.patient_in_queue", "false", "true"},
     {"stack.behavior.recovery_reset_m", "0", "0.5"},
+    {"stack.behavior.queue_wait_s", "5", "2"},
     {"stack.behavior.intersection_free_timeout_s", "0", "1.0"},
     {"stack.emergency_stop.enabled", "false", "true"},
     {"stack.lane_controller.collision.horizon_s", "1.0", "2.0"},

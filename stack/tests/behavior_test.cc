@@ -239,6 +239,22 @@ TEST(BehaviorTest, AFailureCountsOnlyForTheRunningAttemptAndOnlyOnce) {
   EXPECT_EQ(tree.Step(1.04).recovery, RecoveryAction::kNone);
 }
 
+// stack.behavior.queue_wait_s (safe: 2 s): a car waiting in line waits that long, not the
+// RoundRobin's Wait 5 s (drive_to_pose_test.xml:42), before it tries again.
+TEST(BehaviorTest, APatientCarWaitsQueueWaitInLine) {
+  TreeRun tree(BehaviorParams{.patient_in_queue = true, .queue_wait = std::chrono::seconds(2)});
+  tree.input().near_intersection = true;
+  tree.Run(0.0, 1.0);
+  tree.blocked = true;
+  BehaviorOutput out = tree.Run(1.01, 1.02);
+  ASSERT_EQ(out.recovery, RecoveryAction::kWaitInLine);
+  EXPECT_EQ(tree.Run(1.03, 3.0).mode, BehaviorMode::kRecovery);
+  tree.blocked = false;
+  out = tree.Run(3.01, 3.03);
+  EXPECT_EQ(out.mode, BehaviorMode::kDrive);
+  EXPECT_EQ(out.retries, 0);
+}
+
 TEST(BehaviorTest, APatientCarWaitingInLineNearAnIntersectionNeverUsesUpItsRetries) {
   for (const bool patient : {false, true}) {
     TreeRun tree(BehaviorParams{.max_retries = 2, .patient_in_queue = patient});

@@ -191,7 +191,7 @@ TEST(ControllerServerTest, ACarThatDoesNotMoveHalfAMetreInTenSecondsFailsItsActi
   Server s;
   ControllerServerInput input = DriveAt(1.2, 0.0);
   input.lanes = ControllerLanes{.valid = false};  // no line: (0, 0)
-  for (int i = 0; i <= 200; ++i) {  // 10 s at 20 Hz, standing
+  for (int i = 0; i <= 200; ++i) {                // 10 s at 20 Hz, standing
     input.now = FromSeconds(0.05 * i);
     const ControllerServerOutput out = s.Step(input);
     EXPECT_FALSE(out.status.failed) << input.now.count();

@@ -153,8 +153,7 @@ bool SameValue(const nlohmann::json& value, const std::string& text) {
 // which its run departs from the lab's code, whether it sets it or leaves it at a default that is
 // not the lab's.
 TEST(StackPresetsTest, EveryShippedScenarioHeaderNamesItsDeparturesFromTheLab) {
-  std::vector<std::pair<std::string, std::string>> car_keys, scenario_keys, car_safe,
-      scenario_safe;
+  std::vector<std::pair<std::string, std::string>> car_keys, scenario_keys, car_safe, scenario_safe;
   Leaves(StackPresetForCar("lab"), "", &car_keys);
   Leaves(StackPresetForScenario("lab"), "", &scenario_keys);
   Leaves(StackPresetForCar("safe"), "", &car_safe);
@@ -173,8 +172,8 @@ TEST(StackPresetsTest, EveryShippedScenarioHeaderNamesItsDeparturesFromTheLab) {
     const LoadedScenario loaded = LoadScenario(file);
     const nlohmann::json& scenario = loaded.resolved["scenario"];
     // a value that `stack.preset: safe` sets is named by the preset (docs/lab-stack.md)
-    auto check = [&](const nlohmann::json& root, const auto& keys, const auto& safe_keys,
-                     bool safe, const std::string& where) {
+    auto check = [&](const nlohmann::json& root, const auto& keys, const auto& safe_keys, bool safe,
+                     const std::string& where) {
       for (std::size_t k = 0; k < keys.size(); ++k) {
         const auto& [key, lab] = keys[k];
         nlohmann::json value = root;
