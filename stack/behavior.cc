@@ -47,24 +47,6 @@ const char* ToString(BehaviorMode mode) {
   return "?";
 }
 
-const char* ToString(RecoveryAction action) {
-  switch (action) {
-    case RecoveryAction::kNone:
-      return "none";
-    case RecoveryAction::kClearLocal:
-      return "clear local costmap";
-    case RecoveryAction::kClearGlobal:
-      return "clear global costmap";
-    case RecoveryAction::kClearBoth:
-      return "clear both costmaps";
-    case RecoveryAction::kWait:
-      return "round-robin wait";
-    case RecoveryAction::kWaitInLine:
-      return "wait in line";
-  }
-  return "?";
-}
-
 namespace {
 
 // Goals every spacing from the position's projection (exclusive) out to the horizon; an open

@@ -30,11 +30,13 @@
 // The route is map knowledge (the road graph a car is given); the position is the estimate.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
 
+#include "world/enum_names.h"
 #include "world/geometry.h"
 #include "world/polyline.h"
 #include "world/time.h"
@@ -123,9 +125,27 @@ enum class RecoveryAction {
   kClearGlobal,  // ComputePathToPose's inner recovery: clear the global costmap, plan again
   kClearBoth,    // the outer RoundRobin's first action: clear both costmaps, retry
   kWait,         // the outer RoundRobin's second action: wait recovery_wait, then retry
-  kWaitInLine,   // patient_in_queue: clear the local costmap, wait, retry (not counted)
+  kWaitInLine,   // patient_in_queue: clear the local costmap, wait queue_wait, retry (not counted)
 };
-const char* ToString(RecoveryAction action);
+
+}  // namespace autonomsim::stack
+
+namespace autonomsim {
+// The words of the `behavior` events' detail ("drive (clear local costmap, retry 1)").
+template <>
+struct NameTable<stack::RecoveryAction> {
+  using A = stack::RecoveryAction;
+  static constexpr std::array<std::pair<A, std::string_view>, 6> kEntries{
+      {{A::kNone, "none"},
+       {A::kClearLocal, "clear local costmap"},
+       {A::kClearGlobal, "clear global costmap"},
+       {A::kClearBoth, "clear both costmaps"},
+       {A::kWait, "round-robin wait"},
+       {A::kWaitInLine, "wait in line"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::stack {
 
 // The controller server's report that a FollowPath action failed (it throws, the action aborts).
 struct FollowPathFailure {

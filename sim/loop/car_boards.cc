@@ -13,7 +13,7 @@ namespace {
 std::string BehaviorDetail(const stack::BehaviorOutput& out) {
   std::string detail = stack::ToString(out.mode);
   if (out.recovery != stack::RecoveryAction::kNone) {
-    detail += std::string(" (") + stack::ToString(out.recovery) + ", retry " +
+    detail += std::string(" (") + std::string(ToName(out.recovery)) + ", retry " +
               std::to_string(out.retries) + ")";
   }
   return detail;
