@@ -57,6 +57,8 @@ RunSummary HandMadeSummary() {
   s.v2i = {.sent = 9, .delivered = 8, .lost = 1};
   s.platform = std::map<std::string, nlohmann::json>{{"car1", {{"cpu_percent", 150.0}}}};
   s.versions = {.autonomsim = "1", .box2d = "2.4.1", .opencv = "4.6.0", .compiler = "gcc"};
+  s.preset_overrides = std::vector<PresetOverride>{
+      {.key = "traffic_lights.policy", .preset = "lab", .preset_value = "original", .value = "fifo"}};
   return s;
 }
 
@@ -107,6 +109,14 @@ constexpr char kHandMadeJson[] = R"({
       "cpu_percent": 150.0
     }
   },
+  "preset_overrides": [
+    {
+      "key": "traffic_lights.policy",
+      "preset": "lab",
+      "preset_value": "original",
+      "value": "fifo"
+    }
+  ],
   "real_time_factor": 20.0,
   "result_sha256": "cd",
   "scenario": "demo",
@@ -152,6 +162,8 @@ TEST(Summary, WhatIsWrittenReadsBackAsTheSameFile) {
   const nlohmann::json run = SummaryJson(Summarize(loaded, simulation.record(), {}, 0.0));
   EXPECT_TRUE(run.at("platform").is_object());
   EXPECT_TRUE(run.at("real_time_factor").is_null());  // no wall time measured
+  // the default scenario's named departures from stack.preset lab: 6 per car and the server's
+  EXPECT_EQ(run.at("preset_overrides").size(), 13u);
   EXPECT_EQ(SummaryJson(ParseSummary(nlohmann::json::parse(run.dump()))), run);
 }
 
