@@ -57,8 +57,10 @@ RunSummary HandMadeSummary() {
   s.v2i = {.sent = 9, .delivered = 8, .lost = 1};
   s.platform = std::map<std::string, nlohmann::json>{{"car1", {{"cpu_percent", 150.0}}}};
   s.versions = {.autonomsim = "1", .box2d = "2.4.1", .opencv = "4.6.0", .compiler = "gcc"};
-  s.preset_overrides = std::vector<PresetOverride>{
-      {.key = "traffic_lights.policy", .preset = "lab", .preset_value = "original", .value = "fifo"}};
+  s.preset_overrides = std::vector<PresetOverride>{{.key = "traffic_lights.policy",
+                                                    .preset = "lab",
+                                                    .preset_value = "original",
+                                                    .value = "fifo"}};
   return s;
 }
 
