@@ -117,7 +117,6 @@ class Tick {
     }
     if (s_.round_robin == 0) {
       out_.recovery = RecoveryAction::kClearBoth;
-      out_.clear_costmaps = true;
       ++s_.retries;  // instant success
       Restart();
     } else {
@@ -157,7 +156,6 @@ class Tick {
     s_.failed_attempt = s_.attempt;
     if (p_.patient_in_queue && in_.follow_path_failure->collision && in_.near_intersection) {
       out_.recovery = RecoveryAction::kWaitInLine;  // waiting in line: not a failure
-      out_.clear_costmaps = true;
       StartWait(/*counts=*/false);
       s_.progress_since_recovery_m = 0.0;
       return true;
@@ -167,7 +165,6 @@ class Tick {
       Restart();
       s_.follow_path_retries = inner;
       out_.recovery = RecoveryAction::kClearLocal;
-      out_.clear_costmaps = true;
       return true;
     }
     OuterRecovery();

@@ -79,7 +79,8 @@ struct BehaviorParams {
   // Beyond the lab's BT (patient_in_queue only): how long a car waiting in line waits before it
   // tries again. The line moves when the light ahead changes, not on the recovery's 5 s clock;
   // with 5 s the outer-loop car of a six-car fleet lost up to 20 s a lap in line (2 of 20 seeds
-  // short of two laps in 200 s). Assumed 2 s.
+  // short of two laps in 200 s). Default: the lab tree's only wait, Wait 5 s (xml:42); safe sets
+  // 2 s (assumed).
   Duration queue_wait{std::chrono::seconds(5)};
   // Beyond the lab's BT (0: off, the lab's IntersectionFree keeps the last message for ever): in a
   // stop zone, a permission older than this counts as "not free", so a car whose intersection
@@ -147,6 +148,13 @@ struct NameTable<stack::RecoveryAction> {
 
 namespace autonomsim::stack {
 
+// Whether the action clears the local costmap (all but kClearGlobal and kWait; the global costmap
+// holds only the static map here, which a clear restores at once).
+constexpr bool ClearsLocalCostmap(RecoveryAction action) {
+  return action == RecoveryAction::kClearLocal || action == RecoveryAction::kClearBoth ||
+         action == RecoveryAction::kWaitInLine;
+}
+
 // The controller server's report that a FollowPath action failed (it throws, the action aborts).
 struct FollowPathFailure {
   std::uint64_t attempt{0};  // the action that failed
@@ -175,7 +183,6 @@ struct BehaviorOutput {
   bool hold{false};                // FollowPath halted: the controller must not drive
   std::uint64_t attempt{0};        // the current FollowPath action (new after every halt)
   std::vector<world::Vec2> goals;  // map frame, nearest first; empty once failed or done
-  bool clear_costmaps{false};      // clear the local costmap now (kClearLocal/Both, kWaitInLine)
   RecoveryAction recovery{RecoveryAction::kNone};
   int retries{0};  // outer retries so far
 };

@@ -261,8 +261,14 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::optional<Time> intersection_free_stamp;
     std::optional<stack::FollowPathFailure> follow_path_failure;
     std::optional<bool> plan_failed;  // the newest /plan reply since the last tick
-    std::optional<stack::BehaviorOutput> published;
-    Time published_at{kZeroTime};
+    // what the last publish said, as far as it decides the next (the goals go out on a period)
+    struct Published {
+      bool hold;
+      stack::BehaviorMode mode;
+      std::uint64_t attempt;
+      Time at;
+    };
+    std::optional<Published> published;
   };
   auto state = std::make_shared<State>();
   const NodeId node = graph.AddNode(SoftwareNode("bt_navigator"));
@@ -301,13 +307,12 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
         state->plan_failed.reset();
         stack::BehaviorOutput result = stack::StepBehavior(params, *route, input, &state->behavior);
         if (on_behavior) on_behavior(result);
-        const stack::BehaviorOutput* last = state->published ? &*state->published : nullptr;
-        const bool changed = last == nullptr || last->hold != result.hold ||
-                             last->mode != result.mode || last->attempt != result.attempt ||
+        const std::optional<State::Published>& last = state->published;
+        const bool changed = !last || last->hold != result.hold || last->mode != result.mode ||
+                             last->attempt != result.attempt ||
                              result.recovery != stack::RecoveryAction::kNone;
-        if (!changed && now - state->published_at < params.goals_period) return;
-        state->published = result;
-        state->published_at = now;
+        if (!changed && now - last->at < params.goals_period) return;
+        state->published = State::Published{result.hold, result.mode, result.attempt, now};
         outbox.Publish(out, std::move(result), state->odom->stamp);
       });
 }
@@ -428,7 +433,8 @@ void AddLocalCostmapNode(NodeGraph& graph, Cache& cache, const StackTopics& topi
   cache.Keep<stack::BehaviorOutput>(
       node, topics.behavior,
       [state, params = config.local_costmap](const stack::BehaviorOutput& o, Time) {
-        if (o.clear_costmaps) state->costmap = std::make_unique<stack::LocalCostmap>(params);
+        if (stack::ClearsLocalCostmap(o.recovery))
+          state->costmap = std::make_unique<stack::LocalCostmap>(params);
       });
   const auto out = graph.AddPublisher(node, topics.costmap);
   const Duration period = FromSeconds(1.0 / config.local_costmap.update_rate_hz);
