@@ -49,18 +49,23 @@ struct LocalizationEkfParams {
   double q_yaw_rate_rad2_per_s3{0.02};
   // robot_localization's default initial_estimate_covariance: the start pose is the odom origin.
   double initial_variance{1e-9};
-  // Assumed: σ 0.01 rad and 0.01 rad/s. The car's config leaves the BNO055 driver's variance_*
-  // parameters commented out, so the covariances it sent are not recorded anywhere we have.
-  double imu_yaw_variance_rad2{1e-4};
-  double imu_yaw_rate_variance_rad2_per_s2{1e-4};
+  // The covariances the BNO055 driver puts in every bno055/imu message, which robot_localization
+  // fuses as they come: the car's config leaves the driver's variance_* parameters commented out
+  // (code/ros_ws/src/nav2_local/params/nav2_car_params.yaml:385-391), so they are the driver's
+  // defaults, DEFAULT_VARIANCE_ORIENTATION 0.0159 rad² and DEFAULT_VARIANCE_ANGULAR_VEL
+  // 0.04 (rad/s)² (flynneva/bno055 bno055/registers.py:256-257, used in
+  // bno055/sensor/SensorService.py:158-184).
+  double imu_yaw_variance_rad2{0.0159};
+  double imu_yaw_rate_variance_rad2_per_s2{0.04};
   // rt_hallsensor never fills the twist covariance (zeros); robot_localization raises a zero
   // variance to 1e-9, so the filter takes the Hall speed almost as is.
   double wheel_speed_variance_m2_per_s2{1e-9};
   bool use_pose_fix{false};  // beyond the real car (see above)
-  // Whether the IMU's heading is fused (the car's config: imu0 yaw true). False fuses its yaw rate
-  // only, as robot_localization users do when another source owns the heading: the BNO055's
-  // heading drifts with its gyro bias, and with σ 0.01 rad the filter trusts it over a pose fix's
-  // 0.02 rad, so the estimate follows the drift however good the fixes are.
+  // Whether the IMU's heading is fused (the car's config: imu0 yaw true,
+  // code/ros_ws/src/nav2_local/params/nav2_car_params.yaml:341-346). False fuses its yaw rate
+  // only, as robot_localization users do when another source owns the heading: worth it with a
+  // heading that drifts (vehicle::ImuHeadingSource::kGyro) beside a pose fix. The lab's BNO055
+  // heading is magnetometer-referenced and does not drift, and every preset fuses it.
   bool fuse_imu_yaw{true};
 
   template <class V>

@@ -1,6 +1,7 @@
 #include "vehicle/imu.h"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -24,17 +25,48 @@ void ImuParams::Validate() const {
   RequireStddev(accel_noise_stddev_mps2, "accel_noise_stddev_mps2");
   RequireStddev(accel_bias_stddev_mps2, "accel_bias_stddev_mps2");
   RequireStddev(yaw_noise_stddev_rad, "yaw_noise_stddev_rad");
+  RequireStddev(magnetic_distortion_rad, "magnetic_distortion_rad");
+  Require(std::isfinite(magnetic_distortion_wavelength_m) && magnetic_distortion_wavelength_m > 0.0,
+          [&] {
+            return "magnetic_distortion_wavelength_m must be > 0, got " +
+                   Num(magnetic_distortion_wavelength_m);
+          });
   Require(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0,
           [&] { return "gravity_mps2 must be > 0, got " + Num(gravity_mps2); });
 }
 
-ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias) {
+ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias,
+                         const MagneticFieldDraws& field) {
   ImuState state;
+  state.field = field;
   state.gyro_bias_rad_per_s = params.gyro_bias_stddev_rad_per_s * bias.gyro;
   state.accel_bias_x_mps2 = params.accel_bias_stddev_mps2 * bias.accel_x;
   state.accel_bias_y_mps2 = params.accel_bias_stddev_mps2 * bias.accel_y;
   return state;
 }
+
+double MagneticHeadingError(const ImuParams& params, const MagneticFieldDraws& field,
+                            const world::Vec2& p_map) {
+  if (params.magnetic_distortion_rad == 0.0) return 0.0;
+  const double k = 2.0 * std::numbers::pi / params.magnetic_distortion_wavelength_m;
+  return params.magnetic_distortion_rad * std::sin(k * p_map.x() + field.phase_x_rad) *
+         std::sin(k * p_map.y() + field.phase_y_rad);
+}
+
+namespace {
+
+// The reported heading before its noise.
+double HeadingWithoutNoise(const ImuParams& params, const ImuTruth& truth, const ImuState& state) {
+  const double yaw = truth.X_map_car.yaw_rad;
+  if (params.heading_source == ImuHeadingSource::kMagnetometer) {
+    return yaw + MagneticHeadingError(params, state.field, truth.X_map_car.position());
+  }
+  const double t_s = ToSeconds(truth.t);
+  return yaw + state.gyro_bias_rad_per_s * t_s + state.bias_step_rad_per_s * t_s -
+         state.bias_step_time_rad;
+}
+
+}  // namespace
 
 ImuReading StepImu(const ImuParams& params, const ImuTruth& truth, const ImuNoiseDraws& noise,
                    ImuState* state) {
@@ -62,15 +94,9 @@ ImuReading StepImu(const ImuParams& params, const ImuTruth& truth, const ImuNois
   reading.accel_y_mps2 =
       ay + state->accel_bias_y_mps2 + params.accel_noise_stddev_mps2 * noise.accel_y;
   reading.accel_z_mps2 = params.gravity_mps2 + params.accel_noise_stddev_mps2 * noise.accel_z;
-  reading.yaw_rad =
-      world::WrapAngle(truth.X_map_car.yaw_rad + state->gyro_bias_rad_per_s * ToSeconds(truth.t) +
-                       params.yaw_noise_stddev_rad * noise.yaw);
-  if (state->bias_step_rad_per_s != 0.0) {  // only after a step: a run without one is unchanged
-    reading.yaw_rate_rad_per_s += state->bias_step_rad_per_s;
-    reading.yaw_rad =
-        world::WrapAngle(reading.yaw_rad + state->bias_step_rad_per_s * ToSeconds(truth.t) -
-                         state->bias_step_time_rad);
-  }
+  reading.yaw_rate_rad_per_s += state->bias_step_rad_per_s;
+  reading.yaw_rad = world::WrapAngle(HeadingWithoutNoise(params, truth, *state) +
+                                     params.yaw_noise_stddev_rad * noise.yaw);
   return reading;
 }
 

@@ -2,12 +2,47 @@
 // the IMU's yaw, yaw rate and planar accelerations): a pure step from the car's true motion to one
 // reading, with a per-run bias and white noise. The noise enters as standard normal draws, so the
 // caller owns the random streams (sim/car/sensors.h draws them from seeded named streams).
+//
+// The heading. The lab runs the BNO055 in operation mode 0x0B, NDOF_FMC_OFF
+// (code/ros_ws/src/nav2_local/params/nav2_car_params.yaml:376; flynneva/bno055
+// bno055/registers.py:229): the sensor fuses accelerometer, gyroscope and magnetometer, so its
+// heading is referenced to the magnetic field and does not accumulate the gyro's bias. What it
+// has instead is the local field's distortion (steel in the floor and furniture, the car's own
+// motor and wiring): a heading error that depends on where the car is. Nothing records its size in
+// the lab, so it is modelled (assumed) as a smooth field over the floor,
+//   e(x, y) = A · sin(2π x / λ + φx) · sin(2π y / λ + φy),
+// one field per run shared by every car (the phases come from the scenario's seed), with A 2°
+// and λ 2 m (below). `heading_source: gyro` is the other choice: a heading integrated from the
+// gyro (the BNO055's IMU mode, or any sensor without a magnetometer), which drifts by bias · t.
 #pragma once
 
+#include <array>
 #include <chrono>
+#include <string_view>
+#include <utility>
 
+#include "world/enum_names.h"
 #include "world/geometry.h"
 #include "world/time.h"
+
+namespace autonomsim::vehicle {
+
+// Where the reported heading comes from (see above).
+enum class ImuHeadingSource {
+  kMagnetometer,  // NDOF / NDOF_FMC_OFF: fused with the magnetometer, distorted by local fields
+  kGyro,          // integrated gyro (IMU mode): drifts with the gyro's bias
+};
+
+}  // namespace autonomsim::vehicle
+
+namespace autonomsim {
+template <>
+struct NameTable<vehicle::ImuHeadingSource> {
+  static constexpr std::array<std::pair<vehicle::ImuHeadingSource, std::string_view>, 2> kEntries{
+      {{vehicle::ImuHeadingSource::kMagnetometer, "magnetometer"},
+       {vehicle::ImuHeadingSource::kGyro, "gyro"}}};
+};
+}  // namespace autonomsim
 
 namespace autonomsim::vehicle {
 
@@ -24,9 +59,16 @@ struct ImuParams {
   double accel_noise_stddev_mps2{0.01};
   // assumed: residual accelerometer offset after calibration, ~5 mg.
   double accel_bias_stddev_mps2{0.05};
-  // assumed: jitter of the fused heading. The heading also drifts with the gyro bias (the sensor
-  // integrates its gyro; a magnetometer is of no use next to a motor).
+  // assumed: jitter of the fused heading (the BNO055's Euler output has 1/16° resolution).
   double yaw_noise_stddev_rad{0.002};
+  // The lab's mode is NDOF_FMC_OFF (see the top of this file): magnetometer.
+  ImuHeadingSource heading_source{ImuHeadingSource::kMagnetometer};
+  // assumed: the local field's heading error, A and λ of e(x, y) (top of this file). The lab's
+  // field was never measured; 2° is the order of heading error indoor magnetometer fusion shows
+  // away from large steel (more near it), and λ 2 m puts one or two swings along each side of
+  // the 5 m track. Only with heading_source magnetometer; 0 turns the distortion off.
+  double magnetic_distortion_rad{0.035};
+  double magnetic_distortion_wavelength_m{2.0};
   double gravity_mps2{9.80665};  // standard gravity: a resting IMU reads +g on z (sensor_msgs/Imu)
 
   template <class V>
@@ -39,9 +81,13 @@ struct ImuParams {
     v("accel_noise_stddev_mps2", accel_noise_stddev_mps2);
     v("accel_bias_stddev_mps2", accel_bias_stddev_mps2);
     v("yaw_noise_stddev_rad", yaw_noise_stddev_rad);
+    v("heading_source", heading_source);
+    v("magnetic_distortion_rad", magnetic_distortion_rad);
+    v("magnetic_distortion_wavelength_m", magnetic_distortion_wavelength_m);
     v("gravity_mps2", gravity_mps2);
   }
-  void Validate() const;  // finite mount, standard deviations >= 0, gravity > 0
+  // finite mount, standard deviations and distortion >= 0, wavelength > 0, gravity > 0
+  void Validate() const;
 };
 
 // The car's true motion at the sample time (vehicle::Car's accessors).
@@ -68,6 +114,11 @@ struct ImuBiasDraws {
   double accel_x{0.0};
   double accel_y{0.0};
 };
+// The magnetic field's phases φx, φy (rad), once per run and shared by every car.
+struct MagneticFieldDraws {
+  double phase_x_rad{0.0};
+  double phase_y_rad{0.0};
+};
 struct ImuNoiseDraws {
   double gyro{0.0};
   double accel_x{0.0};
@@ -87,16 +138,24 @@ struct ImuState {
   // by Σ step · (t − t_step) from each step on.
   double bias_step_rad_per_s{0.0};
   double bias_step_time_rad{0.0};
+  MagneticFieldDraws field;
 };
 
-// From `t` on, the gyro's bias is `step_rad_per_s` more, and the heading drifts by it from then.
+// From `t` on, the gyro's bias is `step_rad_per_s` more (its yaw rate reads that much more). With
+// heading_source gyro the heading drifts by it from then; the magnetometer's heading does not.
 void StepGyroBias(Time t, double step_rad_per_s, ImuState* state);
 
-ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias);
+ImuState InitialImuState(const ImuParams& params, const ImuBiasDraws& bias,
+                         const MagneticFieldDraws& field = {});
+
+// The magnetometer heading's error at p_map (rad): e(x, y) at the top of this file.
+double MagneticHeadingError(const ImuParams& params, const MagneticFieldDraws& field,
+                            const world::Vec2& p_map);
 
 // The reading at truth.t. The accelerations are those of the mounting point: the chassis centre's
 // plus the lever-arm terms α × r + ω × (ω × r), with the yaw acceleration α taken from the
-// previous reading (zero for the first). The heading drifts by bias · t (t from the run's start).
+// previous reading (zero for the first). The heading: the true heading plus the field's error at
+// the car (magnetometer), or plus bias · t (gyro; t from the run's start); and its noise.
 ImuReading StepImu(const ImuParams& params, const ImuTruth& truth, const ImuNoiseDraws& noise,
                    ImuState* state);
 

@@ -250,7 +250,12 @@ SensorSuite::SensorSuite(Kernel* kernel, SensorEnvironment* environment, int car
   const double gyro = bias.Normal(0.0, 1.0);
   const double accel_x = bias.Normal(0.0, 1.0);
   const double accel_y = bias.Normal(0.0, 1.0);
-  imu_state_ = vehicle::InitialImuState(params_.imu.imu, {gyro, accel_x, accel_y});
+  // the lab's magnetic field: one per run, every car in it (no car prefix in the stream's name)
+  Rng field = streams.Stream("lab/magnetic_field");
+  const double phase_x = field.Uniform(0.0, 2.0 * std::numbers::pi);
+  const double phase_y = field.Uniform(0.0, 2.0 * std::numbers::pi);
+  imu_state_ =
+      vehicle::InitialImuState(params_.imu.imu, {gyro, accel_x, accel_y}, {phase_x, phase_y});
 
   if (options.camera_timers) {
     timers_.push_back(kernel_->SchedulePeriodic(

@@ -12,7 +12,8 @@
 // Random streams (all derived from the scenario seed, sim/core/random.h), for car N:
 //   carN/<camera name>/phase, carN/<camera name>/noise (one seed drawn per frame, rendered or not),
 //   carN/imu/phase, carN/imu/bias, carN/imu/noise, carN/wheel_speed/phase, carN/ultrasonic/phase,
-//   carN/ultrasonic/noise.
+//   carN/ultrasonic/noise; and one for the run, not the car: lab/magnetic_field (the field that
+//   distorts every car's magnetometer heading, vehicle/imu.h).
 #pragma once
 
 #include <cstdint>

@@ -28,8 +28,9 @@
 //   camera_freeze   {car, camera: color|depth, for_s?}  the camera publishes its last picture again
 //                   and again under new stamps (SensorSuite::CameraFault::kFreeze)
 //   camera_blackout {car, camera, for_s?}  the camera publishes black frames (depth: no return)
-//   imu_bias_step   {car, gyro_bias_rad_per_s, for_s?}  the gyro's bias steps by that much and the
-//                   fused heading drifts with it (vehicle::StepGyroBias); for_s steps it back
+//   imu_bias_step   {car, gyro_bias_rad_per_s, for_s?}  the gyro's bias steps by that much; a
+//                   gyro-integrated heading drifts with it, the magnetometer's does not
+//                   (vehicle::StepGyroBias); for_s steps it back
 //   localization_jump {car, dx_m?, dy_m?, dyaw_deg?}  the EKF's estimate jumps by that much, map
 //                   frame (stack::JumpLocalizationEstimate); instantaneous
 //

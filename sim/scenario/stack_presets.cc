@@ -22,7 +22,6 @@ struct PresetOption {
 };
 constexpr PresetOption kCarOptions[] = {
     {"stack.localization.use_pose_fix", "false", "true"},
-    {"stack.localization.fuse_imu_yaw", "true", "false"},
     {"stack.follow_path.pursuit.lookahead_dist_m", "0.6", "0.4"},
     {"stack.planner.start_escape_m", "0.0", "0.3"},
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},

@@ -100,6 +100,9 @@ TEST(LocalizationEkfParamsTest, DefaultsKeysAndValidation) {
   EXPECT_TRUE(params.imu_yaw_relative);
   EXPECT_FALSE(params.use_pose_fix);
   EXPECT_TRUE(params.fuse_imu_yaw);  // the car's config fuses the IMU's heading
+  // what the BNO055 driver sends (its defaults: the car's config sets no variance_*)
+  EXPECT_EQ(params.imu_yaw_variance_rad2, 0.0159);
+  EXPECT_EQ(params.imu_yaw_rate_variance_rad2_per_s2, 0.04);
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
   auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
@@ -234,9 +237,12 @@ TEST(LocalizationEkfTest, PoseFixPullsTheEstimate) {
   EXPECT_GT(weak_error, 0.5 * drift);
 }
 
-// With pose fixes that carry the heading, a drifting IMU heading still wins while it is fused:
-// its variance (0.01 rad)² is a quarter of the fixes' (0.02 rad)² and it comes 20 times as often.
-// Fusing only its yaw rate leaves the heading to the fixes (stack.localization.fuse_imu_yaw).
+// With pose fixes that carry the heading, a drifting IMU heading (a gyro-integrated one:
+// vehicle::ImuHeadingSource::kGyro) still pulls the estimate while it is fused, even at the BNO055
+// driver's variance 0.0159 rad² (flynneva/bno055 bno055/registers.py:257) against the fixes'
+// (0.02 rad)²: it comes 20 times as often. Fusing only its yaw rate leaves the heading to the
+// fixes (stack.localization.fuse_imu_yaw). The lab's magnetometer heading does not drift
+// (ImuTest.TheLabsMagnetometerHeadingDoesNotDriftWithTheGyroBias), so no preset turns it off.
 TEST(LocalizationEkfTest, WithoutTheImuHeadingTheFixesHoldTheYaw) {
   const double b = 0.005;  // rad/s: 0.3 rad of drift in 60 s
   const Truth truth;       // straight along +x
