@@ -5,15 +5,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
+# Each stage's start, with the seconds since this script began (CI's time budget: .ci/run).
+stage() { echo "== test.sh: $1 (at ${SECONDS} s)"; }
 tools/install_deps.sh
 tools/reset_stale_build.sh build build-asan
 # AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, see CMakeLists.txt.
 configure_args=(-DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}")
 
 cmake --preset release "${configure_args[@]}" >/dev/null
+stage "release build"
 cmake --build --preset release -j "$jobs"
 # One test more than cores: the real-time tests (label realtime, started first) spend a minute
 # mostly asleep on the wall clock, and would otherwise hold a core's place.
+stage "release tests"
 ctest --preset release -j "$((jobs + 1))"
 
 if [ "${AUTONOMSIM_SANITIZE:-0}" = "1" ]; then
@@ -32,7 +36,10 @@ if [ "${AUTONOMSIM_SANITIZE:-0}" = "1" ]; then
   asan_skip+='|Faults\.(AreEvents|CarStall|ADead|ACarWhose|APartition|ALossBurst|ABrokerOutage'
   asan_skip+='|AServerRestart|ACrashed|AHung|AFrozen|ABlackedOut|AGyroBias|ALocalizationJump)'
   cmake --preset asan "${configure_args[@]}" >/dev/null
+  stage "asan build"
   cmake --build --preset asan -j "$jobs"
   # the real-time runs pace to the wall clock: under the sanitizers they only wait longer
+  stage "asan tests"
   ctest --preset asan -j "$jobs" -E "$asan_skip" -LE realtime
 fi
+stage "done"
