@@ -186,12 +186,12 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
            LaneScratch* scratch) -> std::optional<stack::LanePoints> {
           stack::BirdsEyeRowSums sums;
           LaneRowSums(p, frame, scratch, &sums);
-          const stack::LanePoints lanes = scratch->detector.Fit(sums);
+          const stack::LanePoints fitted = scratch->detector.Fit(sums);
           // sw_no_line silent: nothing published (lane_detector.cpp:273-276)
-          if (lanes.valid == 0 && p.tables->params().sw_no_line == stack::SwNoLine::kSilent) {
+          if (fitted.valid == 0 && p.tables->params().sw_no_line == stack::SwNoLine::kSilent) {
             return std::nullopt;
           }
-          return Report(p, lanes, frame.stamp);
+          return Report(p, fitted, frame.stamp);
         });
     return lanes;
   }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <vector>
 
