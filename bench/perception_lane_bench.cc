@@ -89,5 +89,49 @@ void BM_LaneRowSumsFromClasses(benchmark::State& state) {
 }
 BENCHMARK(BM_LaneRowSumsFromClasses)->Unit(benchmark::kMicrosecond);
 
+// The same, counted as the lab's hardware counts (hw_pixel_classes exact: rt_polyfit's exact 255
+// and 127 in the combined image's warp).
+void BM_LaneRowSumsFromClassesExact(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  const cv::Mat& image = Frame().image;
+  const ClassImageRegion classes = detector.MutableClassRegion();
+  for (const LaneDetector::SourceSpan& span : classes.spans) {
+    const std::uint8_t* bgr = image.ptr<std::uint8_t>(span.row);
+    for (int c = span.col_begin; c < span.col_end; ++c) {
+      classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
+          detector.ClassOf(bgr[3 * c], bgr[3 * c + 1], bgr[3 * c + 2]);
+    }
+  }
+  BirdsEyeRowSums sums;
+  for (auto _ : state) {
+    detector.ComputeRowSumsFromClasses(&sums, BirdsEyeClasses::kExact);
+    benchmark::DoNotOptimize(sums.yellow.data());
+  }
+}
+BENCHMARK(BM_LaneRowSumsFromClassesExact)->Unit(benchmark::kMicrosecond);
+
+// The fit stage alone: ours (FitLanePoints), and rt_polyfit's with every lab option
+// (FitLanePointsHardware: exact counts, truncation, the PnP projection in float, the overwrite).
+void BM_LaneFit(benchmark::State& state) {
+  LaneDetectionParams params;
+  const bool lab = state.range(0) != 0;
+  if (lab) {
+    params.hw_pixel_classes = BirdsEyeClasses::kExact;
+    params.hw_no_line = HwNoLine::kBothBelowMin;
+    params.hw_truncate_points = true;
+    params.hw_valid_overwrite = true;
+    params.projection = LaneProjection::kPnpSwapped;
+  }
+  LaneDetector detector(params, Frame().calibration);
+  BirdsEyeRowSums sums;
+  detector.ComputeRowSums(Frame().image, &sums, params.hw_pixel_classes);
+  for (auto _ : state) {
+    const LanePoints lanes = lab ? FitLanePointsHardware(*detector.tables(), sums)
+                                 : FitLanePoints(*detector.tables(), sums);
+    benchmark::DoNotOptimize(lanes.valid);
+  }
+}
+BENCHMARK(BM_LaneFit)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 }  // namespace autonomsim::stack

@@ -7,7 +7,8 @@
 //   curvature  κ = 2·y / L² (PurePursuitCurvature);
 //   speed      RegulatedSpeed (0.25 m/s; Nav2's curvature slow-down below radius 0.9 m, v scaled
 //              by r / r_min, floored at regulated_min_speed_mps; approach scaling); ω = v·κ;
-//   no carrot  (lanes invalid, or no point far enough): v = 0, ω = 0;
+//   no carrot  (lanes invalid, or no point far enough; a point that is not finite is never one):
+//              v = 0, ω = 0;
 //   collision  the real plugin runs the same arc check as FollowPath (lane_controller.cpp:364-443,
 //              stack/path_follower.h IsCollisionImminent, by collision.model) and stops; here
 //              when the caller passes `cell_cost`.

@@ -131,6 +131,33 @@ void RowMeans(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums,
   }
 }
 
+int PixelCount(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums) {
+  int total = 0;
+  for (const BirdsEyeRowSums::Row& row : sums) total += row.count;
+  return total;
+}
+
+// The floor point of raw-image pixel (u, v) by the params' projection; `in_float`: rt_polyfit's
+// float arithmetic (the pixel already truncated), else the software node's doubles, whose
+// projection takes the pixel as ints (lane_detector.cpp:214).
+std::optional<LanePoint> FloorPoint(const LaneDetectorTables& tables, double u, double v,
+                                    bool in_float) {
+  if (tables.params().projection == LaneProjection::kIdeal) {
+    const std::optional<Eigen::Vector2d> p = FloorPointFromPixel(tables.camera(), u, v);
+    if (!p) return std::nullopt;
+    return LanePoint{static_cast<float>(p->x()), static_cast<float>(p->y())};
+  }
+  // the lab's: (row, col), as lane_detector.cpp:354 and rt_polyfit.cpp:188-189 pass it
+  const LanePnpPose& pose = *tables.pnp_pose();
+  if (in_float) {
+    const Eigen::Vector2f p =
+        ProjectLabPnpFloat(pose, static_cast<float>(v), static_cast<float>(u));
+    return LanePoint{p.x(), p.y()};
+  }
+  const Eigen::Vector2d p = ProjectLabPnp(pose, std::trunc(v), std::trunc(u));
+  return LanePoint{static_cast<float>(p.x()), static_cast<float>(p.y())};
+}
+
 }  // namespace
 
 BirdsEyeRowSums RowSumsOfMasks(const BirdsEyeMasks& masks) {
@@ -192,6 +219,9 @@ void LaneDetectionParams::Validate() const {
   Require(std::isfinite(anchor_col_px), "anchor_col_px must be finite");
   Require(anchor_repeats >= 1,
           [&] { return "anchor_repeats must be >= 1, got " + Num(anchor_repeats); });
+  for (const auto& p : pnp_floor_points_m) {
+    Require(std::isfinite(p[0]) && std::isfinite(p[1]), "pnp_floor_points_m must be finite");
+  }
 }
 
 void LaneMasksReference(const cv::Mat& bgr, const LaneThresholds& thresholds,
@@ -263,12 +293,17 @@ std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
   return poly;
 }
 
-Eigen::Vector2d ShiftTowardsLaneCentre(const RowPolynomial& line, double row, LaneLine which,
-                                       double shift_px) {
+Eigen::Vector2d LaneCentreShift(const RowPolynomial& line, double row, LaneLine which,
+                                double shift_px) {
   const double slope = line.Slope(row);
   const double sign = which == LaneLine::kYellow ? -1.0 : 1.0;
   const Eigen::Vector2d normal = Eigen::Vector2d(slope, -1.0) / std::sqrt(1.0 + slope * slope);
-  return Eigen::Vector2d(row, line(row)) + sign * shift_px * normal;
+  return sign * shift_px * normal;
+}
+
+Eigen::Vector2d ShiftTowardsLaneCentre(const RowPolynomial& line, double row, LaneLine which,
+                                       double shift_px) {
+  return Eigen::Vector2d(row, line(row)) + LaneCentreShift(line, row, which, shift_px);
 }
 
 std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
@@ -352,6 +387,38 @@ std::vector<std::uint8_t> OpenCvBilinearTable() {
   return table;
 }
 
+// The bilinear warp of rt_laneplanner's combined image, by the same probe: neighbour k of pattern
+// p has class (bit k of p: yellow) | (bit 4 + k of p: white) << 1 and the combined value of that
+// class (white 255 + yellow 127 in 8 bits). [a · 256 + p]: 1 if the output is exactly 127, 2 if
+// exactly 255 (rt_polyfit.cpp:53, 64), else 0.
+std::vector<std::uint8_t> ExactValueTable() {
+  constexpr int kPatterns = 256;
+  constexpr std::array<std::uint8_t, 4> kCombined{0, 127, 255, 126};
+  cv::Mat probe(2, 3 * kPatterns, CV_8UC1, cv::Scalar(0));
+  cv::Mat map_xy(kPatterns, kAlphaCount, CV_16SC2);
+  cv::Mat map_alpha(kPatterns, kAlphaCount, CV_16UC1);
+  for (int p = 0; p < kPatterns; ++p) {
+    for (int k = 0; k < 4; ++k) {
+      const int cls = ((p >> k) & 1) | (((p >> (4 + k)) & 1) << 1);
+      probe.at<std::uint8_t>(k >> 1, 3 * p + (k & 1)) = kCombined[static_cast<std::size_t>(cls)];
+    }
+    for (int a = 0; a < kAlphaCount; ++a) {
+      map_xy.at<cv::Vec2s>(p, a) = cv::Vec2s(static_cast<short>(3 * p), 0);
+      map_alpha.at<std::uint16_t>(p, a) = static_cast<std::uint16_t>(a);
+    }
+  }
+  cv::Mat out;
+  cv::remap(probe, out, map_xy, map_alpha, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+  std::vector<std::uint8_t> table(static_cast<std::size_t>(kAlphaCount) * kPatterns);
+  for (int p = 0; p < kPatterns; ++p) {
+    for (int a = 0; a < kAlphaCount; ++a) {
+      const std::uint8_t v = out.at<std::uint8_t>(p, a);
+      table[static_cast<std::size_t>(a * kPatterns + p)] = v == 127 ? 1 : v == 255 ? 2 : 0;
+    }
+  }
+  return table;
+}
+
 }  // namespace
 
 // Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts the
@@ -418,7 +485,11 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
     hdiv_[i] = static_cast<int>(std::lrint((180 << kHsvShift) / (6.0 * i)));
   }
   warp_lut_ = OpenCvBilinearTable();
+  exact_lut_ = ExactValueTable();
   IndexActivePixels(WarpSource(image_to_birds_eye_));
+  if (params_.projection == LaneProjection::kPnpSwapped) {
+    pnp_pose_ = LabPnpPose(camera_, params_.pnp_floor_points_m);
+  }
 }
 
 void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
@@ -610,18 +681,17 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   masks->white.setTo(0);
   std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
   std::uint8_t* white = masks->white.ptr<std::uint8_t>();
-  ForEachWarpedLinePixel(
-      [&](std::uint32_t dst, std::uint8_t yellow_value, std::uint8_t white_value) {
-        yellow[dst] = yellow_value;
-        white[dst] = white_value;
-      });
+  const std::uint8_t* lut = tables_->warp_lut_.data();
+  ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
+    yellow[dst] = lut[alpha16 + yellow_bits];
+    white[dst] = lut[alpha16 + white_bits];
+  });
 }
 
 template <class Visit>
 void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
   const LaneDetectorTables& tables = *tables_;
   const std::uint8_t* classes = classes_.data();
-  const std::uint8_t* lut = tables.warp_lut_.data();
   const std::uint32_t* pixel_src = tables.pixel_src_.data();
   const std::uint32_t* pixel_dst = tables.pixel_dst_.data();
   const std::uint16_t* pixel_lut = tables.pixel_lut_.data();
@@ -634,36 +704,45 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
       if ((c0 | c1 | c2 | c3) == 0) continue;
       const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
       const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
-      visit(pixel_dst[i], lut[pixel_lut[i] + yellow_bits], lut[pixel_lut[i] + white_bits]);
+      visit(pixel_dst[i], pixel_lut[i], yellow_bits, white_bits);
     }
   }
 }
 
-void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums) {
+void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums,
+                                  BirdsEyeClasses classes) {
   RequireImage(bgr);
   Classify(bgr);
-  SumWarpedClasses(sums);
+  SumWarpedClasses(sums, classes);
 }
 
-void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums) {
+void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
   FindLineCells();
-  SumWarpedClasses(sums);
+  SumWarpedClasses(sums, classes);
 }
 
-void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums) {
+void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
   *sums = BirdsEyeRowSums{};
-  // counting the non-zero outputs where ComputeMasks writes them
-  ForEachWarpedLinePixel([sums](std::uint32_t dst, std::uint8_t yellow, std::uint8_t white) {
+  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, std::uint32_t dst) {
     const std::uint32_t row = dst / kLaneImageWidth;
-    const std::uint32_t col = dst - row * kLaneImageWidth;
-    if (yellow != 0) {
-      ++sums->yellow[row].count;
-      sums->yellow[row].col_sum += col;
-    }
-    if (white != 0) {
-      ++sums->white[row].count;
-      sums->white[row].col_sum += col;
-    }
+    ++rows[row].count;
+    rows[row].col_sum += dst - row * kLaneImageWidth;
+  };
+  if (classes == BirdsEyeClasses::kNonZero) {
+    // counting the non-zero outputs where ComputeMasks writes them
+    const std::uint8_t* lut = tables_->warp_lut_.data();
+    ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
+      if (lut[alpha16 + yellow_bits] != 0) add(sums->yellow, dst);
+      if (lut[alpha16 + white_bits] != 0) add(sums->white, dst);
+    });
+    return;
+  }
+  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white)
+  const std::uint8_t* lut = tables_->exact_lut_.data();
+  ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
+    const std::uint8_t cls = lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
+    if (cls == 1) add(sums->yellow, dst);
+    if (cls == 2) add(sums->white, dst);
   });
 }
 
@@ -680,6 +759,56 @@ LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* tr
   return FitLanePoints(*tables_, sums, trace);
 }
 
+namespace detail {
+
+std::optional<std::array<LanePoint, LanePoints::kCount>> LanePointsOfLine(
+    const LaneDetectorTables& tables,
+    const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums, LaneLine line,
+    const LaneFitRules& rules, LaneDetectionTrace* trace) {
+  const LaneDetectionParams& params = tables.params();
+  const auto cut = [&](double v) { return rules.truncate ? std::trunc(v) : v; };
+  // col = f(row) over the line's pixels: per row, its pixels' mean column weighted by their count
+  // (the same least-squares problem as one equation per pixel)
+  std::vector<double> rows, cols, weights;
+  int total = 0;
+  RowMeans(sums, &rows, &cols, &weights, &total);
+  trace->line_fit = FitRowPolynomial(rows, cols, weights, 2);
+  if (!trace->line_fit) return std::nullopt;
+
+  // samples moved to the lane centre, and the trajectory through them and the anchors
+  std::array<Eigen::Vector2d, LanePoints::kCount> shifted;
+  for (int i = 0; i < LanePoints::kCount; ++i) {
+    const double row = i * params.sample_row_step_px;
+    if (!rules.truncate) {
+      shifted[i] = ShiftTowardsLaneCentre(*trace->line_fit, row, line, params.normal_shift_px);
+      continue;
+    }
+    // rt_polyfit.cpp:107-114: the line's column truncated, then each shifted coordinate
+    const Eigen::Vector2d shift =
+        LaneCentreShift(*trace->line_fit, row, line, params.normal_shift_px);
+    shifted[i] = {cut(row + shift.x()), cut(cut((*trace->line_fit)(row)) + shift.y())};
+  }
+  trace->trajectory = FitTrajectory(params, shifted);
+  if (!trace->trajectory) return std::nullopt;
+
+  // back into the raw image, and down onto the floor
+  const double* h = tables.birds_eye_to_image().ptr<double>();
+  std::array<LanePoint, LanePoints::kCount> points;
+  for (int i = 0; i < LanePoints::kCount; ++i) {
+    const double row = i * params.sample_row_step_px;
+    const double col = cut((*trace->trajectory)(row));
+    const double w = h[6] * col + h[7] * row + h[8];
+    const double u = cut((h[0] * col + h[1] * row + h[2]) / w);
+    const double v = cut((h[3] * col + h[4] * row + h[5]) / w);
+    const std::optional<LanePoint> p = FloorPoint(tables, u, v, rules.in_float);
+    if (!p) return std::nullopt;
+    points[static_cast<std::size_t>(i)] = *p;
+  }
+  return points;
+}
+
+}  // namespace detail
+
 LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums& sums,
                          LaneDetectionTrace* trace) {
   const LaneDetectionParams& params = tables.params();
@@ -690,44 +819,20 @@ LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums
   LanePoints out;
 
   // choose the line: yellow if it has enough pixels, else white, else nothing
-  std::vector<double> rows, cols, weights;
-  RowMeans(sums.yellow, &rows, &cols, &weights, &t.yellow_px);
+  t.yellow_px = PixelCount(sums.yellow);
   t.line = LaneLine::kYellow;
   if (t.yellow_px < params.yellow_min_px) {
-    RowMeans(sums.white, &rows, &cols, &weights, &t.white_px);
+    t.white_px = PixelCount(sums.white);
     t.line = LaneLine::kWhite;
     if (t.white_px < params.line_min_px) {
       t.line = LaneLine::kNone;
       return out;
     }
   }
-
-  // col = f(row) over the line's pixels: per row, its pixels' mean column weighted by their count
-  // (the same least-squares problem as one equation per pixel)
-  t.line_fit = FitRowPolynomial(rows, cols, weights, 2);
-  if (!t.line_fit) return out;
-
-  // samples moved to the lane centre, and the trajectory through them and the anchors
-  std::array<Eigen::Vector2d, LanePoints::kCount> shifted;
-  for (int i = 0; i < LanePoints::kCount; ++i) {
-    shifted[i] = ShiftTowardsLaneCentre(*t.line_fit, i * params.sample_row_step_px, t.line,
-                                        params.normal_shift_px);
-  }
-  t.trajectory = FitTrajectory(params, shifted);
-  if (!t.trajectory) return out;
-
-  // back into the raw image, and down onto the floor
-  const double* h = tables.birds_eye_to_image().ptr<double>();
-  for (int i = 0; i < LanePoints::kCount; ++i) {
-    const double row = i * params.sample_row_step_px;
-    const double col = (*t.trajectory)(row);
-    const double w = h[6] * col + h[7] * row + h[8];
-    const double u = (h[0] * col + h[1] * row + h[2]) / w;
-    const double v = (h[3] * col + h[4] * row + h[5]) / w;
-    const std::optional<Eigen::Vector2d> p = FloorPointFromPixel(tables.camera(), u, v);
-    if (!p) return LanePoints{};
-    out.points[i] = {static_cast<float>(p->x()), static_cast<float>(p->y())};
-  }
+  const auto points = detail::LanePointsOfLine(
+      tables, t.line == LaneLine::kYellow ? sums.yellow : sums.white, t.line, {}, &t);
+  if (!points) return out;
+  out.points = *points;
   out.valid = 1;
   return out;
 }

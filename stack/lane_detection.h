@@ -26,7 +26,11 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
+
+#include "world/enum_names.h"
 
 namespace autonomsim::stack {
 
@@ -66,6 +70,72 @@ struct LaneCameraCalibration {
 
   void Validate() const;  // fx, fy > 0, finite; the camera above the floor
 };
+
+// Where the lab's code departs from the pipeline above, each a `perception.lane_detection` key
+// (docs/lab-stack.md, "The options"). The defaults are ours, which keeps a scenario without a
+// preset as it was; `stack.preset: lab` sets the lab's. Lab paths: MohnessWaizy/AutonomROS, under
+// code/reconros_ws/laneplanner/src/ (rt_*) and code/ros_ws/src/autonomros_lane_detection/src/.
+//
+// hw_pixel_classes, which bird's-eye pixels are line pixels (the hardware lane planner only):
+//   non_zero  ours and the software node's (lane_detector.cpp:99, 265, 273: findNonZero and
+//             countNonZero of each warped mask): every pixel the bilinear warp left non-zero.
+//   exact     the hardware's: rt_laneplanner.cpp:134-142 adds the white mask and the yellow mask
+//             shifted right by one (255 + 127; both: 382 in 8 bits, 126) into one image and warps
+//             that bilinearly; rt_polyfit.cpp:53-74 counts a pixel white only if its warped value
+//             is exactly 255, yellow only if exactly 127. A line's blended edge pixels drop out,
+//             and a white edge pixel blended down to exactly 127 counts as yellow.
+enum class BirdsEyeClasses { kNonZero, kExact };
+// hw_no_line, when the hardware's fit says "no line" (the `valid` it writes):
+//   white_below_min  ours, the software node's rule (lane_detector.cpp:265-276): yellow if it has
+//                    >= yellow_min_px, else white, and no line if white < line_min_px;
+//   both_below_min   rt_polyfit.cpp:80-96, 246-248: yellow if it has >= yellow_min_px, else the
+//                    white fit whatever its count; `valid` 0 only if white and yellow are both
+//                    below line_min_px. So with 1000 <= yellow < 2000 and white < 1000 it fits the
+//                    few white pixels (a fit of nothing if there are none) and says valid.
+enum class HwNoLine { kWhiteBelowMin, kBothBelowMin };
+// projection, from a raw-image pixel to the floor (both mappings):
+//   ideal        ours: the pixel undistorted and its ray intersected with the floor.
+//   pnp_swapped  the lab's: a pose from cv::solvePnP of hand-picked floor points whose pixels are
+//                written (row, col) (params/real_pointsets.yml), with K and D; each pixel is then
+//                projected with R⁻¹, t and K⁻¹ as (row, col, 1) as well, without undistortion
+//                (lane_detector.cpp:47-53, 214-236, called with (point.y, point.x) at :354 and
+//                truncated to int by its signature; rt_polyfit.cpp:169-241 the same numbers
+//                hard-coded, in float, screen (row, col) at :188-189). See LabPnpPose.
+enum class LaneProjection { kIdeal, kPnpSwapped };
+// sw_no_line, what the software node publishes without a line:
+//   invalid  ours: valid = 0 and zero points, so the LaneController has no carrot and stops;
+//   silent   lane_detector.cpp:273-276: nothing, so the controller drives on the last points it
+//            got (lane_controller.cpp:348-357, 562-565).
+enum class SwNoLine { kInvalid, kSilent };
+
+}  // namespace autonomsim::stack
+
+namespace autonomsim {
+template <>
+struct NameTable<stack::BirdsEyeClasses> {
+  static constexpr std::array<std::pair<stack::BirdsEyeClasses, std::string_view>, 2> kEntries{
+      {{stack::BirdsEyeClasses::kNonZero, "non_zero"}, {stack::BirdsEyeClasses::kExact, "exact"}}};
+};
+template <>
+struct NameTable<stack::HwNoLine> {
+  static constexpr std::array<std::pair<stack::HwNoLine, std::string_view>, 2> kEntries{
+      {{stack::HwNoLine::kWhiteBelowMin, "white_below_min"},
+       {stack::HwNoLine::kBothBelowMin, "both_below_min"}}};
+};
+template <>
+struct NameTable<stack::LaneProjection> {
+  static constexpr std::array<std::pair<stack::LaneProjection, std::string_view>, 2> kEntries{
+      {{stack::LaneProjection::kIdeal, "ideal"},
+       {stack::LaneProjection::kPnpSwapped, "pnp_swapped"}}};
+};
+template <>
+struct NameTable<stack::SwNoLine> {
+  static constexpr std::array<std::pair<stack::SwNoLine, std::string_view>, 2> kEntries{
+      {{stack::SwNoLine::kInvalid, "invalid"}, {stack::SwNoLine::kSilent, "silent"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::stack {
 
 struct LaneDetectionParams {
   // Which HSV set: "simulation" by default. Our renderer paints white RGB(255,255,255) and yellow
@@ -112,6 +182,33 @@ struct LaneDetectionParams {
   std::vector<double> anchor_rows_px{480.0, 470.0, 460.0};  // reference §5
   double anchor_col_px{320.0};                              // reference §5
   int anchor_repeats{60};                                   // reference §5
+  // The lab's departures (see the enums above).
+  BirdsEyeClasses hw_pixel_classes{BirdsEyeClasses::kNonZero};
+  HwNoLine hw_no_line{HwNoLine::kWhiteBelowMin};
+  // rt_polyfit.cpp:107-114, 157, 165-166: the line's samples, the shifted points, the trajectory's
+  // samples and their raw-image pixels are each truncated to integers (int64_t, towards zero).
+  bool hw_truncate_points{false};
+  // rt_polyfit.cpp:249, 258: `valid` and then the 30 points are both written at the message's
+  // offset 0, while the message is `uint64 valid` then the points (LanePoints.msg of the lab's
+  // carcontrol and ros_ws iceoryx_msg). The receiver's `valid` is point 0's two floats (x in the
+  // low word), never 0; its point k is the fit's point k + 1; its point 29 is never written
+  // (LabHardwareMessage).
+  bool hw_valid_overwrite{false};
+  LaneProjection projection{LaneProjection::kIdeal};
+  SwNoLine sw_no_line{SwNoLine::kInvalid};
+  // The floor points of the lab's PnP calibration, (x forward, y left) in m on the floor
+  // (params/real_pointsets.yml:10-14, worldpoints, z 0; the origin taken as base_link's).
+  std::array<std::array<double, 2>, 11> pnp_floor_points_m{{{0.3, 0.15},
+                                                            {0.3, 0.0},
+                                                            {0.3, -0.15},
+                                                            {0.55, 0.15},
+                                                            {0.55, 0.0},
+                                                            {0.55, -0.15},
+                                                            {0.8, 0.15},
+                                                            {0.8, 0.0},
+                                                            {0.8, -0.15},
+                                                            {1.6, 0.15},
+                                                            {1.6, -0.15}}};
 
   template <class V>
   void Describe(V& v) {
@@ -125,6 +222,13 @@ struct LaneDetectionParams {
     v("anchor_rows_px", anchor_rows_px);
     v("anchor_col_px", anchor_col_px);
     v("anchor_repeats", anchor_repeats);
+    v("hw_pixel_classes", hw_pixel_classes);
+    v("hw_no_line", hw_no_line);
+    v("hw_truncate_points", hw_truncate_points);
+    v("hw_valid_overwrite", hw_valid_overwrite);
+    v("projection", projection);
+    v("sw_no_line", sw_no_line);
+    v("pnp_floor_points_m", pnp_floor_points_m);
   }
   // A known threshold set, finite warp points forming a proper quadrilateral, counts >= 0,
   // line_min_px <= yellow_min_px, step > 0, shift >= 0, at least one anchor row and repeat.
@@ -198,6 +302,10 @@ std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
 Eigen::Vector2d ShiftTowardsLaneCentre(const RowPolynomial& line, double row, LaneLine which,
                                        double shift_px);
 
+// That move alone, (Δrow, Δcol).
+Eigen::Vector2d LaneCentreShift(const RowPolynomial& line, double row, LaneLine which,
+                                double shift_px);
+
 // The 3rd-order trajectory through the shifted samples (row, col) and the anchors.
 std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
                                            std::span<const Eigen::Vector2d> shifted_row_col);
@@ -206,6 +314,43 @@ std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
 // the distortion cannot be inverted there or the ray does not point down at the floor.
 std::optional<Eigen::Vector2d> FloorPointFromPixel(const LaneCameraCalibration& camera, double u,
                                                    double v);
+
+// rt_laneplanner's bird's-eye image (rt_laneplanner.cpp:129-142): the white mask plus the yellow
+// mask shifted right by one bit, in 8 bits (0, 127, 255; both 126), warped bilinearly. Warped here
+// with cv::warpPerspective as LaneMasksReference: the FPGA's xf::cv::warpTransform has
+// fixed-point weights of its own (not modelled), so where exactly a blend lands on 255 or 127 can
+// differ from the real slot's in a few pixels.
+void LaneCombinedReference(const cv::Mat& bgr, const LaneThresholds& thresholds,
+                           const cv::Mat& image_to_birds_eye, cv::Mat* combined);
+// Its row sums as rt_polyfit counts them (rt_polyfit.cpp:53-74): white where exactly 255, yellow
+// where exactly 127.
+BirdsEyeRowSums RowSumsOfCombined(const cv::Mat& combined);
+
+// The lab's floor projection as data: the pose cv::solvePnP gave (R⁻¹ = rotationMatrix.inv(), t)
+// and K⁻¹ (lane_detector.cpp:47-53; rt_polyfit.cpp:170-176 holds the same numbers for the real
+// car: solvePnP of params/real_pointsets.yml with params/real_intrinsics.yml, K and D, gives them
+// to the last digit).
+struct LanePnpPose {
+  Eigen::Matrix3d R_inv{Eigen::Matrix3d::Identity()};
+  Eigen::Vector3d t{Eigen::Vector3d::Zero()};
+  Eigen::Matrix3d K_inv{Eigen::Matrix3d::Identity()};
+};
+
+// The pose the lab's node would compute for `camera`: the lab's floor points (x, y, 0) imaged by
+// this camera with its distortion, rounded to whole pixels (the lab picked whole pixels) and
+// written (row, col) as in the lab's file, then cv::solvePnP (iterative) with the camera's K and D,
+// as the node's init. The lab's constants are for the real car's camera and mount, and ours differ
+// (see warp_source_px): so the method is carried over, not the numbers. Points the camera does not
+// see are left out, as nobody could pick them (ours: (0.3, +0.15) at column −40 and (0.3, 0) at
+// row 485, of the lab's 11). Throws if a point is behind the camera or fewer than 4 are seen.
+LanePnpPose LabPnpPose(const LaneCameraCalibration& camera,
+                       std::span<const std::array<double, 2>> floor_points_m);
+
+// The lab's formula for the pixel it passes as (a, b) (it passes (row, col)): s = (R⁻¹t)_z /
+// (R⁻¹K⁻¹(a, b, 1))_z, p = R⁻¹(s·K⁻¹(a, b, 1) − t); (x, y) of p. In doubles as the software node
+// (lane_detector.cpp:214-236), or in float as rt_polyfit (rt_polyfit.cpp:178-241).
+Eigen::Vector2d ProjectLabPnp(const LanePnpPose& pose, double a, double b);
+Eigen::Vector2f ProjectLabPnpFloat(const LanePnpPose& pose, float a, float b);
 
 namespace detail {
 // OpenCV's 8-bit BGR2HSV (H 0–179) in its integer arithmetic; exposed for the exhaustive test.
@@ -245,6 +390,10 @@ class LaneDetectorTables {
   };
   const std::vector<SourceSpan>& source_spans() const { return spans_; }
 
+  // The lab's PnP pose for this camera (LabPnpPose); set only if params().projection is
+  // pnp_swapped.
+  const std::optional<LanePnpPose>& pnp_pose() const { return pnp_pose_; }
+
   // The class a pixel of this colour gets: bit 0 yellow, bit 1 white (the thresholds' HSV boxes,
   // in OpenCV's 8-bit HSV); a pure function of the colour.
   std::uint8_t ClassOf(std::uint8_t b, std::uint8_t g, std::uint8_t r) const;
@@ -275,6 +424,11 @@ class LaneDetectorTables {
   int v_min_{0};
   // The bilinear warp of a 0/255 mask: output for (alpha index, which of the 4 neighbours are 255).
   std::vector<std::uint8_t> warp_lut_;  // 1024 × 16
+  // The bilinear warp of rt_laneplanner's combined image (neighbour values 0, 127, 255, 126 for
+  // classes 0-3): 1 where the output is exactly 127, 2 where exactly 255, else 0, for (alpha
+  // index, yellow bits | white bits << 4).
+  std::vector<std::uint8_t> exact_lut_;  // 1024 × 256
+  std::optional<LanePnpPose> pnp_pose_;
   // Active output pixels (whose source square touches the image), grouped by output tile.
   std::vector<Tile> tiles_;
   std::vector<std::uint32_t> pixel_dst_;  // output index
@@ -299,6 +453,40 @@ struct ClassImageRegion {
 // Reads the tables only.
 LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums& sums,
                          LaneDetectionTrace* trace = nullptr);
+
+namespace detail {
+// How a fit turns a line into points: rt_polyfit truncates (hw_truncate_points) and projects in
+// float.
+struct LaneFitRules {
+  bool truncate{false};
+  bool in_float{false};
+};
+// From the chosen line's row sums: its fit, the shifted samples, the trajectory and the 30 floor
+// points by the params' projection (the trace's fits set); nullopt if a fit is undetermined or a
+// point does not reach the floor.
+std::optional<std::array<LanePoint, LanePoints::kCount>> LanePointsOfLine(
+    const LaneDetectorTables& tables,
+    const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums, LaneLine line,
+    const LaneFitRules& rules, LaneDetectionTrace* trace);
+}  // namespace detail
+
+// The polynomial fit's slot as rt_polyfit computes it, with the params' hw_* options and
+// projection; the message as its receiver reads it. With every option ours it is FitLanePoints.
+// Both counts are taken (the trace's white_px is never -1); the line is yellow with >=
+// yellow_min_px, else white, and hw_no_line decides `valid`. Not modelled: rt_polyfit solves the
+// normal equations of its integer moment sums by LU (xf::solver::gelinearsolver, rt_polyfit.cpp:
+// 101, 147), ours by QR; a fit the pixels do not determine divides by a zero pivot there: its
+// points are taken as not-a-number (what the slot's double-to-int64 conversion makes of that is
+// unknown), which only the overwritten message shows (else `valid` is 0).
+LanePoints FitLanePointsHardware(const LaneDetectorTables& tables, const BirdsEyeRowSums& sums,
+                                 LaneDetectionTrace* trace = nullptr);
+
+// What the receiver reads when rt_polyfit writes `written` (valid word, then the 30 points, both
+// at offset 0: rt_polyfit.cpp:249, 258) into a message laid out `uint64 valid` then the points:
+// `valid` is point 0's (x bits | y bits << 32, little-endian as the ZCU104's A53), point k is
+// written point k + 1, and point 29 holds what the loaned chunk held before: assumed zero (a fresh
+// shared-memory chunk; which earlier messages reuse the chunk and what they left is unknown).
+LanePoints LabHardwareMessage(const std::array<LanePoint, LanePoints::kCount>& written);
 
 // A detector: shared, read-only tables (LaneDetectorTables) plus scratch buffers of its own, so
 // an output depends on its input alone. One detector per thread (and per node); detectors that
@@ -334,11 +522,15 @@ class LaneDetector {
   void ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks);
   // The same stage as the fit reads it: RowSumsOfMasks of ComputeMasks, without writing (or
   // clearing) the two 640×480 masks.
-  void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums);
+  // With `classes` exact, the row sums of rt_laneplanner's combined image as rt_polyfit counts
+  // them: RowSumsOfCombined of LaneCombinedReference, bit for bit.
+  void ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums,
+                      BirdsEyeClasses classes = BirdsEyeClasses::kNonZero);
   // The detector's class image for a producer to fill (ClassImageRegion); then
   // ComputeRowSumsFromClasses gives ComputeRowSums of the image whose classes were written.
   ClassImageRegion MutableClassRegion();
-  void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums);
+  void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums,
+                                 BirdsEyeClasses classes = BirdsEyeClasses::kNonZero);
   // The rest, from the bird's-eye masks or their row sums (the same result): Step is
   // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
   // planner, polynomial fit). Fit(sums) is FitLanePoints(*tables(), sums).
@@ -354,12 +546,13 @@ class LaneDetector {
   void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
   void IndexLineCells();  // cell_prefix_ from cell_any_
   bool AnyLineCell(const Tile& tile) const;
-  // The warp over classes_: visit(output index, yellow value, white value) for each output pixel
-  // that may be non-zero (the others stay 0, the border value).
+  // The warp over classes_: visit(output index, alpha index · 16, yellow bits, white bits) for
+  // each output pixel with a line pixel among its four source pixels (the others stay 0, the
+  // border value); bit k of the bits: neighbour k (top left, top right, bottom left, bottom right).
   template <class Visit>
   void ForEachWarpedLinePixel(Visit visit) const;
   // The row sums of the bird's-eye masks, from classes_.
-  void SumWarpedClasses(BirdsEyeRowSums* sums);
+  void SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes);
 
   std::shared_ptr<const LaneDetectorTables> tables_;
   // Scratch: per source pixel bit 0 yellow, bit 1 white, with a 1-pixel zero border; and per

@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <utility>
 
 #include "sim/core/config.h"
@@ -138,14 +139,15 @@ struct LaneScratch {
 // colours in view) in the class image the detector hands out, instead of drawing them for the
 // detector to classify one by one; with colour noise on, the colour image it is.
 void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch,
-                 stack::BirdsEyeRowSums* sums) {
+                 stack::BirdsEyeRowSums* sums,
+                 stack::BirdsEyeClasses count = stack::BirdsEyeClasses::kNonZero) {
   stack::LaneDetector& detector = scratch->detector;
   const stack::ClassImageRegion classes = detector.MutableClassRegion();
   if (frame.RenderLabels(*p.reads, p.line_class,
                          vehicle::LabelView{classes.pixels.data(), classes.stride})) {
-    detector.ComputeRowSumsFromClasses(sums);
+    detector.ComputeRowSumsFromClasses(sums, count);
   } else {
-    detector.ComputeRowSums(RenderColor(frame, &scratch->color, *p.reads), sums);
+    detector.ComputeRowSums(RenderColor(frame, &scratch->color, *p.reads), sums, count);
   }
 }
 
@@ -177,13 +179,20 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
           "platform.mapping: lane_detection is the ROS 2 software node; in hardware the lane "
           "detection is two nodes: map lane_planner and poly_fit");
     }
-    AddComponentNode(graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes,
-                     params, std::make_shared<LaneScratch>(params.tables),
-                     [](const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch) {
-                       stack::BirdsEyeRowSums sums;
-                       LaneRowSums(p, frame, scratch, &sums);
-                       return Report(p, scratch->detector.Fit(sums), frame.stamp);
-                     });
+    AddComponentNode(
+        graph, NodeSpec{.name = "lane_detection", .mapping = kSoftware}, image, lanes, params,
+        std::make_shared<LaneScratch>(params.tables),
+        [](const LaneParams& p, const CameraFrame& frame,
+           LaneScratch* scratch) -> std::optional<stack::LanePoints> {
+          stack::BirdsEyeRowSums sums;
+          LaneRowSums(p, frame, scratch, &sums);
+          const stack::LanePoints fitted = scratch->detector.Fit(sums);
+          // sw_no_line silent: nothing published (lane_detector.cpp:273-276)
+          if (fitted.valid == 0 && p.tables->params().sw_no_line == stack::SwNoLine::kSilent) {
+            return std::nullopt;
+          }
+          return Report(p, fitted, frame.stamp);
+        });
     return lanes;
   }
 
@@ -193,13 +202,13 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
                    params, std::make_shared<LaneScratch>(params.tables),
                    [](const LaneParams& p, const CameraFrame& frame, LaneScratch* scratch) {
                      BirdViewMessage out{.stamp = frame.stamp};
-                     LaneRowSums(p, frame, scratch, &out.sums);
+                     LaneRowSums(p, frame, scratch, &out.sums, p.tables->params().hw_pixel_classes);
                      return out;
                    });
   AddComponentNode(graph, NodeSpec{.name = "poly_fit", .mapping = kSlot2}, bird_view, lanes,
                    std::move(params), std::shared_ptr<void>(),
                    [](const LaneParams& p, const BirdViewMessage& in, void*) {
-                     return Report(p, stack::FitLanePoints(*p.tables, in.sums), in.stamp);
+                     return Report(p, stack::FitLanePointsHardware(*p.tables, in.sums), in.stamp);
                    });
   return lanes;
 }

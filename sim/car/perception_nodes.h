@@ -10,8 +10,11 @@
 //   lanes, hardware (default; reference §8: slot 1 HSV/threshold/warp, slot 2 polynomial fit):
 //     /image → lane_planner → /camera/bird_view → poly_fit →
 //     /lane_detector/central_line/point_cloud
+//     (rt_laneplanner and rt_polyfit's semantics by the lane detection's hw_* options:
+//     stack::FitLanePointsHardware)
 //   lanes, software (`lane_detection: {target: sw}`: the ROS 2 node, reference §5):
 //     /image → lane_detection → /lane_detector/central_line/point_cloud
+//     (without a line it publishes nothing under sw_no_line silent)
 //
 // Each node runs its pure component (stack/) on the frame at once; the platform decides when the
 // result is published. A point cloud computed in hardware is scaled as the real HLS code scales it

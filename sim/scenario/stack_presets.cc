@@ -40,6 +40,12 @@ constexpr PresetOption kCarOptions[] = {
     {"intersection_client.exit_margin_m", "0.0", "0.15"},
     {"intersection_client.latch_wait", "false", "true"},
     {"intersection_client.release_on_failure", "false", "true"},
+    {"perception.lane_detection.hw_pixel_classes", "exact", "non_zero"},
+    {"perception.lane_detection.hw_no_line", "both_below_min", "white_below_min"},
+    {"perception.lane_detection.hw_truncate_points", "true", "false"},
+    {"perception.lane_detection.hw_valid_overwrite", "true", "false"},
+    {"perception.lane_detection.projection", "pnp_swapped", "ideal"},
+    {"perception.lane_detection.sw_no_line", "silent", "invalid"},
 };
 // The scenario-level option a top-level preset sets: the lab's vtl.py, or ours.
 constexpr PresetOption kScenarioOptions[] = {{"traffic_lights.policy", "original", "fifo"}};

@@ -21,10 +21,30 @@ namespace {
 
 constexpr const char* kScenario = "scenarios/lab_two_cars.yaml";
 
+// The times and margins below were measured with our lane detection, so the runs keep it (the
+// `safe` values of the six perception.lane_detection options, issue 31). Under the lab's, which
+// stack.preset lab now sets, the default run differs from about 6 s on (car 1 goes at 8.1 s, not
+// 7.8 s), a frozen colour camera takes car 1 0.153 m off its lane in the corner (0.119 m without
+// the fault; 0.378 m with ours), and a blacked-out camera gives messages whose `valid` is never 0
+// (rt_polyfit's overwrite) but whose points are not numbers, so the car stops just the same.
+std::vector<std::string> OurLaneDetection() {
+  std::vector<std::string> sets;
+  for (const char* car : {"cars[0]", "cars[1]"}) {
+    for (const char* option :
+         {"hw_pixel_classes=non_zero", "hw_no_line=white_below_min", "hw_truncate_points=false",
+          "hw_valid_overwrite=false", "projection=ideal", "sw_no_line=invalid"}) {
+      sets.push_back(std::string(car) + ".perception.lane_detection." + option);
+    }
+  }
+  return sets;
+}
+
 RunRecord RunWithFaults(const std::string& faults, double duration_s = 25.0,
                         std::vector<std::string> more = {}) {
   std::vector<std::string> overrides = {"duration_s=" + std::to_string(duration_s), "expect=[]",
                                         "faults=" + faults};
+  const std::vector<std::string> lanes = OurLaneDetection();
+  overrides.insert(overrides.end(), lanes.begin(), lanes.end());
   overrides.insert(overrides.end(), more.begin(), more.end());
   return RunScenario(LoadScenario(kScenario, overrides));
 }

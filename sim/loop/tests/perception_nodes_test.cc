@@ -113,6 +113,27 @@ TEST(PerceptionNodesTest, TheLaneIsSeenWhereItIs) {
   EXPECT_GT(record.cars[0].perception->lane_error_samples, 50u);
 }
 
+// The lab's software node returns before publishing when it finds no line
+// (autonomros_lane_detection/src/lane_detector.cpp:273-276): under sw_no_line silent the topic
+// carries the valid frames only, and the controller keeps the last; ours publishes them invalid.
+TEST(PerceptionNodesTest, WithoutALineTheLabsSoftwareNodePublishesNothing) {
+  const auto run = [](const char* sw_no_line) {
+    return RunScenario(LoadScenario(
+        kDefault,
+        WithPerception(
+            {"duration_s=30", "cars[0].platform.mapping.lane_detection.target=sw",
+             std::string("cars[0].perception.lane_detection.sw_no_line=") + sw_no_line})));
+  };
+  const RunRecord silent = run("silent");
+  const RunRecord invalid = run("invalid");
+  ASSERT_TRUE(silent.cars[0].perception && invalid.cars[0].perception);
+  const PerceptionMetrics& s = *silent.cars[0].perception;
+  const PerceptionMetrics& i = *invalid.cars[0].perception;
+  EXPECT_LT(i.lane_valid_frames, i.lane_frames);        // frames without a line were published
+  EXPECT_EQ(s.lane_valid_frames, s.lane_frames);        // ... and are not under silent
+  EXPECT_EQ(s.lane_valid_frames, i.lane_valid_frames);  // the oracle drives: the same frames
+}
+
 TEST(PerceptionNodesTest, AnEmptyRoadHoldsNoObstacleAndABoxOnTheLaneFillsTheGrid) {
   // the box stands on car 1's lane from 5 s on; before it, car 1 sees only the painted road
   const RunRecord before = RunScenario(

@@ -316,7 +316,14 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
     return RunScenario(LoadScenario(
         "scenarios/stack_obstacle.yaml",
         {"duration_s=27", "expect=[]", "cars[0].stack.follow_path.collision.model=" + m,
-         "cars[0].stack.lane_controller.collision.model=" + m}));
+         "cars[0].stack.lane_controller.collision.model=" + m,
+         // the gaps below were measured with our lane detection (issue 31: with the lab's,
+         // which the preset sets, footprint stops the car 0.108 m short of the box)
+         "cars[0].perception.lane_detection.hw_pixel_classes=non_zero",
+         "cars[0].perception.lane_detection.hw_no_line=white_below_min",
+         "cars[0].perception.lane_detection.hw_truncate_points=false",
+         "cars[0].perception.lane_detection.hw_valid_overwrite=false",
+         "cars[0].perception.lane_detection.projection=ideal"}));
   };
   const RunRecord lab = run("centre");
   const RunRecord safe = run("footprint");
