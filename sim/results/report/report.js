@@ -344,8 +344,10 @@
       ]);
       ctx.fillStyle = "#ffffff";
       ctx.fill();
+      // the id above the car's drawn extent, whichever way it points (not on its body)
       const [lx, ly] = toPx(p.x, p.y);
-      labelText(String(car.id), lx - 4, ly - (car.width_m / 2) * view.px_per_m - 12, "#ffffff");
+      const halfHeight = Math.abs(s) * car.length_m / 2 + Math.abs(c) * car.width_m / 2;
+      labelText(String(car.id), lx - 4, ly - halfHeight * view.px_per_m - 6, "#ffffff");
     }
     // the strip below the floor: clock and scale bar
     ctx.fillStyle = "#1d1f23";
