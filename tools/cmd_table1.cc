@@ -1,6 +1,7 @@
-// `autonomsim table1`: the paper's Table I test setup (camera publisher at 30 fps, one processing
+// `autonomsim table1`: the paper's Table I test setup (camera driver at 30 fps, one processing
 // component, a rate probe) for all eight configurations on the platform model, beside the paper's
-// ranges; and the whole unit in software. Exit 0 only when every cell is in the paper's range.
+// ranges, each row's processes beside the lab's sheet's; and the whole unit in software. Exit 0
+// only when every cell is in the paper's range.
 #include <fmt/format.h>
 
 #include <algorithm>

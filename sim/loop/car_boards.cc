@@ -27,21 +27,24 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
   const std::string name = "car" + std::to_string(config.id);
   auto board = std::make_unique<Board>(kernel, name, config.platform, profile, &streams);
   NodeGraph& graph = board->graph();
-  // The camera drivers: each publishes its frames, captured at its stream's instants. The QoS
-  // depth of each: ColorImageDepth (sim/car/perception_nodes.h).
+  // The camera drivers as the lab runs them (reference §2, §8), each a process with its own cost
+  // in the profile: Cam2Image for the colour camera (code/ros_ws/src/camera/src/cam2image.cpp),
+  // AstraSDK for the depth camera (code/ros_ws/src/astra_pro). Each publishes its frames, captured
+  // at its stream's instants. The QoS depth of each: ColorImageDepth (sim/car/perception_nodes.h).
   const auto camera_topic = [&](const SensorStream& stream, int depth) {
     return graph.AddTopic<CameraFrame>(
         {.name = stream.topic,
          .type = MessageType{stream.type.name, stream.type.bytes, true},
          .depth = depth});
   };
-  const NodeMappingConfig camera_cost{.cost = "camera_publisher"};
+  const NodeMappingConfig color_driver{.cost = "cam2image"};
+  const NodeMappingConfig depth_driver{.cost = "astra_sdk"};
   const SensorStream& color = suite->color_stream();
   const SensorStream& depth = suite->depth_stream();
   const TopicId<CameraFrame> image = camera_topic(color, ColorImageDepth(config.platform.mapping));
   const TopicId<CameraFrame> depth_image = camera_topic(depth, TopicSpec{}.depth);
   AddSourceNode(
-      graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = camera_cost},
+      graph, NodeSpec{.name = suite->color_camera().params().camera.name, .mapping = color_driver},
       image, color.first, color.period, [suite, agent](Time) {
         CameraFrame frame = suite->CaptureColorFrame();
         // the car's pose now, which is the frame's unless the camera froze (then the detection is
@@ -50,7 +53,7 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
         return frame;
       });
   AddSourceNode(
-      graph, NodeSpec{.name = suite->depth_camera().params().camera.name, .mapping = camera_cost},
+      graph, NodeSpec{.name = suite->depth_camera().params().camera.name, .mapping = depth_driver},
       depth_image, depth.first, depth.period, [suite](Time) { return suite->CaptureDepthFrame(); });
 
   if (config.perception.enabled) {

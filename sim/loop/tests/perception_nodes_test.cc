@@ -61,9 +61,14 @@ TEST(PerceptionNodesTest, InSoftwareTheGraphIsTheRos2NodesAndSlower) {
   EXPECT_GT(Node(sw, "lane_detection").turnaround_ms.p50, hw_lane_ms);
   EXPECT_GT(sw.boards[0].report.cpu_percent, hw.boards[0].report.cpu_percent + 100.0);
   // the same frames give the same lanes either way (the component does not depend on the
-  // mapping); only the last frame or two may still be in the longer software pipeline at the end
+  // mapping); only the last frame or two may still be in the longer software pipeline at the end.
+  // In software the lane node shares the cores with the other software nodes and the camera
+  // drivers (the lab's sheet: docs/model.md#table-i) and falls behind: each frame its KeepLast(1)
+  // queue drops is one lane result fewer.
   ASSERT_TRUE(sw.cars[0].perception && hw.cars[0].perception);
-  EXPECT_NEAR(static_cast<double>(sw.cars[0].perception->lane_valid_frames),
+  const std::uint64_t sw_lane_drops = Node(sw, "lane_detection").drops;
+  EXPECT_GT(sw_lane_drops, 0u);
+  EXPECT_NEAR(static_cast<double>(sw.cars[0].perception->lane_valid_frames + sw_lane_drops),
               static_cast<double>(hw.cars[0].perception->lane_valid_frames), 2.0);
 }
 

@@ -253,8 +253,8 @@ TEST(Profile, TheZcu104ProfileLoadsAndNamesEveryComponentOfTableI) {
   EXPECT_EQ(p.fpga.slots, 3);
   EXPECT_EQ(p.zero_copy.max_subscribers, 127);
   EXPECT_EQ(p.zero_copy.max_loans_per_publisher, 8);
-  for (const char* name : {"camera_publisher", "fps_probe", "point_cloud", "obstacle_detection",
-                           "lane_detection", "lane_planner", "poly_fit"}) {
+  for (const char* name : {"astra_sdk", "cam2image", "camera_publisher", "fps_probe", "point_cloud",
+                           "obstacle_detection", "lane_detection", "lane_planner", "poly_fit"}) {
     EXPECT_NO_THROW(p.Component(name)) << name;
   }
   EXPECT_TRUE(p.Component("point_cloud").hw.has_value());
