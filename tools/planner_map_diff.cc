@@ -7,7 +7,7 @@
 //   red        occupied in ours only
 //   blue       occupied in the lab's only
 //   light grey graded (1..99: FREE for the planner) in either map, occupied in neither
-//   white      free in both
+//   white      clear (value 0) in both
 // Run from the repository root:
 //   build/bin/planner_map_diff --lab-image ../shared/reference/lab_final_map.png
 //       --out docs/images/planner_map_diff.png
@@ -49,8 +49,8 @@ void PrintGreyLevels(const cv::Mat& grey, int transparent) {
     for (int c = 0; c < grey.cols; ++c) ++count[grey.at<std::uint8_t>(r, c)];
   }
   long between = 0;
-  std::printf("lab picture: %d x %d px, %d not opaque\ngrey levels with more than 100 px:", grey.cols,
-              grey.rows, transparent);
+  std::printf("lab picture: %d x %d px, %d not opaque\ngrey levels with more than 100 px:",
+              grey.cols, grey.rows, transparent);
   for (const auto& [level, n] : count) {
     if (n > 100) std::printf(" %d (%ld px)", level, n);
     if (n <= 100) between += n;
@@ -91,7 +91,7 @@ cv::Mat Difference(const OccupancyMap& ours, const cv::Mat& lab_grey,
       }
     }
   }
-  const char* names[] = {"free", "graded", "occupied"};
+  const char* names[] = {"clear", "graded", "occupied"};
   std::printf("cells (ours x lab's):\n");
   for (int m = 0; m < 3; ++m) {
     for (int t = 0; t < 3; ++t) {
@@ -116,8 +116,8 @@ void DrawLegend(cv::Mat* image, double crop_m) {
   }
   char caption[96];
   std::snprintf(caption, sizeof caption, "x, y in [-%.1f, %.1f] m, 0.00517 m/px", crop_m, crop_m);
-  cv::putText(*image, caption, {12, image->rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.55, {0, 0, 0},
-              1, cv::LINE_AA);
+  cv::putText(*image, caption, {12, image->rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.55, {0, 0, 0}, 1,
+              cv::LINE_AA);
 }
 
 }  // namespace
