@@ -137,8 +137,11 @@ void DrawChord(const Chord& chord, Canvas* canvas) {
       if (t > length && !(chord.ends && chord.b == chord.ends[1].point)) d = (p - ab).norm();
       double coverage = EdgeCoverage(chord.half_width_m - d, res);
       if (chord.ends != nullptr) {
-        for (int e = 0; e < 2; ++e) {
-          coverage *= EdgeCoverage(-(c - chord.ends[e].point).dot(chord.ends[e].outward), res);
+        for (int e = 0; e < 2; ++e) {  // the square cap: the end's chord, and others near it
+          const Vec2 from_end = c - chord.ends[e].point;
+          const bool own = (e == 0 ? chord.a : chord.b) == chord.ends[e].point;
+          if (!own && from_end.norm() > 1.5 * reach) continue;
+          coverage *= EdgeCoverage(-from_end.dot(chord.ends[e].outward), res);
         }
       }
       if (coverage <= 0.0) continue;

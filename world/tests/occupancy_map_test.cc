@@ -128,6 +128,14 @@ TEST(OccupancyMapTest, AStrokeIsDrawnInItsGreyWithOneGradedCellAtEachEdgeAndFlat
   EXPECT_EQ(value(1.015, 0.005), 0);
   EXPECT_TRUE(map.Occupied({0.0, 0.0}));
   EXPECT_FALSE(map.Occupied({0.0, -0.015}));  // graded cells are not occupied
+  // A U whose ends lie at different heights, as the lab's yellow loop (y = 0.63 on the right,
+  // 0.68 on the left): each end's square cap clips the stroke only near that end.
+  spec.lines = {Line("u", {{1.0, 0.5}, {1.0, 1.5}, {-1.0, 1.5}, {-1.0, 0.8}}, false, 0.2, "line")};
+  const OccupancyMap u = BuildStaticMap(Track(spec), 0.01);
+  EXPECT_TRUE(u.Occupied({1.0, 0.6}));  // below the other end's 0.8
+  EXPECT_TRUE(u.Occupied({-1.0, 0.805}));
+  EXPECT_FALSE(u.Occupied({-1.0, 0.78}));
+  EXPECT_FALSE(u.Occupied({1.0, 0.48}));
 }
 
 TEST(OccupancyMapTest, HollowAndFilledOutlinesAndIgnoredLines) {
