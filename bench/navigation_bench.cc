@@ -1,8 +1,11 @@
 // Issue 6: the costmaps and the global planner on the lab track (scenarios/tracks/lab.yaml; run
 // from the repository root).
 //   BM_GlobalPlanLab       A* from the real car's start (outer south lane) to the outer north lane
-//                          on the inflated 100 × 100 global costmap (reference §1, §6).
+//                          on the inflated 1934 × 1934 global costmap at the map's 0.00517 m
+//                          (reference §1, §6), smoothed.
 //   BM_GlobalPlanLabScratch  the same with the search's memory kept from plan to plan.
+//   BM_PlanThroughPosesLab the planner node's plan (1 Hz per car): ten goals 0.25 m apart along
+//                          the outer south lane, one Smac 2D leg each.
 //   BM_InflateGlobal       static layer + inflation rebuild of the global costmap.
 //   BM_LocalCostmapUpdate  one 5 × 5 m rolling local costmap update with the 234 marks of the
 //                          obstacle grid (reference §4), the car moving along the lane.
@@ -22,8 +25,9 @@ using autonomsim::stack::CostmapMark;
 using autonomsim::world::Vec2;
 
 const autonomsim::world::OccupancyMap& LabMap() {
-  static const autonomsim::world::OccupancyMap map = autonomsim::world::BuildStaticMap(
-      autonomsim::sim::LoadTrack("scenarios/tracks/lab.yaml"), 0.05);
+  static const autonomsim::world::OccupancyMap map =
+      autonomsim::world::BuildStaticMap(autonomsim::sim::LoadTrack("scenarios/tracks/lab.yaml"),
+                                        autonomsim::world::kLabMapResolution_m);
   return map;
 }
 
@@ -58,6 +62,26 @@ void BM_GlobalPlanLabScratch(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_GlobalPlanLabScratch)->Unit(benchmark::kMicrosecond);
+
+void BM_PlanThroughPosesLab(benchmark::State& state) {
+  const autonomsim::stack::GlobalCostmap global({}, LabMap());
+  const autonomsim::stack::GlobalPlannerParams params;
+  autonomsim::stack::PlannerScratch scratch;
+  std::vector<Vec2> goals;
+  for (int k = 1; k <= 10; ++k) goals.emplace_back(-1.5 + 0.25 * k, -2.17);
+  int expansions = 0;
+  for (auto _ : state) {
+    const auto plan =
+        PlanThroughPoses(params, global.costmap(), Vec2(-1.5, -2.17), goals, &scratch);
+    if (!plan.ok()) state.SkipWithError("no plan");
+    expansions = plan.expansions;
+    benchmark::DoNotOptimize(plan.path_m.data());
+  }
+  state.counters["expansions"] = expansions;
+  state.counters["scratch_bytes"] = static_cast<double>(scratch.bytes());
+  state.counters["costmap_bytes"] = static_cast<double>(global.bytes());
+}
+BENCHMARK(BM_PlanThroughPosesLab)->Unit(benchmark::kMicrosecond);
 
 void BM_InflateGlobal(benchmark::State& state) {
   autonomsim::stack::GlobalCostmap global({}, LabMap());

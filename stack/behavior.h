@@ -53,8 +53,8 @@ struct BehaviorParams {
   // other outputs (hold, attempt, recovery) go out on the tick they change
   Duration goals_period{333'333'333};  // 1/3 s
   // assumed: NavigateThroughPoses goals along the lane, one every quarter metre. Between goals
-  // the cost term of A* pulls the path towards the middle of free space (at 0.5 m spacing up to
-  // 0.16 m off the lane on the lab; at 0.25 m 0.11 m: GlobalPlannerLabTest)
+  // the cost term of A* pulls the path towards the middle of free space (at 0.25 m spacing up to
+  // 0.08 m off the lane on the lab's map: GlobalPlannerLabTest)
   double waypoint_spacing_m{0.25};
   // assumed: the goals reach as far ahead as the local costmap's half width (reference §6: 5 m
   // rolling window), so the path always covers the controller's 0.6 m lookahead

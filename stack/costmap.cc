@@ -219,7 +219,13 @@ void Inflation::Apply(Costmap2D* grid) const {
 
 // --- layers ------------------------------------------------------------------------------------
 
-Costmap2D StaticLayer(const world::OccupancyMap& map) {
+void StaticLayerParams::Validate() const {
+  Require(lethal_cost_threshold >= 0 && lethal_cost_threshold <= 100, [&] {
+    return "lethal_cost_threshold must be in [0, 100], got " + Num(lethal_cost_threshold);
+  });
+}
+
+Costmap2D StaticLayer(const world::OccupancyMap& map, const StaticLayerParams& params) {
   Require(map.width_cells > 0 && map.height_cells > 0 &&
               map.cells.size() == static_cast<std::size_t>(map.width_cells) * map.height_cells,
           [&] {
@@ -228,12 +234,19 @@ Costmap2D StaticLayer(const world::OccupancyMap& map) {
           });
   Costmap2D layer(map.width_cells, map.height_cells, map.resolution_m, map.origin_m);
   std::vector<std::uint8_t>& costs = layer.mutable_costs();
+  const int threshold = params.lethal_cost_threshold;
   for (std::size_t i = 0; i < map.cells.size(); ++i) {
-    // Nav2 StaticLayer::interpretValue with trinary_costmap and lethal_cost_threshold 100.
-    const std::int8_t value = map.cells[i];
-    costs[i] = value < 0                                 ? kNoInformation
-               : value >= world::OccupancyMap::kOccupied ? kLethalObstacle
-                                                         : kFreeSpace;
+    const int value = map.cells[i];
+    if (value < 0) {
+      costs[i] = kNoInformation;  // OccupancyGrid -1 is 255 = unknown_cost_value
+    } else if (value >= threshold) {
+      costs[i] = kLethalObstacle;
+    } else if (params.trinary_costmap) {
+      costs[i] = kFreeSpace;
+    } else {
+      costs[i] =
+          static_cast<std::uint8_t>(static_cast<double>(value) / threshold * kLethalObstacle);
+    }
   }
   return layer;
 }
@@ -264,6 +277,7 @@ void CombineMax(const Costmap2D& layer, Costmap2D* master) {
 void GlobalCostmapParams::Validate() const {
   Require(std::isfinite(resolution_m) && resolution_m > 0.0,
           [&] { return "resolution_m must be > 0, got " + Num(resolution_m); });
+  static_layer.Validate();
   inflation.Validate();
   footprint.Validate();
 }
@@ -283,25 +297,32 @@ const LocalCostmapParams& Validated(const LocalCostmapParams& params) {
 }  // namespace
 
 GlobalCostmap::GlobalCostmap(const GlobalCostmapParams& params, const world::OccupancyMap& map)
-    : inflation_(Validated(params).inflation, InscribedRadius_m(params.footprint.Polygon()),
+    : params_(params),
+      inflation_(Validated(params).inflation, InscribedRadius_m(params.footprint.Polygon()),
                  params.resolution_m),
-      static_(StaticLayer(map)) {
+      static_(StaticLayer(map, params.static_layer)) {
   Require(map.resolution_m == params.resolution_m, [&] {
     return "resolution_m: the static map is at " + Num(map.resolution_m) +
            " m, the global costmap at " + Num(params.resolution_m) + " m";
   });
-  obstacles_ = Costmap2D(static_.size_x_cells(), static_.size_y_cells(), static_.resolution_m(),
-                         static_.origin_m(), kFreeSpace);
   Update();
 }
 
 const Costmap2D& GlobalCostmap::Update(const std::vector<CostmapMark>& marks) {
+  if (!marks.empty() && obstacles_.costs().empty()) {
+    obstacles_ = Costmap2D(static_.size_x_cells(), static_.size_y_cells(), static_.resolution_m(),
+                           static_.origin_m(), kFreeSpace);
+  }
   ApplyMarks(marks, &obstacles_);
   // The static layer overwrites the master grid (Nav2 StaticLayer, use_maximum false).
   master_ = static_;
-  CombineMax(obstacles_, &master_);
+  if (!obstacles_.costs().empty()) CombineMax(obstacles_, &master_);
   inflation_.Apply(&master_);
   return master_;
+}
+
+std::size_t GlobalCostmap::bytes() const {
+  return static_.costs().size() + obstacles_.costs().size() + master_.costs().size();
 }
 
 // --- rolling window and local costmap ----------------------------------------------------------

@@ -1,6 +1,6 @@
 // Nav2-style 2D costmaps for the planner and the controller (reference §6): a uint8 grid with
 // Nav2's cost values, and the three layers the real car's costmaps used:
-//   static     the map the car is given (world::OccupancyMap): occupied -> LETHAL;
+//   static     the map the car is given (world::OccupancyMap), as Galactic's StaticLayer reads it;
 //   obstacle   marks from the obstacle-grid layer (reference §4): LETHAL or FREE per cell centre;
 //   inflation  Nav2's InflationLayer: LETHAL at an obstacle cell, INSCRIBED within the footprint's
 //              inscribed radius, 252·exp(−scale·(d − r_inscribed)) out to the inflation radius.
@@ -96,6 +96,7 @@ struct FootprintParams {
     v("half_width_m", half_width_m);
   }
   void Validate() const;
+  bool operator==(const FootprintParams&) const = default;
   std::vector<world::Vec2> Polygon() const;  // counter-clockwise, base_link frame
 };
 
@@ -113,6 +114,7 @@ struct InflationParams {
     v("cost_scaling_factor", cost_scaling_factor);
   }
   void Validate() const;
+  bool operator==(const InflationParams&) const = default;
 };
 
 // Nav2's InflationLayer on a grid of one resolution, with its costs cached per cell distance (as
@@ -145,9 +147,28 @@ class Inflation {
   std::vector<std::uint8_t> cost_by_distance_sq_;  // index dx² + dy² <= cell_radius²
 };
 
-// The static layer (Nav2 StaticLayer, trinary): occupied -> LETHAL, free -> FREE, unknown (-1) ->
-// NO_INFORMATION; same geometry as the map.
-Costmap2D StaticLayer(const world::OccupancyMap& map);
+// How Galactic's StaticLayer reads the map's values (nav2_costmap_2d/plugins/static_layer.cpp:
+// 252-267, StaticLayer::interpretValue), with the global costmap's parameters.
+struct StaticLayerParams {
+  // Galactic's default (costmap_2d_ros.cpp:112; nav2_car_params.yaml:221-240 does not set it):
+  // every value below lethal_cost_threshold becomes FREE, so the graded greys of the lab's
+  // `mode: scale` map never reach the planner.
+  bool trinary_costmap{true};
+  int lethal_cost_threshold{100};  // Galactic's default (costmap_2d_ros.cpp:96), not set
+
+  template <class V>
+  void Describe(V& v) {
+    v("trinary_costmap", trinary_costmap);
+    v("lethal_cost_threshold", lethal_cost_threshold);
+  }
+  void Validate() const;  // threshold in [0, 100] (Galactic clamps it, static_layer.cpp:160)
+  bool operator==(const StaticLayerParams&) const = default;
+};
+
+// The static layer (Nav2 StaticLayer, track_unknown_space true, nav2_car_params.yaml:231):
+// unknown (-1) -> NO_INFORMATION; value >= lethal_cost_threshold -> LETHAL; otherwise FREE when
+// trinary, else value / threshold · LETHAL (truncated); same geometry as the map.
+Costmap2D StaticLayer(const world::OccupancyMap& map, const StaticLayerParams& params = {});
 
 // A mark of the obstacle layer: the obstacle-grid layer writes each of its cell centres as LETHAL
 // (count above its threshold) or FREE (reference §4). p is in the costmap's frame.
@@ -166,21 +187,25 @@ int ApplyMarks(const std::vector<CostmapMark>& marks, Costmap2D* obstacle_layer)
 void CombineMax(const Costmap2D& layer, Costmap2D* master);
 
 struct GlobalCostmapParams {
-  // reference §6: the global costmap runs at 0.05 m. The world map handed in must have this
-  // resolution (world::BuildStaticMap(track, 0.05)). Note: Nav2's StaticLayer::processMap resizes
-  // a non-rolling costmap to the map's own resolution, so the real car's global costmap may well
-  // have run at the map's 0.00517 m despite the 0.05 m parameter; we follow the reference.
-  double resolution_m{0.05};
+  // The map's resolution (simplestreet3.yaml:18, 0.00517063 m): the yaml's `resolution: 0.05`
+  // (nav2_car_params.yaml:230) does not hold, because Galactic's StaticLayer::processMap resizes a
+  // non-rolling costmap to the map's size, resolution and origin (static_layer.cpp:180-197;
+  // reference §6). The world map handed in must have this resolution
+  // (world::BuildStaticMap(track, resolution_m)).
+  double resolution_m{world::kLabMapResolution_m};
+  StaticLayerParams static_layer{};
   InflationParams inflation{};  // reference §6: static + inflation (scale 5.0, radius 0.4)
   FootprintParams footprint{};  // reference §2
 
   template <class V>
   void Describe(V& v) {
     v("resolution_m", resolution_m);
+    v("static_layer", static_layer);
     v("inflation", inflation);
     v("footprint", footprint);
   }
   void Validate() const;
+  bool operator==(const GlobalCostmapParams&) const = default;
 };
 
 // The planner's costmap over the whole static map: static + obstacle + inflation. The real car's
@@ -198,9 +223,14 @@ class GlobalCostmap {
 
   const Costmap2D& costmap() const { return master_; }
   const Costmap2D& static_layer() const { return static_; }
+  const GlobalCostmapParams& params() const { return params_; }
+  // Empty (0 cells) until the first marks arrive: at the map's resolution a layer is 3.7 MB.
   const Costmap2D& obstacle_layer() const { return obstacles_; }
+  // The grids' bytes (static, obstacle and master layers).
+  std::size_t bytes() const;
 
  private:
+  GlobalCostmapParams params_;
   Inflation inflation_;
   Costmap2D static_;
   Costmap2D obstacles_;

@@ -4,44 +4,22 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numbers>
+#include <optional>
 
 #include "world/validation.h"
 
 namespace autonomsim::stack {
-namespace {
 
-// assumed: far below a cell (0.05 m), far above the rounding of cell-centre coordinates.
-constexpr double kSameDistance_m = 1e-9;
-
-using OpenEntry = PlannerScratch::OpenEntry;
-
-// The open list is a heap with the least (f, h, index) on top (std::push_heap and pop_heap with
-// "greater", as std::priority_queue would order it).
-struct WorseEntry {
-  bool operator()(const OpenEntry& a, const OpenEntry& b) const {
-    if (a.f != b.f) return a.f > b.f;
-    if (a.h != b.h) return a.h > b.h;
-    return a.index > b.index;
-  }
-};
-
-std::vector<world::Vec2> Backtrace(const Costmap2D& costmap, const int* parent, int end) {
-  std::vector<world::Vec2> path;
-  for (int i = end; i >= 0; i = parent[i]) {
-    const CellIndex cell = costmap.Cell(static_cast<std::size_t>(i));
-    path.push_back(costmap.MapToWorld(cell.mx, cell.my));
-  }
-  return {path.rbegin(), path.rend()};
+void SmootherParams::Validate() const {
+  Require(max_iterations > 0,
+          [&] { return "smoother.max_iterations must be > 0, got " + Num(max_iterations); });
+  Require(std::isfinite(w_smooth) && w_smooth >= 0.0,
+          [&] { return "smoother.w_smooth must be >= 0, got " + Num(w_smooth); });
+  Require(std::isfinite(w_data) && w_data >= 0.0,
+          [&] { return "smoother.w_data must be >= 0, got " + Num(w_data); });
+  Require(std::isfinite(tolerance) && tolerance > 0.0,
+          [&] { return "smoother.tolerance must be > 0, got " + Num(tolerance); });
 }
-
-double Length_m(const std::vector<world::Vec2>& path) {
-  double length = 0.0;
-  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
-  return length;
-}
-
-}  // namespace
 
 void GlobalPlannerParams::Validate() const {
   Require(std::isfinite(tolerance_m) && tolerance_m >= 0.0,
@@ -51,6 +29,10 @@ void GlobalPlannerParams::Validate() const {
   });
   Require(max_expansions > 0,
           [&] { return "max_expansions must be > 0, got " + Num(max_expansions); });
+  Require(max_on_approach_iterations > 0, [&] {
+    return "max_on_approach_iterations must be > 0, got " + Num(max_on_approach_iterations);
+  });
+  smoother.Validate();
   Require(start_escape_m >= 0.0 && start_escape_m <= 2.0,
           [&] { return "start_escape_m must be in [0, 2] m, got " + Num(start_escape_m); });
 }
@@ -63,179 +45,332 @@ std::string ToString(PlanStatus status) {
       return "start outside the costmap";
     case PlanStatus::kGoalOutsideMap:
       return "goal outside the costmap";
+    case PlanStatus::kStartOccupied:
+      return "start in lethal space";
     case PlanStatus::kNoPath:
-      return "no path within tolerance of the goal";
+      return "no valid path found";
     case PlanStatus::kExpansionLimit:
       return "expansion limit reached";
   }
   return "unknown";
 }
 
+// --- the smoother (Galactic smoother.hpp:71-188) -----------------------------------------------
+
 namespace {
 
-// Smac's neighbour order (cardinal moves first), as (dx, dy, step in cells).
-struct Move {
-  int dx;
-  int dy;
-  double step;
-};
-constexpr double kDiagonal = std::numbers::sqrt2;
-constexpr Move kMoves[8] = {{-1, 0, 1.0},       {1, 0, 1.0},         {0, -1, 1.0},
-                            {0, 1, 1.0},        {-1, -1, kDiagonal}, {1, -1, kDiagonal},
-                            {-1, 1, kDiagonal}, {1, 1, kDiagonal}};
+// Galactic's MAX_NON_OBSTACLE (nav2_smac_planner/constants.hpp): 252.
+bool InCollision(const Costmap2D& costmap, const world::Vec2& p) {
+  const std::optional<std::uint8_t> cost = costmap.CostAt(p);
+  return !cost || *cost > kMaxNonInscribedCost;
+}
 
-// The search's memory, a PlannerScratch's: per cell g, parent and the stamps saying whether this
-// search reached or closed it; the open list.
-struct SearchMemory {
-  double* g_cells;
-  int* parent;
-  std::uint32_t* reached;
-  std::uint32_t* closed;
-  std::uint32_t search;
-  std::vector<OpenEntry>* open;
+// One smoothing pass over *path (the data it is pulled back to is *path as it came in);
+// `refine`: a converged pass smooths its result once more (smoother.hpp:165-169).
+SmoothResult SmoothPass(const SmootherParams& params, const Costmap2D& costmap, bool refine,
+                        std::vector<world::Vec2>* path) {
+  const std::vector<world::Vec2>& data = *path;
+  const std::size_t n = data.size();
+  std::vector<world::Vec2> next = data;
+  std::vector<world::Vec2> last = data;
+  SmoothResult result;
+  double change = params.tolerance;
+  int its = 0;
+  while (change >= params.tolerance) {
+    ++its;
+    change = 0.0;
+    if (its >= params.max_iterations) {
+      *path = std::move(last);
+      return result;
+    }
+    for (std::size_t i = 2; i != n - 2; ++i) {
+      for (int j = 0; j != 2; ++j) {
+        const double x_i = data[i][j];
+        double y_i = next[i][j];
+        const double y_org = y_i;
+        const double y_m1 = next[i - 1][j];
+        const double y_p1 = next[i + 1][j];
+        if (i > 2) {
+          const double y_m2 = next[i - 2][j];
+          const double y_p2 = next[i + 2][j];
+          y_i += params.w_data * (x_i - y_i) +
+                 params.w_smooth * (y_m2 + y_p2 + y_p1 + y_m1 - 4.0 * y_i);
+        } else {
+          y_i += params.w_data * (x_i - y_i) + params.w_smooth * (y_p1 + y_m1 - 2.0 * y_i);
+        }
+        next[i][j] = y_i;
+        change += std::abs(y_i - y_org);
+      }
+      if (InCollision(costmap, next[i])) {
+        *path = std::move(last);
+        return result;
+      }
+    }
+    last = next;
+    result.sweeps = its;
+  }
+  if (refine) SmoothPass(params, costmap, false, &next);
+  *path = std::move(next);
+  result.converged = true;
+  return result;
+}
+
+}  // namespace
+
+SmoothResult SmoothPath(const SmootherParams& params, const Costmap2D& costmap,
+                        std::vector<world::Vec2>* path) {
+  if (path->size() < 5) return {};  // no pose between the two fixed ones at each end
+  return SmoothPass(params, costmap, true, path);
+}
+
+// --- the search (Galactic a_star.cpp, node_2d.cpp) ---------------------------------------------
+
+std::size_t PlannerScratch::bytes() const {
+  return slots_.capacity() * sizeof(Slot) + open_.capacity() * sizeof(OpenEntry);
+}
+
+void PlannerScratch::Begin() {
+  constexpr std::size_t kInitialSlots = std::size_t{1} << 15;  // assumed: a few legs' searches
+  if (slots_.empty()) slots_.assign(kInitialSlots, Slot{0, -1, {}});
+  used_ = 0;
+  open_.clear();
+  if (++search_ == 0) {  // the stamps wrapped: clear them once
+    for (Slot& slot : slots_) slot.stamp = 0;
+    search_ = 1;
+  }
+}
+
+std::size_t PlannerScratch::SlotOf(int key) const {
+  // Fibonacci hashing onto the power-of-two table.
+  return (static_cast<std::uint32_t>(key) * 2654435769u) & (slots_.size() - 1);
+}
+
+PlannerScratch::Node* PlannerScratch::Find(int key) {
+  for (std::size_t i = SlotOf(key);; i = (i + 1) & (slots_.size() - 1)) {
+    Slot& slot = slots_[i];
+    if (slot.stamp != search_) return nullptr;
+    if (slot.key == key) return &slot.node;
+  }
+}
+
+PlannerScratch::Node& PlannerScratch::Emplace(int key, const Node& fresh, bool* added) {
+  if (2 * (used_ + 1) > slots_.size()) Grow();
+  for (std::size_t i = SlotOf(key);; i = (i + 1) & (slots_.size() - 1)) {
+    Slot& slot = slots_[i];
+    if (slot.stamp != search_) {
+      slot = Slot{search_, key, fresh};
+      ++used_;
+      *added = true;
+      return slot.node;
+    }
+    if (slot.key == key) {
+      *added = false;
+      return slot.node;
+    }
+  }
+}
+
+void PlannerScratch::Grow() {
+  std::vector<Slot> old = std::move(slots_);
+  slots_.assign(2 * old.size(), Slot{0, -1, {}});
+  used_ = 0;
+  bool added = false;
+  for (const Slot& slot : old) {
+    if (slot.stamp == search_) Emplace(slot.key, slot.node, &added);
+  }
+}
+
+namespace {
+
+using OpenEntry = PlannerScratch::OpenEntry;
+using Node = PlannerScratch::Node;
+
+// The open list is a heap with the least (f, h, index) on top.
+struct WorseEntry {
+  bool operator()(const OpenEntry& a, const OpenEntry& b) const {
+    if (a.f != b.f) return a.f > b.f;
+    if (a.h != b.h) return a.h > b.h;
+    return a.index > b.index;
+  }
 };
 
-// One A* search from the start cell to the goal cell (Smac 2D's costs: a step's length times
-// 1 + cost_travel_multiplier · cost / kMaxNonInscribedCost; Euclidean heuristic).
+// Galactic's Moore neighbourhood in its order (node_2d.cpp:107-110): as (dx, dy).
+constexpr int kMoves[8][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+
+double Length_m(const std::vector<world::Vec2>& path) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+  return length;
+}
+
+}  // namespace
+
+// One search (AStarAlgorithm<Node2D>::createPath) on a costmap, in the scratch's memory.
 class AStarSearch {
  public:
   AStarSearch(const GlobalPlannerParams& params, const Costmap2D& costmap, CellIndex start,
-              CellIndex goal, const world::Vec2& goal_m, SearchMemory memory)
+              CellIndex goal, PlannerScratch* memory)
       : params_(params),
-        costmap_(costmap),
         costs_(costmap.costs()),
         nx_(costmap.size_x_cells()),
         ny_(costmap.size_y_cells()),
-        resolution_m_(costmap.resolution_m()),
         start_(start),
         goal_(goal),
-        goal_m_(goal_m),
-        goal_index_(static_cast<int>(costmap.Index(goal.mx, goal.my))),
-        escape_cells_sq_((params.start_escape_m / resolution_m_) *
-                         (params.start_escape_m / resolution_m_)),
-        m_(memory) {}
-
-  // Expands cells until the goal, the expansion limit or an empty open list; the plan's status,
-  // path, cost, length and expansions.
-  void Run(GlobalPlan* plan) {
-    const int start_index = static_cast<int>(costmap_.Index(start_.mx, start_.my));
-    m_.g_cells[start_index] = 0.0;
-    m_.parent[start_index] = -1;
-    m_.reached[start_index] = m_.search;
-    m_.open->clear();
-    const double h_start = Heuristic_m(start_.mx, start_.my);
-    Push({h_start, h_start, start_index});
-    std::vector<OpenEntry>& open = *m_.open;
-    while (!open.empty()) {
-      std::pop_heap(open.begin(), open.end(), WorseEntry{});
-      const OpenEntry top = open.back();
-      open.pop_back();
-      const int i = top.index;
-      if (m_.closed[i] == m_.search) continue;  // a stale entry: closed at a lower cost
-      m_.closed[i] = m_.search;
-      ++plan->expansions;
-      if (i == goal_index_) {
-        Finish(i, true, plan);
-        return;
-      }
-      const int mx = i % nx_;
-      const int my = i / nx_;
-      NoteIfNearest(i, mx, my);
-      if (plan->expansions >= params_.max_expansions) {
-        FinishWithinTolerance(PlanStatus::kExpansionLimit, plan);
-        return;
-      }
-      ExpandNeighbours(i, mx, my);
-    }
-    FinishWithinTolerance(PlanStatus::kNoPath, plan);
+        goal_index_(goal.my * nx_ + goal.mx),
+        tolerance_cells_(static_cast<float>(params.tolerance_m) /
+                         static_cast<float>(costmap.resolution_m())),
+        multiplier_(static_cast<float>(params.cost_travel_multiplier)),
+        escape_cells_sq_((params.start_escape_m / costmap.resolution_m()) *
+                         (params.start_escape_m / costmap.resolution_m())),
+        memory_(*memory),
+        open_(memory->open_) {
+    memory_.Begin();
   }
 
- private:
-  bool NearStart(int i) const {
-    const double dx = i % nx_ - static_cast<int>(start_.mx);
-    const double dy = i / nx_ - static_cast<int>(start_.my);
-    return dx * dx + dy * dy <= escape_cells_sq_;
-  }
-  bool Traversable(int i) const {
+  bool Valid(int i) const {
     const std::uint8_t c = costs_[i];
-    if (c == kNoInformation) return params_.allow_unknown;
+    if (c == kNoInformation && params_.allow_unknown) return true;
     return c < kInscribedInflatedObstacle ||
            (c == kInscribedInflatedObstacle && params_.start_escape_m > 0.0 && NearStart(i));
   }
-  double Heuristic_m(int mx, int my) const {
-    const double dx = mx - goal_.mx;
-    const double dy = my - goal_.my;
-    return resolution_m_ * std::sqrt(dx * dx + dy * dy);
+
+  // Expands until the goal, the approach limit, max_expansions or an empty open list (a_star.cpp:
+  // 250-308). The cell the path ends in, or -1 with the failure in *plan.
+  int Run(GlobalPlan* plan) {
+    const int start_index = start_.my * nx_ + start_.mx;
+    bool added = false;
+    memory_.Emplace(start_index, Node{0.0F, -1, false}, &added);
+    Push({0.0F, 0.0F, start_index});  // addNode(0.0, start): no heuristic for the start
+    int approach = 0;
+    while (plan->expansions < params_.max_expansions && !open_.empty()) {
+      std::pop_heap(open_.begin(), open_.end(), WorseEntry{});
+      const int i = open_.back().index;
+      open_.pop_back();
+      Node* node = memory_.Find(i);
+      if (node->closed) continue;  // queued again at a lower cost and already expanded
+      ++plan->expansions;
+      node->closed = true;
+      if (i == goal_index_) return i;
+      if (best_h_ < tolerance_cells_ && ++approach >= params_.max_on_approach_iterations) {
+        return best_index_;
+      }
+      ExpandNeighbours(i);
+    }
+    plan->status = plan->expansions < params_.max_expansions ? PlanStatus::kNoPath
+                                                             : PlanStatus::kExpansionLimit;
+    return -1;
   }
-  // The cost so far of cell i: +inf until this search reaches it.
-  double G(int i) const {
-    return m_.reached[i] == m_.search ? m_.g_cells[i] : std::numeric_limits<double>::infinity();
+
+  float G(int i) const { return memory_.Find(i)->g; }
+  int Parent(int i) const { return memory_.Find(i)->parent; }
+
+ private:
+  bool NearStart(int i) const {
+    const double dx = i % nx_ - start_.mx;
+    const double dy = i / nx_ - start_.my;
+    return dx * dx + dy * dy <= escape_cells_sq_;
   }
   void Push(const OpenEntry& entry) {
-    m_.open->push_back(entry);
-    std::push_heap(m_.open->begin(), m_.open->end(), WorseEntry{});
+    open_.push_back(entry);
+    std::push_heap(open_.begin(), open_.end(), WorseEntry{});
+  }
+  // Node2D::getTraversalCost (node_2d.cpp:64-79), in float as Galactic's.
+  float TraversalCost(int j, bool diagonal) const {
+    const float normalized = static_cast<float>(costs_[j] / 252.0);
+    static const float kSqrt2 = std::sqrt(2.0F);
+    return (diagonal ? kSqrt2 : 1.0F) + multiplier_ * normalized;
+  }
+  // Node2D::getHeuristicCost (node_2d.cpp:81-90): Manhattan, in cells.
+  float Heuristic(int mx, int my) const {
+    return std::fabs(static_cast<float>(goal_.mx - mx)) +
+           std::fabs(static_cast<float>(goal_.my - my));
   }
 
-  // The closed cell nearest the goal point (among equals the cheapest, then the lowest index),
-  // for the tolerance.
-  void NoteIfNearest(int i, int mx, int my) {
-    const double distance_m = (costmap_.MapToWorld(mx, my) - goal_m_).norm();
-    // Distances within kSameDistance_m are ties: rounding must not pick among equidistant cells.
-    const bool nearer = distance_m < nearest_distance_m_ - kSameDistance_m;
-    const bool tie = !nearer && distance_m <= nearest_distance_m_ + kSameDistance_m;
-    if (nearer || (tie && (G(i) < G(nearest_) || (G(i) == G(nearest_) && i < nearest_)))) {
-      nearest_distance_m_ = distance_m;
-      nearest_ = i;
-    }
-  }
-
-  void ExpandNeighbours(int i, int mx, int my) {
-    for (const Move& move : kMoves) {
-      const int cx = mx + move.dx;
-      const int cy = my + move.dy;
+  void ExpandNeighbours(int i) {
+    const int mx = i % nx_;
+    const int my = i / nx_;
+    const float g_i = memory_.Find(i)->g;
+    for (const auto& move : kMoves) {
+      const int cx = mx + move[0];
+      const int cy = my + move[1];
       if (cx < 0 || cx >= nx_ || cy < 0 || cy >= ny_) continue;
       const int j = cy * nx_ + cx;
-      if (m_.closed[j] == m_.search || !Traversable(j)) continue;
-      const double weight = 1.0 + params_.cost_travel_multiplier *
-                                      (static_cast<double>(costs_[j]) / kMaxNonInscribedCost);
-      const double g_new = G(i) + resolution_m_ * move.step * weight;
-      if (!(g_new < G(j))) continue;
-      m_.g_cells[j] = g_new;
-      m_.parent[j] = i;
-      m_.reached[j] = m_.search;
-      const double h = Heuristic_m(cx, cy);
-      Push({g_new + h, h, j});
-    }
-  }
-
-  void Finish(int end, bool exact, GlobalPlan* plan) const {
-    plan->status = PlanStatus::kOk;
-    plan->path_m = Backtrace(costmap_, m_.parent, end);
-    plan->cost = G(end);
-    plan->length_m = Length_m(plan->path_m);
-    plan->exact_goal = exact;
-  }
-  void FinishWithinTolerance(PlanStatus otherwise, GlobalPlan* plan) const {
-    if (nearest_ >= 0 && nearest_distance_m_ <= params_.tolerance_m) {
-      Finish(nearest_, false, plan);
-    } else {
-      plan->status = otherwise;
+      if (!Valid(j)) continue;
+      bool added = false;
+      Node& neighbour =
+          memory_.Emplace(j, Node{std::numeric_limits<float>::max(), -1, false}, &added);
+      if (neighbour.closed) continue;
+      const float g = g_i + TraversalCost(j, move[0] != 0 && move[1] != 0);
+      if (!(g < neighbour.g)) continue;
+      neighbour.g = g;
+      neighbour.parent = i;
+      const float h = Heuristic(cx, cy);
+      if (h < best_h_) {  // AStarAlgorithm::getHeuristicCost (a_star.cpp:405-418)
+        best_h_ = h;
+        best_index_ = j;
+      }
+      Push({g + h, h, j});
     }
   }
 
   const GlobalPlannerParams& params_;
-  const Costmap2D& costmap_;
   const std::vector<std::uint8_t>& costs_;
   const int nx_, ny_;
-  const double resolution_m_;
   const CellIndex start_, goal_;
-  const world::Vec2 goal_m_;
   const int goal_index_;
+  const float tolerance_cells_;
+  const float multiplier_;
   const double escape_cells_sq_;
-  SearchMemory m_;
-  int nearest_{-1};
-  double nearest_distance_m_{std::numeric_limits<double>::infinity()};
+  PlannerScratch& memory_;
+  std::vector<OpenEntry>& open_;
+  float best_h_{std::numeric_limits<float>::max()};
+  int best_index_{0};
 };
+
+namespace {
+
+// The cell centres from the one after the start to `end` (a_star.cpp:316-333).
+std::vector<world::Vec2> Backtrace(const Costmap2D& costmap, const AStarSearch& search, int end) {
+  std::vector<world::Vec2> path;
+  for (int i = end; search.Parent(i) >= 0; i = search.Parent(i)) {
+    const CellIndex cell = costmap.Cell(static_cast<std::size_t>(i));
+    path.push_back(costmap.MapToWorld(cell.mx, cell.my));
+  }
+  return {path.rbegin(), path.rend()};
+}
+
+// SmacPlanner2D::createPlan (smac_planner_2d.cpp:205-340) between two cells of the costmap.
+void PlanBetweenCells(const GlobalPlannerParams& params, const Costmap2D& costmap,
+                      const world::Vec2& start, CellIndex start_cell, CellIndex goal_cell,
+                      PlannerScratch* scratch, GlobalPlan* plan) {
+  if (start_cell == goal_cell) {  // smac_planner_2d.cpp:245-260
+    if (costmap.Cost(start_cell.mx, start_cell.my) == kLethalObstacle) {
+      plan->status = PlanStatus::kStartOccupied;
+      return;
+    }
+    plan->status = PlanStatus::kOk;
+    plan->path_m = {start};
+    plan->exact_goal = true;
+    return;
+  }
+  AStarSearch search(params, costmap, start_cell, goal_cell, scratch);
+  const int goal_index = static_cast<int>(costmap.Index(goal_cell.mx, goal_cell.my));
+  if (params.tolerance_m < 0.001 && !search.Valid(goal_index)) {  // a_star.cpp:194-199
+    plan->status = PlanStatus::kNoPath;
+    return;
+  }
+  if (!search.Valid(static_cast<int>(costmap.Index(start_cell.mx, start_cell.my)))) {
+    plan->status = PlanStatus::kStartOccupied;  // a_star.cpp:201-204
+    return;
+  }
+  const int end = search.Run(plan);
+  if (end < 0) return;
+  plan->status = PlanStatus::kOk;
+  plan->path_m = Backtrace(costmap, search, end);
+  plan->cost = search.G(end) * costmap.resolution_m();
+  plan->exact_goal = end == goal_index;
+  if (plan->path_m.size() > 6) SmoothPath(params.smoother, costmap, &plan->path_m);
+}
 
 }  // namespace
 
@@ -254,19 +389,9 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
     return plan;
   }
   PlannerScratch local;
-  PlannerScratch& memory = scratch != nullptr ? *scratch : local;
-  const std::size_t n = costmap.costs().size();
-  if (memory.g_.size() != n || ++memory.search_ == 0) {  // a new size, or the stamps wrapped
-    memory.g_.assign(n, 0.0);
-    memory.parent_.assign(n, -1);
-    memory.reached_.assign(n, 0);
-    memory.closed_.assign(n, 0);
-    memory.search_ = 1;
-  }
-  AStarSearch search(params, costmap, *start_cell, *goal_cell, goal,
-                     {memory.g_.data(), memory.parent_.data(), memory.reached_.data(),
-                      memory.closed_.data(), memory.search_, &memory.open_});
-  search.Run(&plan);
+  PlanBetweenCells(params, costmap, start, *start_cell, *goal_cell,
+                   scratch != nullptr ? scratch : &local, &plan);
+  plan.length_m = Length_m(plan.path_m);
   return plan;
 }
 
@@ -276,9 +401,9 @@ GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& 
   if (goals.empty()) return PlanGlobalPath(params, costmap, start, start, scratch);
   GlobalPlan joined;
   joined.status = PlanStatus::kOk;
-  world::Vec2 from = start;
-  for (const world::Vec2& goal : goals) {
-    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goal, scratch);
+  for (std::size_t i = 0; i < goals.size(); ++i) {
+    const world::Vec2& from = i == 0 ? start : goals[i - 1];
+    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goals[i], scratch);
     joined.expansions += leg.expansions;
     if (!leg.ok()) {
       joined.status = leg.status;
@@ -288,14 +413,11 @@ GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& 
       joined.exact_goal = false;
       return joined;
     }
-    const std::size_t skip = joined.path_m.empty() ? 0 : 1;  // the cell both legs share
-    joined.path_m.insert(joined.path_m.end(), leg.path_m.begin() + static_cast<long>(skip),
-                         leg.path_m.end());
+    joined.path_m.insert(joined.path_m.end(), leg.path_m.begin(), leg.path_m.end());
     joined.cost += leg.cost;
-    joined.length_m += leg.length_m;
     joined.exact_goal = leg.exact_goal;
-    from = leg.path_m.back();
   }
+  joined.length_m = Length_m(joined.path_m);
   return joined;
 }
 

@@ -34,6 +34,8 @@ void TrackLineSpec::Validate() const {
   Require(planner == "none" || planner == "line" || planner == "filled",
           "planner must be one of none, line, filled; got '" + planner + "'");
   Require(planner != "filled" || closed, "planner: filled needs closed: true");
+  Require(planner_grey >= 0 && planner_grey <= 255,
+          "planner_grey must be in [0, 255], got " + Num(planner_grey));
 }
 
 void LaneSegmentSpec::Validate() const {

@@ -29,7 +29,11 @@ struct TrackLineSpec {
   double corner_radius_m{0.0};
   // What the planner's static map makes of it (reference §1: the yellow lines and the islands are
   // obstacles there, the outer white boundary is missing): "none", "line" or "filled".
+  // "line" draws the stroke only (a hollow outline if closed), "filled" also its inside.
   std::string planner{"none"};
+  // The grey the planner's map draws it in: 0 black .. 255 white (world/occupancy_map.h turns
+  // grey into map values as map_server does). Default black: an occupied line.
+  int planner_grey{0};
 
   template <class V>
   void Describe(V& v) {
@@ -40,6 +44,7 @@ struct TrackLineSpec {
     v("closed", closed);
     v("corner_radius_m", corner_radius_m);
     v("planner", planner);
+    v("planner_grey", planner_grey);
   }
   void Validate() const;
 };

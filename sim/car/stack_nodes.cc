@@ -319,9 +319,9 @@ void AddBehaviorNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
 
 // planner_server: a plan through the behaviour's goals, at 1 Hz.
 void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
-                    const StackConfig& config, const world::OccupancyMap& static_map) {
+                    const StackConfig& config, const stack::GlobalCostmap& global_costmap) {
   struct State {
-    std::optional<stack::GlobalCostmap> costmap;
+    const stack::Costmap2D* costmap{nullptr};
     std::optional<stack::LocalizationEkfOutput> odom;
     std::vector<world::Vec2> goals;
     std::uint64_t plans{0};
@@ -329,8 +329,7 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
   };
   config.planner.Validate();  // once here: PlanThroughPoses takes them as validated
   auto state = std::make_shared<State>();
-  state->costmap.emplace(config.global_costmap, static_map);
-  state->costmap->Update();
+  state->costmap = &global_costmap.costmap();
   const NodeId node = graph.AddNode(SoftwareNode("planner_server"));
   cache.KeepLatest(node, topics.odometry, state, &State::odom);
   cache.Keep<stack::BehaviorOutput>(
@@ -341,9 +340,9 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
       node, config.planner_period, config.planner_period,
       [state, out, params = config.planner](Time, Outbox& outbox) {
         if (!state->odom || state->goals.empty()) return;
-        stack::GlobalPlan plan = stack::PlanThroughPoses(params, state->costmap->costmap(),
-                                                         state->odom->X_map_base.position(),
-                                                         state->goals, &state->search);
+        stack::GlobalPlan plan =
+            stack::PlanThroughPoses(params, *state->costmap, state->odom->X_map_base.position(),
+                                    state->goals, &state->search);
         PathMessage message{
             .path = std::make_shared<const std::vector<world::Vec2>>(std::move(plan.path_m)),
             .id = ++state->plans,
@@ -637,7 +636,8 @@ stack::PoseFix DrawPoseFix(const PoseFixConfig& config, const world::Pose2& X_ma
 StackControls AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackConfig& config,
                             SensorSuite& sensors, const PerceptionTopics& perception,
                             const StackContext& context, StackHooks hooks) {
-  if (!context.route || !context.intersections || !context.static_map || !context.obstacle_grid) {
+  if (!context.route || !context.intersections || !context.global_costmap ||
+      !context.obstacle_grid) {
     throw std::invalid_argument("AddStackNodes: incomplete context");
   }
   const StackTopics topics = AddStackTopics(graph, config, sensors, perception);
@@ -657,7 +657,7 @@ StackControls AddStackNodes(NodeGraph& graph, const Kernel& kernel, const StackC
   }
   AddVehicleCommunicationNode(graph, cache, topics, context, std::move(hooks.intersection_client));
   AddBehaviorNode(graph, cache, topics, config.behavior, context, hooks);
-  AddPlannerNode(graph, cache, topics, config, *context.static_map);
+  AddPlannerNode(graph, cache, topics, config, *context.global_costmap);
   AddLocalCostmapNode(graph, cache, topics, config, *context.obstacle_grid, kernel);
   AddControllerNode(graph, cache, topics, config, context, std::move(hooks.on_control));
   AddCruiseControlNode(graph, cache, topics, config.cruise_control, kernel, emergency);

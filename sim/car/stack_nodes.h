@@ -57,7 +57,9 @@ namespace autonomsim::sim {
 struct StackContext {
   const world::Polyline* route{nullptr};  // the lanes to drive (the behaviour's goals)
   const std::vector<world::IntersectionSpec>* intersections{nullptr};  // the zone boxes
-  const world::OccupancyMap* static_map{nullptr};           // at global_costmap.resolution_m
+  // The planner's global costmap (static map + inflation), built once per run for the cars whose
+  // global_costmap parameters are equal: 3.7 MB a grid at the map's resolution.
+  const stack::GlobalCostmap* global_costmap{nullptr};
   const stack::ObstacleGridParams* obstacle_grid{nullptr};  // the grid's geometry (perception)
   world::Pose2 X_map_odom;  // static map→odom: the start pose (reference §6)
   Duration intersection_client_period{Milliseconds(100)};

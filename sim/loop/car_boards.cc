@@ -89,10 +89,19 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
     static_map = std::make_unique<world::OccupancyMap>(
         world::BuildStaticMap(loaded.track, config.stack.global_costmap.resolution_m));
   }
+  const stack::GlobalCostmapParams& costmap_params = config.stack.global_costmap;
+  const stack::GlobalCostmap* global_costmap = nullptr;
+  for (const auto& built : global_costmaps) {
+    if (built->params() == costmap_params) global_costmap = built.get();
+  }
+  if (global_costmap == nullptr) {
+    global_costmaps.push_back(std::make_unique<stack::GlobalCostmap>(costmap_params, *static_map));
+    global_costmap = global_costmaps.back().get();
+  }
   const StackContext context{
       .route = &agent->route->path,
       .intersections = &loaded.track.spec().intersections,
-      .static_map = static_map.get(),
+      .global_costmap = global_costmap,
       .obstacle_grid = &config.perception.obstacle_grid,
       .X_map_odom = agent->car->pose(),  // the start pose
       .intersection_client_period = config.intersection_client.tick_period,

@@ -127,6 +127,9 @@ struct Simulation::Impl {
   std::vector<std::unique_ptr<SensorSuite>> sensors;
   // driver: stack — the planners' static maps, by resolution (m); before the boards that use them
   std::map<double, std::unique_ptr<world::OccupancyMap>> static_maps;
+  // ... and their global costmaps, one per distinct global_costmap parameters (the planners only
+  // read them: the lab's global costmap has no obstacle layer)
+  std::vector<std::unique_ptr<stack::GlobalCostmap>> global_costmaps;
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
   LaneJudgeParams lane_judge;

@@ -179,8 +179,8 @@ TEST(CostmapObstacleLayerTest, CombineMaxFollowsNav2UpdateWithMax) {
 class CostmapLabTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    map_ = new world::OccupancyMap(
-        world::BuildStaticMap(sim::LoadTrack("scenarios/tracks/lab.yaml"), 0.05));
+    map_ = new world::OccupancyMap(world::BuildStaticMap(
+        sim::LoadTrack("scenarios/tracks/lab.yaml"), world::kLabMapResolution_m));
   }
   static void TearDownTestSuite() {
     delete map_;
@@ -193,16 +193,18 @@ world::OccupancyMap* CostmapLabTest::map_ = nullptr;
 TEST_F(CostmapLabTest, StaticLayerAndInflationOfTheLabMap) {
   const GlobalCostmap global(GlobalCostmapParams{}, *map_);
   const Costmap2D& costmap = global.costmap();
-  EXPECT_EQ(costmap.size_x_cells(), 200);  // the 10 m map at 0.05 m (reference §1, §6)
-  EXPECT_EQ(costmap.size_y_cells(), 200);
+  // the 10 m map at its own 0.00517063 m (simplestreet3.yaml:18; Galactic's StaticLayer resizes
+  // the global costmap to it, static_layer.cpp:180-197)
+  EXPECT_EQ(costmap.size_x_cells(), 1934);
+  EXPECT_EQ(costmap.size_y_cells(), 1934);
   int lethal = 0;
   for (std::size_t i = 0; i < map_->cells.size(); ++i) {
-    const bool occupied = map_->cells[i] != world::OccupancyMap::kFree;
+    const bool occupied = map_->cells[i] == world::OccupancyMap::kOccupied;
     EXPECT_EQ(global.static_layer().costs()[i] == kLethalObstacle, occupied);
     EXPECT_EQ(costmap.costs()[i] == kLethalObstacle, occupied);
     lethal += occupied;
   }
-  EXPECT_GT(lethal, 500);
+  EXPECT_GT(lethal, 30000);  // ≈ 27 m of 7-cell-wide lines
   // The yellow south loop at y = −1.86 is lethal with an inscribed halo; the outer south lane
   // centre (0.31 m away) is inflated but traversable; the outer boundary is not in the map.
   EXPECT_EQ(costmap.CostAt(Vec2(0.0, -1.86)), kLethalObstacle);
@@ -212,8 +214,30 @@ TEST_F(CostmapLabTest, StaticLayerAndInflationOfTheLabMap) {
   EXPECT_LT(lane, kInscribedInflatedObstacle);
   EXPECT_EQ(costmap.CostAt(Vec2(0.0, -2.45)), kFreeSpace);
   EXPECT_EQ(costmap.CostAt(Vec2(0.0, -2.6)), kFreeSpace);  // beyond the floor, on the map
-  // Inside an island: lethal (filled).
-  EXPECT_EQ(costmap.CostAt(Vec2(0.0, 0.93)), kLethalObstacle);
+  // Inside an island: its outlines' inflation only (the lab's map draws hollow outlines), at
+  // 0.325 m from both long sides: 252 exp(-5 (0.325 - 0.018 - 0.135)) ≈ 107.
+  const std::uint8_t inside = *costmap.CostAt(Vec2(0.0, 0.9335));
+  EXPECT_GT(inside, 90);
+  EXPECT_LT(inside, 120);
+  // The obstacle layer is not kept until a mark comes: two grids of 1934² bytes.
+  EXPECT_EQ(global.bytes(), 2u * 1934 * 1934);
+}
+
+// Galactic's StaticLayer::interpretValue (static_layer.cpp:252-267) with the costmap's defaults,
+// which nav2_car_params.yaml:221-240 leaves: trinary_costmap true (costmap_2d_ros.cpp:112),
+// lethal_cost_threshold 100 (:96), and track_unknown_space true (yaml:231). So the `mode: scale`
+// map's graded values become FREE; only 100 is LETHAL.
+TEST(CostmapStaticLayerTest, GradedValuesAreFreeUnderGalacticsTrinaryDefault) {
+  world::OccupancyMap map;
+  map.width_cells = 5;
+  map.height_cells = 1;
+  map.cells = {0, 50, 99, 100, -1};
+  EXPECT_EQ(StaticLayer(map).costs(), (std::vector<std::uint8_t>{kFreeSpace, kFreeSpace, kFreeSpace,
+                                                                 kLethalObstacle, kNoInformation}));
+  // Not trinary: value / threshold · 254, truncated.
+  EXPECT_EQ(StaticLayer(map, {.trinary_costmap = false}).costs(),
+            (std::vector<std::uint8_t>{0, 127, 251, kLethalObstacle, kNoInformation}));
+  EXPECT_THROW(StaticLayerParams{.lethal_cost_threshold = 101}.Validate(), std::invalid_argument);
 }
 
 TEST_F(CostmapLabTest, ClearingMarksKeepsTheStaticMap) {

@@ -15,8 +15,9 @@ namespace autonomsim::world {
 namespace {
 
 TrackLineSpec Line(std::string name, PointList points, bool closed, double corner_radius_m,
-                   std::string planner) {
+                   std::string planner, int grey = 0) {
   TrackLineSpec line;
+  line.planner_grey = grey;
   line.name = std::move(name);
   line.color = "white";
   line.width_m = 0.04;
@@ -27,7 +28,7 @@ TrackLineSpec Line(std::string name, PointList points, bool closed, double corne
   return line;
 }
 
-// A 4 m floor: a border the planner does not see, a middle line, and a filled island.
+// A 4 m floor: a border the planner does not see, a middle line, a filled island and a hollow one.
 Track MakeTrack() {
   TrackSpec spec;
   spec.size_m = 4.0;
@@ -37,6 +38,7 @@ Track MakeTrack() {
       Line("middle", {{-1.0, 0.0}, {1.0, 0.0}}, false, 0.0, "line"),
       Line("island", {{0.5, 0.6}, {0.5, 1.2}, {-0.5, 1.2}, {-0.5, 0.6}}, true, 0.3, "filled"),
       Line("ghost", {{0.2, -1.0}, {0.2, -0.2}}, false, 0.0, "none"),
+      Line("ring", {{0.5, -1.2}, {0.5, -0.6}, {-0.5, -0.6}, {-0.5, -1.2}}, true, 0.3, "line"),
   };
   LaneSegmentSpec lane;
   lane.name = "ring";
@@ -46,7 +48,7 @@ Track MakeTrack() {
 }
 
 TEST(OccupancyMapTest, GeometryFollowsMapServer) {
-  const OccupancyMap map = BuildStaticMap(MakeTrack());
+  const OccupancyMap map = BuildStaticMap(MakeTrack(), 0.05);
   EXPECT_EQ(map.width_cells, 80);
   EXPECT_EQ(map.height_cells, 80);
   EXPECT_DOUBLE_EQ(map.resolution_m, 0.05);
@@ -62,14 +64,18 @@ TEST(OccupancyMapTest, GeometryFollowsMapServer) {
   EXPECT_THROW(map.At(80, 0), std::out_of_range);
   EXPECT_THROW(map.At(0, -1), std::out_of_range);
   EXPECT_THROW(BuildStaticMap(MakeTrack(), -0.05), std::invalid_argument);
+  // The lab's map: 10 m at simplestreet3.yaml:18's 0.00517063 m is the picture's 1934 px.
+  TrackSpec lab = MakeTrack().spec();
+  lab.planner_map_size_m = 10.0;
+  EXPECT_EQ(BuildStaticMap(Track(lab)).width_cells, 1934);
 }
 
 TEST(OccupancyMapTest, APlannerMapLargerThanTheFloorIsFreeBeyondIt) {
   TrackSpec spec = MakeTrack().spec();
   spec.planner_map_size_m = 6.0;
   const Track track(spec);
-  const OccupancyMap map = BuildStaticMap(track);
-  EXPECT_EQ(map.width_cells, 120);
+  const OccupancyMap map = BuildStaticMap(track, 0.01);
+  EXPECT_EQ(map.width_cells, 600);
   EXPECT_TRUE(map.origin_m.isApprox(Vec2(-3.0, -3.0)));
   EXPECT_FALSE(map.Occupied({2.5, 0.0}));  // beyond the 4 m floor, on the map: free
   EXPECT_TRUE(map.Occupied({0.0, 0.01}));  // the middle line where it was
@@ -79,36 +85,86 @@ TEST(OccupancyMapTest, APlannerMapLargerThanTheFloorIsFreeBeyondIt) {
   EXPECT_THROW(spec.Validate(), std::invalid_argument);
 }
 
-TEST(OccupancyMapTest, LinesFilledOutlinesAndIgnoredLines) {
+// Galactic map_io.cpp:212-243 (`mode: scale`) with simplestreet3.yaml:22-23's thresholds.
+TEST(OccupancyMapTest, MapServerScaleModeTurnsGreyIntoValues) {
+  const MapServerParams lab;
+  EXPECT_EQ(lab.ValueOfGrey(0), 100);
+  EXPECT_EQ(lab.ValueOfGrey(77), 100);   // the yellow lines' grey: occ 0.698 > 0.60
+  EXPECT_EQ(lab.ValueOfGrey(102), 100);  // occ 0.600: rint(100 · 0.404 / 0.404)
+  EXPECT_EQ(lab.ValueOfGrey(103), 99);   // occ 0.596
+  EXPECT_EQ(lab.ValueOfGrey(204), 1);    // occ 0.200: rint(0.99)
+  EXPECT_EQ(lab.ValueOfGrey(205), 0);    // occ 0.196 1: rint(0.02)
+  EXPECT_EQ(lab.ValueOfGrey(255), 0);
+  EXPECT_THROW((MapServerParams{.occupied_thresh = 0.1, .free_thresh = 0.2}.Validate()),
+               std::invalid_argument);
+}
+
+// A stroke in its grey with one graded cell at each edge and flat ends (the lab's picture,
+// measured): worked by hand for a 0.04 m line along y = 0.003 from x = -1 to 1.003, in grey 77,
+// at 0.01 m.
+TEST(OccupancyMapTest, AStrokeIsDrawnInItsGreyWithOneGradedCellAtEachEdgeAndFlatEnds) {
+  TrackSpec spec = MakeTrack().spec();
+  spec.lines = {Line("middle", {{-1.0, 0.003}, {1.003, 0.003}}, false, 0.0, "line", 77)};
+  const Track track(spec);
+  const OccupancyMap map = BuildStaticMap(track, 0.01);
+  const auto value = [&](double x, double y) {
+    const auto cell = map.CellAt({x, y});
+    return map.At((*cell)[0], (*cell)[1]);
+  };
+  // Cell centres at y = 0.005 ... 0.015 (d <= 0.012): covered, grey 77 -> 100.
+  EXPECT_EQ(value(0.0, 0.015), 100);
+  EXPECT_EQ(value(0.0, -0.005), 100);
+  // y = 0.025: d 0.022, coverage (0.02 - 0.022) / 0.01 + 0.5 = 0.3, grey 255 - 178 · 0.3 = 202,
+  // occ 0.208: rint(100 · 0.012 / 0.404) = 3.
+  EXPECT_EQ(value(0.0, 0.025), 3);
+  // y = -0.015: d 0.018, coverage 0.7, grey 130, occ 0.490: rint(72.8) = 73.
+  EXPECT_EQ(value(0.0, -0.015), 73);
+  EXPECT_EQ(value(0.0, 0.035), 0);
+  EXPECT_EQ(value(0.0, -0.025), 0);
+  // The flat end at x = 1.003: the cell centred 0.002 beyond it is covered 0.3 (grey 202, 3);
+  // the next one not at all.
+  EXPECT_EQ(value(0.995, 0.005), 100);
+  EXPECT_EQ(value(1.005, 0.005), 3);
+  EXPECT_EQ(value(1.015, 0.005), 0);
+  EXPECT_TRUE(map.Occupied({0.0, 0.0}));
+  EXPECT_FALSE(map.Occupied({0.0, -0.015}));  // graded cells are not occupied
+  // A U whose ends lie at different heights, as the lab's yellow loop (y = 0.63 on the right,
+  // 0.68 on the left): each end's square cap clips the stroke only near that end.
+  spec.lines = {Line("u", {{1.0, 0.5}, {1.0, 1.5}, {-1.0, 1.5}, {-1.0, 0.8}}, false, 0.2, "line")};
+  const OccupancyMap u = BuildStaticMap(Track(spec), 0.01);
+  EXPECT_TRUE(u.Occupied({1.0, 0.6}));  // below the other end's 0.8
+  EXPECT_TRUE(u.Occupied({-1.0, 0.805}));
+  EXPECT_FALSE(u.Occupied({-1.0, 0.78}));
+  EXPECT_FALSE(u.Occupied({1.0, 0.48}));
+}
+
+TEST(OccupancyMapTest, HollowAndFilledOutlinesAndIgnoredLines) {
   const Track track = MakeTrack();
-  const OccupancyMap map = BuildStaticMap(track);
-  // The middle line lies on a cell boundary (y = 0): the rows either side are occupied, the
-  // next ones free; its 2 cm round cap reaches into the next column only.
-  EXPECT_TRUE(map.Occupied({0.0, 0.01}));
-  EXPECT_TRUE(map.Occupied({0.0, -0.01}));
-  EXPECT_TRUE(map.Occupied({-0.97, 0.04}));
-  EXPECT_FALSE(map.Occupied({0.0, 0.06}));
-  EXPECT_FALSE(map.Occupied({0.0, -0.06}));
-  EXPECT_TRUE(map.Occupied({1.01, 0.01}));
-  EXPECT_FALSE(map.Occupied({1.06, 0.01}));
-  EXPECT_EQ(map.At(60, 40), OccupancyMap::kOccupied);  // x in [1.0, 1.05): the cap
-  EXPECT_EQ(map.At(61, 40), OccupancyMap::kFree);
-  // Inside the island, and its outline.
+  const OccupancyMap map = BuildStaticMap(track, 0.01);
+  // The filled island: inside and its outline.
   EXPECT_TRUE(map.Occupied({0.0, 0.9}));
   EXPECT_TRUE(map.Occupied({-0.3, 0.7}));
   EXPECT_TRUE(map.Occupied({0.5, 0.9}));
   EXPECT_FALSE(map.Occupied({0.0, 0.5}));
   EXPECT_FALSE(map.Occupied({0.6, 0.9}));
+  // The hollow one (planner: line): its outline, and free inside.
+  EXPECT_TRUE(map.Occupied({0.0, -0.601}));
+  EXPECT_TRUE(map.Occupied({0.5, -0.9}));
+  // A 0.04 m line along a cell boundary at 0.05 m covers 0.4 of each cell beside it: graded
+  // (value 50), so it is not in a map that coarse at all.
+  EXPECT_FALSE(BuildStaticMap(track, 0.05).Occupied({0.0, -0.601}));
+  EXPECT_FALSE(map.Occupied({0.0, -0.9}));
+  EXPECT_FALSE(map.Occupied({0.3, -0.8}));
   // Lines with planner: none are not there.
   EXPECT_FALSE(map.Occupied({1.9, 0.5}));
-  EXPECT_FALSE(map.Occupied({0.2, -0.6}));
+  EXPECT_FALSE(map.Occupied({0.2, -0.3}));
   // The lane is free all along.
   for (const Vec2& p : track.road_graph().path(0).points()) EXPECT_FALSE(map.Occupied(p)) << p;
 }
 
-// Cell by cell, against an independent reckoning: the stroke's distance to each cell found by
-// walking the centreline in 1 mm steps (so within 0.5 mm of the truth), and the cell centre's
-// inside-ness by ray casting.
+// Cell by cell, against an independent reckoning: each cell centre's distance to the stroke found
+// by walking the centreline in 0.2 mm steps, and its inside-ness by ray casting. Cells clearly
+// inside the stroke (or a filled outline) are occupied, cells clearly outside it are free.
 TEST(OccupancyMapTest, MatchesBruteForce) {
   const Track track = MakeTrack();
   const OccupancyMap map = BuildStaticMap(track, 0.1);
@@ -116,26 +172,23 @@ TEST(OccupancyMapTest, MatchesBruteForce) {
   const TrackSpec& spec = track.spec();
   const double half_width = 0.02;
   const double res = map.resolution_m;
-  std::vector<double> stroke_distance(map.cells.size(), 1e9);
+  std::vector<double> distance(map.cells.size(), 1e9);
   std::vector<bool> inside(map.cells.size(), false);
   for (std::size_t l = 0; l < spec.lines.size(); ++l) {
     if (spec.lines[l].planner == "none") continue;
     const std::vector<Vec2>& p = track.line_paths()[l].points();
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-      const int steps = static_cast<int>(std::ceil((p[i + 1] - p[i]).norm() / 1e-3));
+      const int steps = static_cast<int>(std::ceil((p[i + 1] - p[i]).norm() / 2e-4));
       for (int k = 0; k <= steps; ++k) {
         const Vec2 q = p[i] + (p[i + 1] - p[i]) * (static_cast<double>(k) / steps);
-        // The cells within reach of q.
         const Vec2 cell = (q - map.origin_m) / res;
         for (int row = static_cast<int>(cell.y()) - 1; row <= static_cast<int>(cell.y()) + 1;
              ++row) {
           for (int col = static_cast<int>(cell.x()) - 1; col <= static_cast<int>(cell.x()) + 1;
                ++col) {
             if (!map.Contains(col, row)) continue;
-            const Vec2 lo = map.origin_m + Vec2(col, row) * res;
-            const Vec2 hi = lo + Vec2(res, res);
-            double& d = stroke_distance[row * map.width_cells + col];
-            d = std::min(d, (q - q.cwiseMax(lo).cwiseMin(hi)).norm());
+            double& d = distance[row * map.width_cells + col];
+            d = std::min(d, (q - map.CellCentre(col, row)).norm());
           }
         }
       }
@@ -158,16 +211,17 @@ TEST(OccupancyMapTest, MatchesBruteForce) {
   for (int row = 0; row < map.height_cells; ++row) {
     for (int col = 0; col < map.width_cells; ++col) {
       const std::size_t k = row * map.width_cells + col;
-      const bool actual = map.At(col, row) == OccupancyMap::kOccupied;
-      occupied += actual;
-      if (inside[k] || stroke_distance[k] < half_width - 1e-3) {
-        EXPECT_TRUE(actual) << "cell " << col << ", " << row;
-      } else if (stroke_distance[k] > half_width + 1e-3) {
-        EXPECT_FALSE(actual) << "cell " << col << ", " << row;
+      const std::int8_t value = map.At(col, row);
+      occupied += value == OccupancyMap::kOccupied;
+      // Black lines: occupied where the coverage (half_width - d) / res + 1/2 reaches 0.6.
+      if (inside[k] || distance[k] < half_width - 0.1 * res - 1e-3) {
+        EXPECT_EQ(value, OccupancyMap::kOccupied) << "cell " << col << ", " << row;
+      } else if (distance[k] > half_width + 0.5 * res + 1e-3) {
+        EXPECT_EQ(value, OccupancyMap::kFree) << "cell " << col << ", " << row;
       }
     }
   }
-  EXPECT_GT(occupied, 40);
+  EXPECT_GT(occupied, 10);
 }
 
 }  // namespace
