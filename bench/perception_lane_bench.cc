@@ -68,10 +68,8 @@ void BM_LaneRowSums(benchmark::State& state) {
 }
 BENCHMARK(BM_LaneRowSums)->Unit(benchmark::kMicrosecond);
 
-// The warp and row sums alone, as the loop runs them: the renderer has written each source
-// pixel's line class (here ClassOf of the frame's colours), the detector sums the warped classes.
-void BM_LaneRowSumsFromClasses(benchmark::State& state) {
-  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+// The renderer's part: each source pixel's line class (ClassOf of the frame's colours).
+void WriteFrameClasses(LaneDetector& detector) {
   const cv::Mat& image = Frame().image;
   const ClassImageRegion classes = detector.MutableClassRegion();
   for (const LaneDetector::SourceSpan& span : classes.spans) {
@@ -81,6 +79,13 @@ void BM_LaneRowSumsFromClasses(benchmark::State& state) {
           detector.ClassOf(bgr[3 * c], bgr[3 * c + 1], bgr[3 * c + 2]);
     }
   }
+}
+
+// The warp and row sums alone, as the loop runs them: the renderer has written each source
+// pixel's line class (here ClassOf of the frame's colours), the detector sums the warped classes.
+void BM_LaneRowSumsFromClasses(benchmark::State& state) {
+  LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
+  WriteFrameClasses(detector);
   BirdsEyeRowSums sums;
   for (auto _ : state) {
     detector.ComputeRowSumsFromClasses(&sums);
@@ -93,15 +98,7 @@ BENCHMARK(BM_LaneRowSumsFromClasses)->Unit(benchmark::kMicrosecond);
 // and 127 in the combined image's warp).
 void BM_LaneRowSumsFromClassesExact(benchmark::State& state) {
   LaneDetector detector(LaneDetectionParams{}, Frame().calibration);
-  const cv::Mat& image = Frame().image;
-  const ClassImageRegion classes = detector.MutableClassRegion();
-  for (const LaneDetector::SourceSpan& span : classes.spans) {
-    const std::uint8_t* bgr = image.ptr<std::uint8_t>(span.row);
-    for (int c = span.col_begin; c < span.col_end; ++c) {
-      classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
-          detector.ClassOf(bgr[3 * c], bgr[3 * c + 1], bgr[3 * c + 2]);
-    }
-  }
+  WriteFrameClasses(detector);
   BirdsEyeRowSums sums;
   for (auto _ : state) {
     detector.ComputeRowSumsFromClasses(&sums, BirdsEyeClasses::kExact);

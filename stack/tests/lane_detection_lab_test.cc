@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "stack/lane_detection.h"
+#include "stack/tests/lane_classes.h"
 #include "stack/tests/track_frames.h"
 #include "vehicle/camera_model.h"
 #include "world/plumb_bob.h"
@@ -106,14 +107,7 @@ TEST(LaneHardwareTest, FastExactCountsAreBitIdenticalToTheCombinedReference) {
     const auto frame = frames.Render(frames.PoseOnRoute(route, s_m));
     const BirdsEyeRowSums fast = check(LabTestMat(frame.color), route);
     // from a producer's classes
-    const ClassImageRegion classes = detector.MutableClassRegion();
-    for (const LaneDetector::SourceSpan& span : classes.spans) {
-      for (int c = span.col_begin; c < span.col_end; ++c) {
-        const std::uint8_t* px = frame.color.bgr.data() + 3 * (span.row * kLaneImageWidth + c);
-        classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
-            detector.ClassOf(px[0], px[1], px[2]);
-      }
-    }
+    testing::WriteLineClasses(detector, frame.color);
     BirdsEyeRowSums from_classes;
     detector.ComputeRowSumsFromClasses(&from_classes, BirdsEyeClasses::kExact);
     EXPECT_EQ(from_classes, fast) << route;

@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "stack/tests/lane_classes.h"
 #include "stack/tests/track_frames.h"
 #include "vehicle/camera_model.h"
 
@@ -187,14 +188,7 @@ TEST_F(LaneTrack, FastMasksAreBitIdenticalToOpenCv) {
     BirdsEyeRowSums of_black;
     detector.ComputeRowSums(cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC3), &of_black);
     ASSERT_NE(of_black, sums) << p.what;
-    const ClassImageRegion classes = detector.MutableClassRegion();
-    for (const LaneDetector::SourceSpan& span : classes.spans) {
-      for (int c = span.col_begin; c < span.col_end; ++c) {
-        const std::uint8_t* px = frame.color.bgr.data() + 3 * (span.row * kLaneImageWidth + c);
-        classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] =
-            detector.ClassOf(px[0], px[1], px[2]);
-      }
-    }
+    testing::WriteLineClasses(detector, frame.color);
     BirdsEyeRowSums from_classes;
     detector.ComputeRowSumsFromClasses(&from_classes);
     EXPECT_EQ(from_classes, sums) << p.what;
