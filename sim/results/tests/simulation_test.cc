@@ -322,6 +322,8 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
     return RunScenario(LoadScenario(
         "scenarios/stack_obstacle.yaml",
         {"duration_s=27", "expect=[]", "cars[0].stack.follow_path.collision.model=" + m,
+         // the collision check alone: without the ultrasonic stop the scenario sets since issue 31
+         "cars[0].stack.emergency_stop.enabled=false",
          "cars[0].stack.lane_controller.collision.model=" + m,
          // the gaps below were measured with our lane detection (issue 31: with the lab's,
          // which the preset sets, footprint stops the car 0.108 m short of the box)
