@@ -131,12 +131,6 @@ void RowMeans(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums,
   }
 }
 
-int PixelCount(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums) {
-  int total = 0;
-  for (const BirdsEyeRowSums::Row& row : sums) total += row.count;
-  return total;
-}
-
 // The floor point of raw-image pixel (u, v) by the params' projection; `in_float`: rt_polyfit's
 // float arithmetic (the pixel already truncated), else the software node's doubles, whose
 // projection takes the pixel as ints (lane_detector.cpp:214).
@@ -761,6 +755,12 @@ LanePoints LaneDetector::Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* tr
 
 namespace detail {
 
+int PixelCount(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums) {
+  int total = 0;
+  for (const BirdsEyeRowSums::Row& row : sums) total += row.count;
+  return total;
+}
+
 std::optional<std::array<LanePoint, LanePoints::kCount>> LanePointsOfLine(
     const LaneDetectorTables& tables,
     const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums, LaneLine line,
@@ -819,10 +819,10 @@ LanePoints FitLanePoints(const LaneDetectorTables& tables, const BirdsEyeRowSums
   LanePoints out;
 
   // choose the line: yellow if it has enough pixels, else white, else nothing
-  t.yellow_px = PixelCount(sums.yellow);
+  t.yellow_px = detail::PixelCount(sums.yellow);
   t.line = LaneLine::kYellow;
   if (t.yellow_px < params.yellow_min_px) {
-    t.white_px = PixelCount(sums.white);
+    t.white_px = detail::PixelCount(sums.white);
     t.line = LaneLine::kWhite;
     if (t.white_px < params.line_min_px) {
       t.line = LaneLine::kNone;

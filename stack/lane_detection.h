@@ -461,6 +461,8 @@ struct LaneFitRules {
   bool truncate{false};
   bool in_float{false};
 };
+// The line pixels of one mask's row sums.
+int PixelCount(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums);
 // From the chosen line's row sums: its fit, the shifted samples, the trajectory and the 30 floor
 // points by the params' projection (the trace's fits set); nullopt if a fit is undetermined or a
 // point does not reach the floor.

@@ -149,8 +149,8 @@ LanePoints FitLanePointsHardware(const LaneDetectorTables& tables, const BirdsEy
   LaneDetectionTrace& t = trace != nullptr ? *trace : local;
   t = LaneDetectionTrace{};
   // rt_polyfit.cpp:47-77 counts both; :80-96 yellow with >= 2000, else white
-  for (const BirdsEyeRowSums::Row& row : sums.yellow) t.yellow_px += row.count;
-  for (const BirdsEyeRowSums::Row& row : sums.white) t.white_px += row.count;
+  t.yellow_px = detail::PixelCount(sums.yellow);
+  t.white_px = detail::PixelCount(sums.white);
   const LaneLine line = t.yellow_px >= params.yellow_min_px ? LaneLine::kYellow : LaneLine::kWhite;
   const bool white_short = t.white_px < params.line_min_px;
   const bool valid = params.hw_no_line == HwNoLine::kBothBelowMin
