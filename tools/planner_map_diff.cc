@@ -10,7 +10,7 @@
 //   white      clear (value 0) in both
 // Run from the repository root:
 //   build/bin/planner_map_diff --lab-image ../shared/reference/lab_final_map.png
-//       --out docs/images/planner_map_diff.png
+//       --out docs/images/planner_map_diff.png --force   (an existing --out only with --force)
 #include <CLI/CLI.hpp>
 #include <array>
 #include <cstdint>
@@ -20,6 +20,8 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/core/track_loader.h"
 #include "world/occupancy_map.h"
 
@@ -130,7 +132,18 @@ int main(int argc, char** argv) {
   app.add_option("--track", track, "the track file our map is drawn from");
   app.add_option("--out", out, "the difference image (PNG) to write");
   app.add_option("--crop-m", crop_m, "half the side of the square shown, metres");
+  bool force = false;
+  app.add_flag("--force", force,
+               "Replace --out even if it is a file this tool may not have written");
   CLI11_PARSE(app, argc, argv);
+  if (!out.empty()) {
+    try {  // nothing of a user's is overwritten unless asked (a PNG carries no mark of its maker)
+      out = autonomsim::sim::CheckOutputFile(out, force).string();
+    } catch (const autonomsim::sim::ConfigError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
+  }
 
   const cv::Mat picture = cv::imread(lab_image, cv::IMREAD_UNCHANGED);
   if (picture.empty() || picture.type() != CV_8UC4) {
