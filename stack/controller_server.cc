@@ -75,33 +75,44 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   }
 
   // select and drive
-  const bool follow =
+  bool follow =
       UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
   out.controller = follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
   Twist twist;
   bool collision = false;
-  if (follow) {
-    if (input.path) {
-      const PathFollowerOutput r = StepPathFollower(params.follow_path,
-                                                    {.path = input.path->points_map,
-                                                     .path_id = input.path->id,
-                                                     .X_F_base = input.X_map_base,
-                                                     .speed_mps = input.speed_mps,
-                                                     .cell_cost = input.cell_cost},
-                                                    &state->follower);
-      twist = {r.speed_mps, r.yaw_rate_rad_per_s};
-      collision = r.collision_ahead;
-    }
-  } else if (input.lanes) {
-    const LaneControllerOutput r =
-        StepLaneController(params.lane_controller, {.lane_points_base = input.lanes->points_base,
-                                                    .lanes_valid = input.lanes->valid,
-                                                    .speed_mps = input.speed_mps,
-                                                    .X_F_base = input.X_map_base,
-                                                    .cell_cost = input.cell_cost});
+  const auto follow_plan = [&] {
+    if (!input.path) return;
+    const PathFollowerOutput r = StepPathFollower(params.follow_path,
+                                                  {.path = input.path->points_map,
+                                                   .path_id = input.path->id,
+                                                   .X_F_base = input.X_map_base,
+                                                   .speed_mps = input.speed_mps,
+                                                   .cell_cost = input.cell_cost},
+                                                  &state->follower);
     twist = {r.speed_mps, r.yaw_rate_rad_per_s};
     collision = r.collision_ahead;
-    out.cmd_vel_stamp = input.lanes->stamp;
+  };
+  if (follow) {
+    follow_plan();
+  } else {
+    std::optional<LaneControllerOutput> lane;
+    if (input.lanes) {
+      lane = StepLaneController(params.lane_controller,
+                                {.lane_points_base = input.lanes->points_base,
+                                 .lanes_valid = input.lanes->valid,
+                                 .speed_mps = input.speed_mps,
+                                 .X_F_base = input.X_map_base,
+                                 .cell_cost = input.cell_cost});
+    }
+    if (params.follow_path_without_line && (!lane || !lane->carrot_base) && input.path) {
+      follow = true;  // beyond the lab's: no line to follow, the plan instead
+      out.controller = ActiveController::kFollowPath;
+      follow_plan();
+    } else if (lane) {
+      twist = {lane->speed_mps, lane->yaw_rate_rad_per_s};
+      collision = lane->collision_ahead;
+      out.cmd_vel_stamp = input.lanes->stamp;
+    }
   }
   if (collision) {  // the controller threw: the action aborts with one zero velocity
     state->failed = true;

@@ -5,7 +5,8 @@
 //             velocity goes out (Nav2's publishZeroVelocity), then nothing on cmd_vel until the
 //             car may drive again;
 //   select    FollowPath inside an intersection's area or stop zones (UseFollowPath), the
-//             LaneController elsewhere;
+//             LaneController elsewhere; with follow_path_without_line (beyond the lab's) also
+//             FollowPath on a cycle where the LaneController finds no carrot;
 //   drive     FollowPath (stack/path_follower.h) on the newest successful plan, the
 //             LaneController (stack/lane_controller.h) on the newest lane points; a controller
 //             with nothing to follow yet commands (0, 0);
@@ -60,6 +61,11 @@ struct ControllerServerParams {
   // Beyond the lab's /controller_selector (0: its strict boxes): FollowPath also within this
   // distance of an intersection's area and stop zones (stack.controller_selector.zone_margin_m).
   double zone_margin_m{0.0};
+  // Beyond the lab's (false: without a lane point beyond the lookahead its LaneController has the
+  // origin for a carrot and stops, lane_controller.cpp:343-362): on a cycle where the
+  // LaneController finds no carrot, FollowPath drives on the plan instead
+  // (stack.controller_selector.follow_path_without_line).
+  bool follow_path_without_line{false};
   ProgressCheckerParams progress_checker;
 
   void Validate() const;

@@ -48,10 +48,17 @@ struct ControllerSelectorConfig {
   // boxes it keeps following its plan. stack.preset: safe sets 0.3 m (assumed: about the car's
   // width beyond the box).
   double zone_margin_m{0.0};
+  // Beyond the lab's (false: its LaneController stops when it sees no line, and nothing in its
+  // behaviour tree moves the car). A car that stands beside its lane with no line in view (after a
+  // wait in line behind a car parked in a corner, say) stays there for good; with true, on every
+  // cycle the LaneController finds no carrot FollowPath drives it on its plan back to where the
+  // camera sees the line. stack.preset: safe sets true.
+  bool follow_path_without_line{false};
 
   template <class V>
   void Describe(V& v) {
     v("zone_margin_m", zone_margin_m);
+    v("follow_path_without_line", follow_path_without_line);
   }
   void Validate() const;  // in [0, 1] m
 };

@@ -517,6 +517,7 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
       .lane_controller = config.lane_controller,
       .follow_path = config.follow_path,
       .zone_margin_m = config.controller_selector.zone_margin_m,
+      .follow_path_without_line = config.controller_selector.follow_path_without_line,
       .progress_checker = config.progress_checker};
   graph.AddTimer(node, config.controller_period, config.controller_period,
                  [state, out, status_out, params, intersections = context.intersections,

@@ -25,6 +25,7 @@ constexpr PresetOption kCarOptions[] = {
     {"stack.follow_path.pursuit.lookahead_dist_m", "0.6", "0.4"},
     {"stack.planner.start_escape_m", "0.0", "0.3"},
     {"stack.controller_selector.zone_margin_m", "0.0", "0.3"},
+    {"stack.controller_selector.follow_path_without_line", "false", "true"},
     {"stack.behavior.patient_in_queue", "false", "true"},
     {"stack.behavior.recovery_reset_m", "0", "0.5"},
     {"stack.behavior.queue_wait_s", "5", "2"},

@@ -132,6 +132,55 @@ TEST(ControllerServerTest, FollowPathInsideAnIntersectionOnThePlan) {
   EXPECT_FALSE(fresh.state.follower.path_id.has_value());
 }
 
+// Beyond the lab's: stack.controller_selector.follow_path_without_line. The lab's LaneController
+// has the origin for a carrot when no lane point lies beyond the lookahead and stands
+// (lane_controller.cpp:343-362); with the option FollowPath drives on the plan on such a cycle.
+TEST(ControllerServerTest, WithoutALineTheOptionFollowsThePlanInstead) {
+  // The car at (0, 0) outside the zones; the same plan as above, shifted: its carrot (0.6, 0)
+  // is at 0.6 m, κ = 0, no approach scaling (the goal is 1.6 m away): v = 0.25 m/s.
+  const std::vector<Vec2> path{Vec2(0.0, 0.0), Vec2(0.3, 0.0), Vec2(0.6, 0.0), Vec2(1.6, 0.0)};
+  const std::vector<Vec2> lanes{Vec2(0.6, 0.3)};
+  ControllerServerInput input = DriveAt(0.0, 0.0);
+  input.path = ControllerPath{.points_map = path, .id = 3};
+  input.lanes = ControllerLanes{.points_base = lanes, .valid = false, .stamp = FromSeconds(9.9)};
+
+  Server lab;  // the lab's: invalid lanes stop the car
+  ControllerServerOutput out = lab.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kLaneController);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+
+  Server safe;
+  safe.params.follow_path_without_line = true;
+  out = safe.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kFollowPath);
+  EXPECT_TRUE(out.status.follow_path);
+  EXPECT_NEAR(out.cmd_vel->speed_mps, 0.25, kTol);
+  EXPECT_EQ(out.cmd_vel->yaw_rate_rad_per_s, 0.0);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(10.0));  // the odometry's: no lane frame was used
+
+  // Valid lanes but no point beyond the lookahead: no carrot either.
+  const std::vector<Vec2> near{Vec2(0.3, 0.1)};
+  input.lanes = ControllerLanes{.points_base = near, .valid = true, .stamp = FromSeconds(9.9)};
+  EXPECT_EQ(safe.Step(input).controller, ActiveController::kFollowPath);
+  // No lane message yet: the plan too.
+  input.lanes.reset();
+  EXPECT_EQ(safe.Step(input).controller, ActiveController::kFollowPath);
+
+  // A line in view: the LaneController again, on the lane points and their stamp.
+  input.lanes = ControllerLanes{.points_base = lanes, .valid = true, .stamp = FromSeconds(9.9)};
+  out = safe.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kLaneController);
+  EXPECT_NEAR(out.cmd_vel->yaw_rate_rad_per_s, 1.0 / 3.0, kTol);
+  EXPECT_EQ(out.cmd_vel_stamp, FromSeconds(9.9));
+
+  // No plan yet: the LaneController's stop stands.
+  input.lanes->valid = false;
+  input.path.reset();
+  out = safe.Step(input);
+  EXPECT_EQ(out.controller, ActiveController::kLaneController);
+  EXPECT_EQ(out.cmd_vel->speed_mps, 0.0);
+}
+
 // LETHAL beyond x_m in the map, FREE before it.
 CostQuery WallBeyond(double x_m) {
   return [x_m](const Vec2& p_map) { return p_map.x() > x_m ? kLethalObstacle : kFreeSpace; };
