@@ -75,8 +75,7 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   }
 
   // select and drive
-  bool follow =
-      UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
+  bool follow = UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
   out.controller = follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
   Twist twist;
   bool collision = false;
@@ -97,12 +96,12 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   } else {
     std::optional<LaneControllerOutput> lane;
     if (input.lanes) {
-      lane = StepLaneController(params.lane_controller,
-                                {.lane_points_base = input.lanes->points_base,
-                                 .lanes_valid = input.lanes->valid,
-                                 .speed_mps = input.speed_mps,
-                                 .X_F_base = input.X_map_base,
-                                 .cell_cost = input.cell_cost});
+      lane =
+          StepLaneController(params.lane_controller, {.lane_points_base = input.lanes->points_base,
+                                                      .lanes_valid = input.lanes->valid,
+                                                      .speed_mps = input.speed_mps,
+                                                      .X_F_base = input.X_map_base,
+                                                      .cell_cost = input.cell_cost});
     }
     if (params.follow_path_without_line && (!lane || !lane->carrot_base) && input.path) {
       follow = true;  // beyond the lab's: no line to follow, the plan instead
