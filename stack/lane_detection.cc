@@ -385,6 +385,10 @@ std::vector<std::uint8_t> OpenCvBilinearTable() {
 // p has class (bit k of p: yellow) | (bit 4 + k of p: white) << 1 and the combined value of that
 // class (white 255 + yellow 127 in 8 bits). [a · 256 + p]: 1 if the output is exactly 127, 2 if
 // exactly 255 (rt_polyfit.cpp:53, 64), else 0.
+// Patterns of ExactValueTable whose four neighbours are all yellow, or all white.
+constexpr int kAllYellow = 0x0f;
+constexpr int kAllWhite = 0xf0;
+
 std::vector<std::uint8_t> ExactValueTable() {
   constexpr int kPatterns = 256;
   constexpr std::array<std::uint8_t, 4> kCombined{0, 127, 255, 126};
@@ -480,6 +484,12 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
   }
   warp_lut_ = OpenCvBilinearTable();
   exact_lut_ = ExactValueTable();
+  for (int a = 0; a < kAlphaCount; ++a) {  // what SumWarpedClasses takes without the table
+    const std::uint8_t* row = &exact_lut_[static_cast<std::size_t>(a) * 256];
+    if (row[kAllYellow] != 1 || row[kAllWhite] != 2) {
+      throw std::logic_error("lane detection: a uniform neighbourhood's warp is not its value");
+    }
+  }
   IndexActivePixels(WarpSource(image_to_birds_eye_));
   if (params_.projection == LaneProjection::kPnpSwapped) {
     pnp_pose_ = LabPnpPose(camera_, params_.pnp_floor_points_m);
@@ -731,10 +741,16 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
     });
     return;
   }
-  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white)
+  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white). Inside a line
+  // all four neighbours have its class and the warp gives its value whatever the weights (the
+  // constructor checks this against the table): only the pixels at a line's edge look up the
+  // 256 KB table.
   const std::uint8_t* lut = tables_->exact_lut_.data();
   ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
-    const std::uint8_t cls = lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
+    const int pattern = yellow_bits + (white_bits << 4);
+    const std::uint8_t cls = pattern == kAllYellow  ? std::uint8_t{1}
+                             : pattern == kAllWhite ? std::uint8_t{2}
+                                                    : lut[(alpha16 << 4) + pattern];
     if (cls == 1) add(sums->yellow, dst);
     if (cls == 2) add(sums->white, dst);
   });
