@@ -385,10 +385,6 @@ std::vector<std::uint8_t> OpenCvBilinearTable() {
 // p has class (bit k of p: yellow) | (bit 4 + k of p: white) << 1 and the combined value of that
 // class (white 255 + yellow 127 in 8 bits). [a · 256 + p]: 1 if the output is exactly 127, 2 if
 // exactly 255 (rt_polyfit.cpp:53, 64), else 0.
-// Patterns of ExactValueTable whose four neighbours are all yellow, or all white.
-constexpr int kAllYellow = 0x0f;
-constexpr int kAllWhite = 0xf0;
-
 std::vector<std::uint8_t> ExactValueTable() {
   constexpr int kPatterns = 256;
   constexpr std::array<std::uint8_t, 4> kCombined{0, 127, 255, 126};
@@ -484,10 +480,11 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
   }
   warp_lut_ = OpenCvBilinearTable();
   exact_lut_ = ExactValueTable();
-  for (int a = 0; a < kAlphaCount; ++a) {  // what SumWarpedClasses takes without the table
-    const std::uint8_t* row = &exact_lut_[static_cast<std::size_t>(a) * 256];
-    if (row[kAllYellow] != 1 || row[kAllWhite] != 2) {
-      throw std::logic_error("lane detection: a uniform neighbourhood's warp is not its value");
+  exact_single_lut_.resize(static_cast<std::size_t>(kAlphaCount) * 16);
+  for (std::size_t a = 0; a < static_cast<std::size_t>(kAlphaCount); ++a) {
+    for (std::size_t bits = 0; bits < 16; ++bits) {
+      exact_single_lut_[a * 16 + bits] = static_cast<std::uint8_t>(
+          exact_lut_[a * 256 + bits] | (exact_lut_[a * 256 + (bits << 4)] << 2));
     }
   }
   IndexActivePixels(WarpSource(image_to_birds_eye_));
@@ -741,16 +738,15 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
     });
     return;
   }
-  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white). Inside a line
-  // all four neighbours have its class and the warp gives its value whatever the weights (the
-  // constructor checks this against the table): only the pixels at a line's edge look up the
-  // 256 KB table.
+  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white). Where the four
+  // neighbours hold one colour (or none) the 16 KB single-colour table answers; only a pixel
+  // beside both colours looks up the 256 KB one.
   const std::uint8_t* lut = tables_->exact_lut_.data();
+  const std::uint8_t* single = tables_->exact_single_lut_.data();
   ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
-    const int pattern = yellow_bits + (white_bits << 4);
-    const std::uint8_t cls = pattern == kAllYellow  ? std::uint8_t{1}
-                             : pattern == kAllWhite ? std::uint8_t{2}
-                                                    : lut[(alpha16 << 4) + pattern];
+    const std::uint8_t cls = white_bits == 0    ? single[alpha16 + yellow_bits] & 3
+                             : yellow_bits == 0 ? single[alpha16 + white_bits] >> 2
+                                                : lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
     if (cls == 1) add(sums->yellow, dst);
     if (cls == 2) add(sums->white, dst);
   });

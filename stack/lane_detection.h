@@ -428,6 +428,9 @@ class LaneDetectorTables {
   // classes 0-3): 1 where the output is exactly 127, 2 where exactly 255, else 0, for (alpha
   // index, yellow bits | white bits << 4).
   std::vector<std::uint8_t> exact_lut_;  // 1024 × 256
+  // exact_lut_'s entries for the patterns of one colour, for (alpha index, neighbour bits): bits
+  // 0-1 those yellow bits and no white, bits 2-3 those white bits and no yellow.
+  std::vector<std::uint8_t> exact_single_lut_;  // 1024 × 16
   std::optional<LanePnpPose> pnp_pose_;
   // Active output pixels (whose source square touches the image), grouped by output tile.
   std::vector<Tile> tiles_;
