@@ -1,6 +1,7 @@
 #include "stack/global_planner.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -126,18 +127,47 @@ SmoothResult SmoothPath(const SmootherParams& params, const Costmap2D& costmap,
 // --- the search (Galactic a_star.cpp, node_2d.cpp) ---------------------------------------------
 
 std::size_t PlannerScratch::bytes() const {
-  return slots_.capacity() * sizeof(Slot) + open_.capacity() * sizeof(OpenEntry);
+  return window_.capacity() * sizeof(WindowCell) + slots_.capacity() * sizeof(Slot) +
+         open_.capacity() * sizeof(OpenEntry);
 }
 
-void PlannerScratch::Begin() {
-  constexpr std::size_t kInitialSlots = std::size_t{1} << 15;  // assumed: a few legs' searches
+void PlannerScratch::Begin(int nx, int cx, int cy) {
+  constexpr std::size_t kInitialSlots = std::size_t{1} << 12;  // assumed: beyond the window, rare
   if (slots_.empty()) slots_.assign(kInitialSlots, Slot{0, -1, {}});
+  if (window_.empty()) window_.assign(std::size_t{kWindowCells} * kWindowCells, WindowCell{0, {}});
+  nx_ = nx;
+  window_x0_ = cx - kWindowCells / 2;
+  window_y0_ = cy - kWindowCells / 2;
   used_ = 0;
   open_.clear();
   if (++search_ == 0) {  // the stamps wrapped: clear them once
     for (Slot& slot : slots_) slot.stamp = 0;
+    for (WindowCell& cell : window_) cell.stamp = 0;
     search_ = 1;
   }
+}
+
+PlannerScratch::Node* PlannerScratch::Find(int key, int mx, int my) {
+  const auto lx = static_cast<unsigned>(mx - window_x0_);
+  const auto ly = static_cast<unsigned>(my - window_y0_);
+  if (lx < unsigned{kWindowCells} && ly < unsigned{kWindowCells}) {
+    WindowCell& cell = window_[ly * kWindowCells + lx];
+    return cell.stamp == search_ ? &cell.node : nullptr;
+  }
+  return FindHashed(key);
+}
+
+PlannerScratch::Node& PlannerScratch::Emplace(int key, int mx, int my, const Node& fresh,
+                                              bool* added) {
+  const auto lx = static_cast<unsigned>(mx - window_x0_);
+  const auto ly = static_cast<unsigned>(my - window_y0_);
+  if (lx < unsigned{kWindowCells} && ly < unsigned{kWindowCells}) {
+    WindowCell& cell = window_[ly * kWindowCells + lx];
+    *added = cell.stamp != search_;
+    if (*added) cell = WindowCell{search_, fresh};
+    return cell.node;
+  }
+  return EmplaceHashed(key, fresh, added);
 }
 
 std::size_t PlannerScratch::SlotOf(int key) const {
@@ -145,7 +175,7 @@ std::size_t PlannerScratch::SlotOf(int key) const {
   return (static_cast<std::uint32_t>(key) * 2654435769u) & (slots_.size() - 1);
 }
 
-PlannerScratch::Node* PlannerScratch::Find(int key) {
+PlannerScratch::Node* PlannerScratch::FindHashed(int key) {
   for (std::size_t i = SlotOf(key);; i = (i + 1) & (slots_.size() - 1)) {
     Slot& slot = slots_[i];
     if (slot.stamp != search_) return nullptr;
@@ -153,7 +183,7 @@ PlannerScratch::Node* PlannerScratch::Find(int key) {
   }
 }
 
-PlannerScratch::Node& PlannerScratch::Emplace(int key, const Node& fresh, bool* added) {
+PlannerScratch::Node& PlannerScratch::EmplaceHashed(int key, const Node& fresh, bool* added) {
   if (2 * (used_ + 1) > slots_.size()) Grow();
   for (std::size_t i = SlotOf(key);; i = (i + 1) & (slots_.size() - 1)) {
     Slot& slot = slots_[i];
@@ -176,7 +206,7 @@ void PlannerScratch::Grow() {
   used_ = 0;
   bool added = false;
   for (const Slot& slot : old) {
-    if (slot.stamp == search_) Emplace(slot.key, slot.node, &added);
+    if (slot.stamp == search_) EmplaceHashed(slot.key, slot.node, &added);
   }
 }
 
@@ -205,6 +235,23 @@ double Length_m(const std::vector<world::Vec2>& path) {
 
 }  // namespace
 
+namespace {
+
+// Node2D::getTraversalCost (node_2d.cpp:64-79) for each cell cost, straight [0] and diagonal [1]:
+// the move's length plus the multiplier times the cost over 252, in float as Galactic's.
+std::array<std::array<float, 256>, 2> TraversalCosts(float multiplier) {
+  const float sqrt2 = std::sqrt(2.0F);
+  std::array<std::array<float, 256>, 2> table{};
+  for (int c = 0; c < 256; ++c) {
+    const float normalized = static_cast<float>(c / 252.0);
+    table[0][static_cast<std::size_t>(c)] = 1.0F + multiplier * normalized;
+    table[1][static_cast<std::size_t>(c)] = sqrt2 + multiplier * normalized;
+  }
+  return table;
+}
+
+}  // namespace
+
 // One search (AStarAlgorithm<Node2D>::createPath) on a costmap, in the scratch's memory.
 class AStarSearch {
  public:
@@ -219,12 +266,12 @@ class AStarSearch {
         goal_index_(goal.my * nx_ + goal.mx),
         tolerance_cells_(static_cast<float>(params.tolerance_m) /
                          static_cast<float>(costmap.resolution_m())),
-        multiplier_(static_cast<float>(params.cost_travel_multiplier)),
+        traversal_(TraversalCosts(static_cast<float>(params.cost_travel_multiplier))),
         escape_cells_sq_((params.start_escape_m / costmap.resolution_m()) *
                          (params.start_escape_m / costmap.resolution_m())),
         memory_(*memory),
         open_(memory->open_) {
-    memory_.Begin();
+    memory_.Begin(nx_, start.mx, start.my);
   }
 
   bool Valid(int i) const {
@@ -239,14 +286,16 @@ class AStarSearch {
   int Run(GlobalPlan* plan) {
     const int start_index = start_.my * nx_ + start_.mx;
     bool added = false;
-    memory_.Emplace(start_index, Node{0.0F, -1, false}, &added);
+    memory_.Emplace(start_index, start_.mx, start_.my, Node{0.0F, -1, false}, &added);
     Push({0.0F, 0.0F, start_index});  // addNode(0.0, start): no heuristic for the start
     int approach = 0;
     while (plan->expansions < params_.max_expansions && !open_.empty()) {
       std::pop_heap(open_.begin(), open_.end(), WorseEntry{});
       const int i = open_.back().index;
       open_.pop_back();
-      Node* node = memory_.Find(i);
+      const int mx = i % nx_;
+      const int my = i / nx_;
+      Node* node = memory_.Find(i, mx, my);
       if (node->closed) continue;  // queued again at a lower cost and already expanded
       ++plan->expansions;
       node->closed = true;
@@ -254,15 +303,15 @@ class AStarSearch {
       if (best_h_ < tolerance_cells_ && ++approach >= params_.max_on_approach_iterations) {
         return best_index_;
       }
-      ExpandNeighbours(i);
+      ExpandNeighbours(i, mx, my, node->g);
     }
     plan->status = plan->expansions < params_.max_expansions ? PlanStatus::kNoPath
                                                              : PlanStatus::kExpansionLimit;
     return -1;
   }
 
-  float G(int i) const { return memory_.Find(i)->g; }
-  int Parent(int i) const { return memory_.Find(i)->parent; }
+  float G(int i) const { return memory_.Find(i, i % nx_, i / nx_)->g; }
+  int Parent(int i) const { return memory_.Find(i, i % nx_, i / nx_)->parent; }
 
  private:
   bool NearStart(int i) const {
@@ -274,22 +323,16 @@ class AStarSearch {
     open_.push_back(entry);
     std::push_heap(open_.begin(), open_.end(), WorseEntry{});
   }
-  // Node2D::getTraversalCost (node_2d.cpp:64-79), in float as Galactic's.
-  float TraversalCost(int j, bool diagonal) const {
-    const float normalized = static_cast<float>(costs_[j] / 252.0);
-    static const float kSqrt2 = std::sqrt(2.0F);
-    return (diagonal ? kSqrt2 : 1.0F) + multiplier_ * normalized;
-  }
+  // Node2D::getTraversalCost (node_2d.cpp:64-79), in float as Galactic's: the table's entry for
+  // the cell's cost (TraversalCosts).
+  float TraversalCost(int j, bool diagonal) const { return traversal_[diagonal][costs_[j]]; }
   // Node2D::getHeuristicCost (node_2d.cpp:81-90): Manhattan, in cells.
   float Heuristic(int mx, int my) const {
     return std::fabs(static_cast<float>(goal_.mx - mx)) +
            std::fabs(static_cast<float>(goal_.my - my));
   }
 
-  void ExpandNeighbours(int i) {
-    const int mx = i % nx_;
-    const int my = i / nx_;
-    const float g_i = memory_.Find(i)->g;
+  void ExpandNeighbours(int i, int mx, int my, float g_i) {
     for (const auto& move : kMoves) {
       const int cx = mx + move[0];
       const int cy = my + move[1];
@@ -298,7 +341,7 @@ class AStarSearch {
       if (!Valid(j)) continue;
       bool added = false;
       Node& neighbour =
-          memory_.Emplace(j, Node{std::numeric_limits<float>::max(), -1, false}, &added);
+          memory_.Emplace(j, cx, cy, Node{std::numeric_limits<float>::max(), -1, false}, &added);
       if (neighbour.closed) continue;
       const float g = g_i + TraversalCost(j, move[0] != 0 && move[1] != 0);
       if (!(g < neighbour.g)) continue;
@@ -319,7 +362,7 @@ class AStarSearch {
   const CellIndex start_, goal_;
   const int goal_index_;
   const float tolerance_cells_;
-  const float multiplier_;
+  const std::array<std::array<float, 256>, 2> traversal_;  // [diagonal][cost]
   const double escape_cells_sq_;
   PlannerScratch& memory_;
   std::vector<OpenEntry>& open_;

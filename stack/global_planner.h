@@ -136,7 +136,7 @@ class PlannerScratch {
     float h;  // heuristic: among equal f, the one nearer the goal first
     int index;
   };
-  // Bytes the scratch holds now (its table's and open list's storage).
+  // Bytes the scratch holds now (its window's, table's and open list's storage).
   std::size_t bytes() const;
 
  private:
@@ -146,11 +146,24 @@ class PlannerScratch {
     int key;              // cell index
     Node node;
   };
-  void Begin();         // a new search: every slot free
-  Node* Find(int key);  // nullptr if this search has no node for key
-  Node& Emplace(int key, const Node& fresh, bool* added);  // may move every node
+  struct WindowCell {
+    std::uint32_t stamp;  // == search_: in use by this search
+    Node node;
+  };
+  // The cells of a search are kept in a dense window of kWindowCells² cells centred on its start
+  // (a leg of a plan through poses stays inside it) and in a hash table beyond it.
+  static constexpr int kWindowCells = 256;
+  // A new search: every cell free, the window centred on (cx, cy) in a grid nx cells wide.
+  void Begin(int nx, int cx, int cy);
+  Node* Find(int key, int mx, int my);  // nullptr if this search has no node for the cell
+  Node& Emplace(int key, int mx, int my, const Node& fresh, bool* added);  // may move hashed nodes
+  Node* FindHashed(int key);
+  Node& EmplaceHashed(int key, const Node& fresh, bool* added);
   std::size_t SlotOf(int key) const;
   void Grow();
+  std::vector<WindowCell> window_;
+  int window_x0_{0}, window_y0_{0};
+  int nx_{0};
   std::vector<Slot> slots_;
   std::size_t used_{0};
   std::uint32_t search_{0};
