@@ -744,9 +744,10 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
   const std::uint8_t* lut = tables_->exact_lut_.data();
   const std::uint8_t* single = tables_->exact_single_lut_.data();
   ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
-    const std::uint8_t cls = white_bits == 0    ? single[alpha16 + yellow_bits] & 3
-                             : yellow_bits == 0 ? single[alpha16 + white_bits] >> 2
-                                                : lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
+    const std::uint8_t cls = white_bits == 0 ? single[alpha16 + yellow_bits] & 3
+                             : yellow_bits == 0
+                                 ? single[alpha16 + white_bits] >> 2
+                                 : lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
     if (cls == 1) add(sums->yellow, dst);
     if (cls == 2) add(sums->white, dst);
   });
