@@ -36,6 +36,60 @@ bool CheckProgress(const ProgressCheckerParams& params, const world::Vec2& p, Ti
   return !(now - state->baseline_time > params.movement_time_allowance);
 }
 
+// The controller selected for this cycle, and what it commands.
+struct Drive {
+  Twist twist;
+  bool collision{false};
+  bool follow{false};  // FollowPath ran (else the LaneController)
+};
+
+// Selects the controller (UseFollowPath; with follow_path_without_line also FollowPath where the
+// LaneController finds no carrot) and runs it; sets out->controller and, for the LaneController,
+// out->cmd_vel_stamp.
+Drive SelectAndDrive(const ControllerServerParams& params,
+                     std::span<const world::IntersectionSpec> intersections,
+                     const ControllerServerInput& input, ControllerServerState* state,
+                     ControllerServerOutput* out) {
+  Drive drive;
+  drive.follow = UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
+  out->controller =
+      drive.follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
+  const auto follow_plan = [&] {
+    if (!input.path) return;
+    const PathFollowerOutput r = StepPathFollower(params.follow_path,
+                                                  {.path = input.path->points_map,
+                                                   .path_id = input.path->id,
+                                                   .X_F_base = input.X_map_base,
+                                                   .speed_mps = input.speed_mps,
+                                                   .cell_cost = input.cell_cost},
+                                                  &state->follower);
+    drive.twist = {r.speed_mps, r.yaw_rate_rad_per_s};
+    drive.collision = r.collision_ahead;
+  };
+  if (drive.follow) {
+    follow_plan();
+    return drive;
+  }
+  std::optional<LaneControllerOutput> lane;
+  if (input.lanes) {
+    lane = StepLaneController(params.lane_controller, {.lane_points_base = input.lanes->points_base,
+                                                       .lanes_valid = input.lanes->valid,
+                                                       .speed_mps = input.speed_mps,
+                                                       .X_F_base = input.X_map_base,
+                                                       .cell_cost = input.cell_cost});
+  }
+  if (params.follow_path_without_line && (!lane || !lane->carrot_base) && input.path) {
+    drive.follow = true;  // beyond the lab's: no line to follow, the plan instead
+    out->controller = ActiveController::kFollowPath;
+    follow_plan();
+  } else if (lane) {
+    drive.twist = {lane->speed_mps, lane->yaw_rate_rad_per_s};
+    drive.collision = lane->collision_ahead;
+    out->cmd_vel_stamp = input.lanes->stamp;
+  }
+  return drive;
+}
+
 }  // namespace
 
 ControllerServerOutput StepControllerServer(const ControllerServerParams& params,
@@ -75,44 +129,10 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   }
 
   // select and drive
-  bool follow = UseFollowPath(intersections, input.X_map_base.position(), params.zone_margin_m);
-  out.controller = follow ? ActiveController::kFollowPath : ActiveController::kLaneController;
-  Twist twist;
-  bool collision = false;
-  const auto follow_plan = [&] {
-    if (!input.path) return;
-    const PathFollowerOutput r = StepPathFollower(params.follow_path,
-                                                  {.path = input.path->points_map,
-                                                   .path_id = input.path->id,
-                                                   .X_F_base = input.X_map_base,
-                                                   .speed_mps = input.speed_mps,
-                                                   .cell_cost = input.cell_cost},
-                                                  &state->follower);
-    twist = {r.speed_mps, r.yaw_rate_rad_per_s};
-    collision = r.collision_ahead;
-  };
-  if (follow) {
-    follow_plan();
-  } else {
-    std::optional<LaneControllerOutput> lane;
-    if (input.lanes) {
-      lane =
-          StepLaneController(params.lane_controller, {.lane_points_base = input.lanes->points_base,
-                                                      .lanes_valid = input.lanes->valid,
-                                                      .speed_mps = input.speed_mps,
-                                                      .X_F_base = input.X_map_base,
-                                                      .cell_cost = input.cell_cost});
-    }
-    if (params.follow_path_without_line && (!lane || !lane->carrot_base) && input.path) {
-      follow = true;  // beyond the lab's: no line to follow, the plan instead
-      out.controller = ActiveController::kFollowPath;
-      follow_plan();
-    } else if (lane) {
-      twist = {lane->speed_mps, lane->yaw_rate_rad_per_s};
-      collision = lane->collision_ahead;
-      out.cmd_vel_stamp = input.lanes->stamp;
-    }
-  }
+  const Drive drive = SelectAndDrive(params, intersections, input, state, &out);
+  const bool follow = drive.follow;
+  const bool collision = drive.collision;
+  const Twist twist = drive.twist;
   if (collision) {  // the controller threw: the action aborts with one zero velocity
     state->failed = true;
     state->failed_by_collision = true;
