@@ -130,19 +130,16 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
 
   // select and drive
   const Drive drive = SelectAndDrive(params, intersections, input, state, &out);
-  const bool follow = drive.follow;
-  const bool collision = drive.collision;
-  const Twist twist = drive.twist;
-  if (collision) {  // the controller threw: the action aborts with one zero velocity
+  if (drive.collision) {  // the controller threw: the action aborts with one zero velocity
     state->failed = true;
     state->failed_by_collision = true;
     out.cmd_vel = Twist{};
     out.status = failed_status();
-    out.status.follow_path = follow;
+    out.status.follow_path = drive.follow;
     return out;
   }
-  out.cmd_vel = twist;
-  out.status = {.attempt = state->attempt, .follow_path = follow};
+  out.cmd_vel = drive.twist;
+  out.status = {.attempt = state->attempt, .follow_path = drive.follow};
   return out;
 }
 

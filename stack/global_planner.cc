@@ -147,25 +147,26 @@ void PlannerScratch::Begin(int nx, int cx, int cy) {
   }
 }
 
-PlannerScratch::Node* PlannerScratch::Find(int key, int mx, int my) {
+PlannerScratch::WindowCell* PlannerScratch::WindowCellAt(int mx, int my) {
   const auto lx = static_cast<unsigned>(mx - window_x0_);
   const auto ly = static_cast<unsigned>(my - window_y0_);
-  if (lx < unsigned{kWindowCells} && ly < unsigned{kWindowCells}) {
-    WindowCell& cell = window_[ly * kWindowCells + lx];
-    return cell.stamp == search_ ? &cell.node : nullptr;
+  if (lx >= unsigned{kWindowCells} || ly >= unsigned{kWindowCells}) return nullptr;
+  return &window_[ly * kWindowCells + lx];
+}
+
+PlannerScratch::Node* PlannerScratch::Find(int key, int mx, int my) {
+  if (WindowCell* cell = WindowCellAt(mx, my)) {
+    return cell->stamp == search_ ? &cell->node : nullptr;
   }
   return FindHashed(key);
 }
 
 PlannerScratch::Node& PlannerScratch::Emplace(int key, int mx, int my, const Node& fresh,
                                               bool* added) {
-  const auto lx = static_cast<unsigned>(mx - window_x0_);
-  const auto ly = static_cast<unsigned>(my - window_y0_);
-  if (lx < unsigned{kWindowCells} && ly < unsigned{kWindowCells}) {
-    WindowCell& cell = window_[ly * kWindowCells + lx];
-    *added = cell.stamp != search_;
-    if (*added) cell = WindowCell{search_, fresh};
-    return cell.node;
+  if (WindowCell* cell = WindowCellAt(mx, my)) {
+    *added = cell->stamp != search_;
+    if (*added) *cell = WindowCell{search_, fresh};
+    return cell->node;
   }
   return EmplaceHashed(key, fresh, added);
 }
@@ -233,20 +234,16 @@ double Length_m(const std::vector<world::Vec2>& path) {
   return length;
 }
 
-}  // namespace
-
-namespace {
-
-// Node2D::getTraversalCost (node_2d.cpp:64-79) for each cell cost, straight [0] and diagonal [1]:
-// the move's length plus the multiplier times the cost over 252, in float as Galactic's.
-std::array<std::array<float, 256>, 2> TraversalCosts(float multiplier) {
-  const float sqrt2 = std::sqrt(2.0F);
-  std::array<std::array<float, 256>, 2> table{};
-  for (int c = 0; c < 256; ++c) {
-    const float normalized = static_cast<float>(c / 252.0);
-    table[0][static_cast<std::size_t>(c)] = 1.0F + multiplier * normalized;
-    table[1][static_cast<std::size_t>(c)] = sqrt2 + multiplier * normalized;
-  }
+// Each cell cost over MAX_NON_OBSTACLE (252), in float (Node2D::getTraversalCost, node_2d.cpp:
+// 64-79): a constant table, so that a step costs no division.
+const std::array<float, 256>& NormalizedCosts() {
+  static const std::array<float, 256> table = [] {
+    std::array<float, 256> t{};
+    for (std::size_t c = 0; c < t.size(); ++c) {
+      t[c] = static_cast<float>(static_cast<double>(c) / double{kMaxNonInscribedCost});
+    }
+    return t;
+  }();
   return table;
 }
 
@@ -266,7 +263,7 @@ class AStarSearch {
         goal_index_(goal.my * nx_ + goal.mx),
         tolerance_cells_(static_cast<float>(params.tolerance_m) /
                          static_cast<float>(costmap.resolution_m())),
-        traversal_(TraversalCosts(static_cast<float>(params.cost_travel_multiplier))),
+        multiplier_(static_cast<float>(params.cost_travel_multiplier)),
         escape_cells_sq_((params.start_escape_m / costmap.resolution_m()) *
                          (params.start_escape_m / costmap.resolution_m())),
         memory_(*memory),
@@ -323,9 +320,11 @@ class AStarSearch {
     open_.push_back(entry);
     std::push_heap(open_.begin(), open_.end(), WorseEntry{});
   }
-  // Node2D::getTraversalCost (node_2d.cpp:64-79), in float as Galactic's: the table's entry for
-  // the cell's cost (TraversalCosts).
-  float TraversalCost(int j, bool diagonal) const { return traversal_[diagonal][costs_[j]]; }
+  // Node2D::getTraversalCost (node_2d.cpp:64-79), in float as Galactic's.
+  float TraversalCost(int j, bool diagonal) const {
+    static const float kSqrt2 = std::sqrt(2.0F);
+    return (diagonal ? kSqrt2 : 1.0F) + multiplier_ * normalized_[costs_[j]];
+  }
   // Node2D::getHeuristicCost (node_2d.cpp:81-90): Manhattan, in cells.
   float Heuristic(int mx, int my) const {
     return std::fabs(static_cast<float>(goal_.mx - mx)) +
@@ -362,7 +361,8 @@ class AStarSearch {
   const CellIndex start_, goal_;
   const int goal_index_;
   const float tolerance_cells_;
-  const std::array<std::array<float, 256>, 2> traversal_;  // [diagonal][cost]
+  const float multiplier_;
+  const std::array<float, 256>& normalized_{NormalizedCosts()};
   const double escape_cells_sq_;
   PlannerScratch& memory_;
   std::vector<OpenEntry>& open_;

@@ -157,6 +157,7 @@ class PlannerScratch {
   void Begin(int nx, int cx, int cy);
   Node* Find(int key, int mx, int my);  // nullptr if this search has no node for the cell
   Node& Emplace(int key, int mx, int my, const Node& fresh, bool* added);  // may move hashed nodes
+  WindowCell* WindowCellAt(int mx, int my);  // nullptr outside the window
   Node* FindHashed(int key);
   Node& EmplaceHashed(int key, const Node& fresh, bool* added);
   std::size_t SlotOf(int key) const;
