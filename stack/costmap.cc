@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "world/validation.h"
 
@@ -24,6 +26,75 @@ void RequireSameGeometry(const Costmap2D& a, const Costmap2D& b) {
            " m";
   });
 }
+
+// The lower envelope of the parabolas (x - q)² + g(q)² of one row's columns q with g(q) < far
+// (Felzenszwalb & Huttenlocher, "Distance Transforms of Sampled Functions", 2012, algorithm 1),
+// so every cell's least squared distance costs O(1) instead of a scan over the radius. The
+// parabolas' crossings are fractions compared by cross-multiplication in 64-bit integers: no
+// rounding, the same distances as the scan on every machine.
+class RowEnvelope {
+ public:
+  void Build(const int* g, int n, int far) {
+    apex_.clear();
+    from_.clear();
+    for (int q = 0; q < n; ++q) {
+      if (g[q] >= far) continue;
+      const std::int64_t height = static_cast<std::int64_t>(g[q]) * g[q];
+      while (!apex_.empty()) {
+        const Fraction s = Crossing(apex_.back(), {q, height});
+        if (Less(from_.back(), s)) {
+          apex_.push_back({q, height});
+          from_.push_back(s);
+          break;
+        }
+        apex_.pop_back();
+        from_.pop_back();
+      }
+      if (apex_.empty()) {
+        apex_.push_back({q, height});
+        from_.push_back({-(std::int64_t{1} << 40), 1});  // before every cell
+      }
+    }
+    // the first whole x of each parabola's stretch: ceil(num / den), den > 0
+    first_x_.clear();
+    for (const Fraction& f : from_) {
+      first_x_.push_back(f.num >= 0 ? (f.num + f.den - 1) / f.den : -((-f.num) / f.den));
+    }
+  }
+  bool empty() const { return apex_.empty(); }
+  // f(x, d²) for every x in [0, n) whose least squared distance d² is at most radius².
+  template <class F>
+  void ForEachWithin(int n, int radius, F&& f) const {
+    const std::int64_t limit_sq = static_cast<std::int64_t>(radius) * radius;
+    std::size_t k = 0;
+    const int end = std::min(n, apex_.back().q + radius + 1);
+    for (int x = std::max(0, apex_.front().q - radius); x < end; ++x) {
+      while (k + 1 < apex_.size() && first_x_[k + 1] <= x) ++k;
+      const std::int64_t dx = x - apex_[k].q;
+      const std::int64_t d2 = dx * dx + apex_[k].height;
+      if (d2 <= limit_sq) f(x, static_cast<int>(d2));
+    }
+  }
+
+ private:
+  struct Apex {
+    int q;
+    std::int64_t height;  // g(q)²
+  };
+  struct Fraction {
+    std::int64_t num, den;  // den > 0
+  };
+  static bool Less(const Fraction& a, const Fraction& b) { return a.num * b.den < b.num * a.den; }
+  // Where the parabolas of a and b (a.q < b.q) cross: the x with equal values.
+  static Fraction Crossing(const Apex& a, const Apex& b) {
+    return {b.height + static_cast<std::int64_t>(b.q) * b.q - a.height -
+                static_cast<std::int64_t>(a.q) * a.q,
+            2 * static_cast<std::int64_t>(b.q - a.q)};
+  }
+  std::vector<Apex> apex_;
+  std::vector<Fraction> from_;  // from_[k]: where apex_[k]'s parabola becomes the least
+  std::vector<std::int64_t> first_x_;
+};
 
 }  // namespace
 
@@ -166,7 +237,6 @@ void Inflation::Apply(Costmap2D* grid) const {
   const int ny = grid->size_y_cells();
   std::vector<std::uint8_t>& costs = grid->mutable_costs();
   const int far = cell_radius_ + 1;  // "no obstacle within the radius"
-  const int radius_sq = cell_radius_ * cell_radius_;
 
   std::vector<int> column_distance(costs.size());
   for (int x = 0; x < nx; ++x) {
@@ -185,35 +255,23 @@ void Inflation::Apply(Costmap2D* grid) const {
   }
 
   // Per row, only the columns with an obstacle within the radius along their column count (most
-  // of a rolling window is free): their indices, ascending, and a window over them per cell.
-  std::vector<int> near;
-  near.reserve(static_cast<std::size_t>(nx));
+  // of a rolling window is free): the least dx² + g² over them, by their parabolas' lower envelope.
+  RowEnvelope envelope;
   for (int y = 0; y < ny; ++y) {
     const int* row_distance = column_distance.data() + static_cast<std::size_t>(y) * nx;
     std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
-    near.clear();
-    for (int x = 0; x < nx; ++x) {
-      if (row_distance[x] < far) near.push_back(x);
-    }
-    std::size_t first = 0;  // the first of near within the radius of x
-    for (int x = 0; x < nx && first < near.size(); ++x) {
-      while (first < near.size() && near[first] < x - cell_radius_) ++first;
-      if (row_distance[x] == 0) continue;  // the obstacle itself
-      int best = radius_sq + 1;
-      for (std::size_t k = first; k < near.size() && near[k] <= x + cell_radius_; ++k) {
-        const int xx = near[k];
-        const int g = row_distance[xx];
-        best = std::min(best, (xx - x) * (xx - x) + g * g);
-      }
-      if (best > radius_sq) continue;
-      const std::uint8_t inflated = cost_by_distance_sq_[best];
+    envelope.Build(row_distance, nx, far);
+    if (envelope.empty()) continue;
+    envelope.ForEachWithin(nx, cell_radius_, [&](int x, int distance_sq) {
+      if (row_distance[x] == 0) return;  // the obstacle itself
+      const std::uint8_t inflated = cost_by_distance_sq_[distance_sq];
       std::uint8_t& cell = row_costs[x];
       if (cell == kNoInformation) {
         if (inflated >= kInscribedInflatedObstacle) cell = inflated;
       } else {
         cell = std::max(cell, inflated);
       }
-    }
+    });
   }
 }
 
