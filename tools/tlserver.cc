@@ -32,6 +32,8 @@ constexpr int kExitUnusable = 2;
 constexpr std::chrono::seconds kFlushTimeout{2};
 // Without a lease to watch, wake up this often anyway (to notice a lost broker in the log).
 constexpr std::chrono::seconds kIdleWake{60};
+// While the broker is away: how often we look whether it is back (leases are paused meanwhile).
+constexpr std::chrono::seconds kConnectionPoll{1};
 
 struct Options {
   std::string host{"localhost"};
@@ -131,13 +133,21 @@ void ServeUntilStopped(Service& service, sim::MqttClient& client, const StopSign
                        Clock::time_point start) {
   auto wall_now = [&] { return std::chrono::duration_cast<Duration>(Clock::now() - start); };
   while (!signals.stopped() && !service.exit_reason()) {
+    // the connection first: a lease must not run out for want of a broker (Service::OnConnection)
+    for (const sim::MqttMessage& m : service.OnConnection(client.connected(), wall_now())) {
+      client.Publish(m);
+    }
     const std::optional<Time> next = service.NextTimer();
-    const Clock::time_point wake = next ? start + *next : Clock::now() + kIdleWake;
+    const Clock::time_point wake =
+        next ? start + *next
+             : Clock::now() + (service.server().connected() ? kIdleWake : kConnectionPoll);
     std::vector<sim::MqttMessage> out;
-    if (std::optional<sim::MqttMessage> in = client.Receive(wake)) {
+    if (std::optional<sim::MqttMessage> in = client.ReceiveUntilConnectionChanges(wake)) {
       out = service.OnMessage(*in, wall_now());
     } else if (next && Clock::now() >= wake) {
-      out = service.OnTimer(wall_now());
+      // the broker may have gone while we waited: then the lease does not run out
+      out = service.OnConnection(client.connected(), wall_now());
+      for (sim::MqttMessage& m : service.OnTimer(wall_now())) out.push_back(std::move(m));
     }
     for (const sim::MqttMessage& m : out) client.Publish(m);
   }

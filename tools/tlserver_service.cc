@@ -103,9 +103,10 @@ Service::Service(ServiceOptions options)
       intersections_(options_.intersections) {}
 
 std::vector<std::string> Service::Subscriptions() {
-  return {std::string(world::kVtlRequestTopic), std::string(world::kVtlRequestTopic) + "/+",
-          std::string(world::kVtlFreeTopic),    std::string(world::kVtlFreeTopic) + "/+",
-          std::string(sim::kSimResetTopic),     std::string(sim::kSimClockTopic)};
+  return {std::string(world::kVtlRequestTopic),  std::string(world::kVtlRequestTopic) + "/+",
+          std::string(world::kVtlFreeTopic),     std::string(world::kVtlFreeTopic) + "/+",
+          std::string(sim::kSimResetTopic),      std::string(sim::kSimClockTopic),
+          std::string(sim::kSimDisconnectTopic), std::string(sim::kSimReconnectTopic)};
 }
 
 std::vector<MqttMessage> Service::OnMessage(const MqttMessage& message, Time wall_now) {
@@ -117,7 +118,8 @@ std::vector<MqttMessage> Service::OnMessage(const MqttMessage& message, Time wal
     out = OnCarMessage(message, false, wall_now);
   } else if (message.topic == sim::kSimResetTopic) {
     out = OnReset(message);
-  } else if (message.topic == sim::kSimClockTopic) {
+  } else if (message.topic == sim::kSimClockTopic || message.topic == sim::kSimDisconnectTopic ||
+             message.topic == sim::kSimReconnectTopic) {
     out = OnClock(message);
   } else {
     spdlog::debug("ignoring a message on {}", message.topic);
@@ -265,7 +267,16 @@ std::vector<MqttMessage> Service::OnClock(const MqttMessage& message) {
     case StepCheck::kNew:
       break;
   }
-  const std::vector<world::Response> responses = server_.OnTick(tag.now);
+  std::vector<world::Response> responses;
+  if (message.topic == sim::kSimDisconnectTopic) {
+    responses = server_.OnDisconnected(tag.now);
+    spdlog::info("the simulated broker is away at {} s: leases paused", ToSeconds(tag.now));
+  } else if (message.topic == sim::kSimReconnectTopic) {
+    server_.OnReconnected(tag.now);
+    spdlog::info("the simulated broker is back at {} s: full leases", ToSeconds(tag.now));
+  } else {
+    responses = server_.OnTick(tag.now);
+  }
   for (const world::Response& r : responses) {
     spdlog::debug("lease tick at {} s -> {}", ToSeconds(tag.now), Describe(r));
   }
@@ -346,6 +357,21 @@ std::vector<MqttMessage> Service::OnTimer(Time wall_now) {
   if (options_.sim_clock) return {};
   const std::vector<world::Response> responses = server_.OnTick(wall_now);
   for (const world::Response& r : responses) spdlog::info("lease expired -> {}", Describe(r));
+  std::vector<MqttMessage> out = Outputs(responses, nullptr);
+  AppendStatusIfChanged(&out);
+  return out;
+}
+
+std::vector<MqttMessage> Service::OnConnection(bool up, Time wall_now) {
+  if (options_.sim_clock || up == server_.connected()) return {};
+  std::vector<world::Response> responses;
+  if (up) {
+    server_.OnReconnected(wall_now);
+    spdlog::info("connected to the broker again: every holder has a full lease");
+  } else {
+    responses = server_.OnDisconnected(wall_now);
+    spdlog::warn("lost the broker: leases paused until it is back");
+  }
   std::vector<MqttMessage> out = Outputs(responses, nullptr);
   AppendStatusIfChanged(&out);
   return out;

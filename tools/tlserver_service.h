@@ -8,7 +8,8 @@
 //                                     car<d> and the payload must name car d, else refused
 //   /vtl/response                     our answers, as in the lab
 //   /vtl/status                       retained JSON: per intersection holder and queue, counters
-//   /vtl/sim/{reset,clock,ack}        the lock-step of a simulation (--sim-clock only)
+//   /vtl/sim/{reset,clock,ack},       the lock-step of a simulation (--sim-clock only)
+//   /vtl/sim/{disconnect,reconnect}
 //
 // Clocks: on the wall clock (default) `now` is the time since the service started and lease
 // expiries come from OnTimer at NextTimer(). With sim_clock, time is what the simulation's step
@@ -64,6 +65,11 @@ class Service {
   std::vector<sim::MqttMessage> OnTimer(Time wall_now);
   // Wall clock: when OnTimer must run next; nullopt when nothing is pending or with sim_clock.
   std::optional<Time> NextTimer() const;
+  // Wall clock: our connection to the broker is up or down since `wall_now` (tlserver polls it).
+  // While it is down no lease runs out; on reconnecting every holder and queued car has a full
+  // lease (TrafficLightServer::OnDisconnected). With sim_clock the simulation says when its
+  // modelled broker is away (/vtl/sim/disconnect): this is ignored.
+  std::vector<sim::MqttMessage> OnConnection(bool up, Time wall_now);
 
   // The retained status message (also the MQTT will, with online false).
   sim::MqttMessage Status(bool online) const;
@@ -88,6 +94,7 @@ class Service {
   // simulated time for a message without a step, counted as unclocked).
   Time ServiceTime(const sim::MqttMessage& message, const sim::StepTag* tag, Time wall_now);
   std::vector<sim::MqttMessage> OnReset(const sim::MqttMessage& message);
+  // A simulation step on /vtl/sim/clock, /vtl/sim/disconnect or /vtl/sim/reconnect.
   std::vector<sim::MqttMessage> OnClock(const sim::MqttMessage& message);
   StepCheck Check(const sim::StepTag& tag, std::string* error);
   // The responses (tagged when `tag` is given) and the ack of the step.

@@ -63,7 +63,7 @@ void TrafficLightServer::GrantHeadIfFree(Slot* slot, std::vector<Response>* out)
 }
 
 void TrafficLightServer::Expire(Time now, std::vector<Response>* out) {
-  if (!fifo_) return;
+  if (!fifo_ || !connected_) return;
   // Drop every dead queued car first, so that an expiry never grants a car that is itself dead.
   for (auto& entry : slots_) {
     Slot& slot = entry.second;  // not a structured binding: clang < 16 can't capture it
@@ -165,6 +165,23 @@ std::vector<Response> TrafficLightServer::OnTick(Time now) {
   return out;
 }
 
+std::vector<Response> TrafficLightServer::OnDisconnected(Time now) {
+  AdvanceTo(now);
+  std::vector<Response> out;
+  Expire(now, &out);
+  connected_ = false;
+  return out;
+}
+
+void TrafficLightServer::OnReconnected(Time now) {
+  AdvanceTo(now);
+  if (connected_) return;
+  connected_ = true;
+  for (auto& entry : slots_) {
+    for (auto& heard : entry.second.last_request) heard.second = now;
+  }
+}
+
 std::vector<ServerRecord> TrafficLightServer::TakeRecords() {
   std::vector<ServerRecord> taken;
   taken.swap(records_);
@@ -172,7 +189,7 @@ std::vector<ServerRecord> TrafficLightServer::TakeRecords() {
 }
 
 std::optional<Time> TrafficLightServer::NextDeadline() const {
-  if (!fifo_) return std::nullopt;
+  if (!fifo_ || !connected_) return std::nullopt;
   std::optional<Time> earliest;
   for (const auto& [id, slot] : slots_) {
     for (const auto& [car, heard] : slot.last_request) {

@@ -115,10 +115,20 @@ class TrafficLightServer {
   std::vector<Response> OnFree(Time now, const Free& free);
   // Lease expiries due at `now`, and the grants that follow them.
   std::vector<Response> OnTick(Time now);
+  // The server's connection to its clients (the broker) went down at `now`, or came back. While
+  // it is down no lease runs out (nobody can renew, so silence says nothing about a car inside
+  // an intersection); on reconnecting every holder and queued car has a full lease from `now`,
+  // time to renew over the link that is back. Expiries due before the disconnect still apply
+  // (their grants are in the returned responses, which a down link loses: the granted car learns
+  // of it when it asks again). Policy "original" has no lease: nothing changes. Repeating the
+  // current state (down when down) changes nothing.
+  std::vector<Response> OnDisconnected(Time now);
+  void OnReconnected(Time now);
+  bool connected() const { return connected_; }
 
   // The earliest time at which the state changes by itself (a holder's lease expires or a queued
   // car is dropped), so a simulator can schedule OnTick exactly; nullopt when nothing is pending
-  // (always for "original").
+  // (always for "original"; while disconnected).
   std::optional<Time> NextDeadline() const;
 
   // Unknown intersections: nullopt / empty.
@@ -147,6 +157,7 @@ class TrafficLightServer {
   bool fifo_{true};
   std::map<int, Slot> slots_;  // ordered by id: iteration order is output order
   std::optional<Time> last_now_;
+  bool connected_{true};
   Counters counters_;
   std::vector<ServerRecord> records_;
 };

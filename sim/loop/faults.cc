@@ -55,7 +55,20 @@ FaultActions ActionsOf(const V2iLossBurstFault& f, const FaultTargets& sim) {
                           {.car = f.car, .loss = f.loss, .cause = std::string(ToName(f.kKind))});
 }
 FaultActions ActionsOf(const BrokerOutageFault& f, const FaultTargets& sim) {
-  return LinkFaultActions(sim, {.cause = std::string(ToName(f.kKind))});
+  FaultActions link = LinkFaultActions(sim, {.cause = std::string(ToName(f.kKind))});
+  TrafficLightNode* server = &sim.server;
+  // the server sees its broker go, too: its leases pause (TrafficLightServer::OnDisconnected)
+  FaultActions actions{.begin = [begin = link.begin, server] {
+    begin();
+    server->BrokerDown();
+  }};
+  if (link.end) {
+    actions.end = [end = link.end, server] {
+      end();
+      server->BrokerUp();
+    };
+  }
+  return actions;
 }
 
 FaultActions ActionsOf(const ServerRestartFault& f, const FaultTargets& sim) {

@@ -87,7 +87,13 @@ class MosquittoClient final : public MqttClient {
 
   void Publish(const MqttMessage& message) override;
   void Subscribe(const std::string& filter, int qos) override;
-  std::optional<MqttMessage> Receive(std::chrono::steady_clock::time_point deadline) override;
+  std::optional<MqttMessage> Receive(std::chrono::steady_clock::time_point deadline) override {
+    return Take(deadline, false);
+  }
+  std::optional<MqttMessage> ReceiveUntilConnectionChanges(
+      std::chrono::steady_clock::time_point deadline) override {
+    return Take(deadline, true);
+  }
   void Interrupt() override;
   bool WaitReady(std::chrono::steady_clock::time_point deadline) override;
   bool Flush(std::chrono::steady_clock::time_point deadline) override;
@@ -97,6 +103,8 @@ class MosquittoClient final : public MqttClient {
  private:
   static void OnConnect(mosquitto* m, void* self, int rc, int flags, const mosquitto_property*);
   static void OnDisconnect(mosquitto* m, void* self, int rc, const mosquitto_property*);
+  std::optional<MqttMessage> Take(std::chrono::steady_clock::time_point deadline,
+                                  bool until_connection_changes);
   static void OnMessage(mosquitto* m, void* self, const mosquitto_message* msg,
                         const mosquitto_property* props);
   static void OnSubscribe(mosquitto* m, void* self, int mid, int count, const int* granted,
@@ -299,10 +307,14 @@ void MosquittoClient::SendSubscribe(const std::string& filter, int qos) {
   // Any failure here means the connection is going away; OnConnect subscribes again.
 }
 
-std::optional<MqttMessage> MosquittoClient::Receive(
-    std::chrono::steady_clock::time_point deadline) {
+std::optional<MqttMessage> MosquittoClient::Take(std::chrono::steady_clock::time_point deadline,
+                                                 bool until_connection_changes) {
   std::unique_lock lock(mu_);
-  cv_.wait_until(lock, deadline, [this] { return !inbox_.empty() || interrupted_; });
+  const bool was_connected = connected_;
+  cv_.wait_until(lock, deadline, [&] {
+    return !inbox_.empty() || interrupted_ ||
+           (until_connection_changes && connected_ != was_connected);
+  });
   if (interrupted_) {
     interrupted_ = false;
     return std::nullopt;

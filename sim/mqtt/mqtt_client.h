@@ -82,6 +82,10 @@ class MqttClient {
   virtual void Subscribe(const std::string& filter, int qos) = 0;
   // The next received message, or nullopt once `deadline` has passed or Interrupt() was called.
   virtual std::optional<MqttMessage> Receive(std::chrono::steady_clock::time_point deadline) = 0;
+  // As Receive, and nullopt too as soon as the connection is lost or made meanwhile (tlserver:
+  // its leases pause from the moment the broker is gone, not from its next timer).
+  virtual std::optional<MqttMessage> ReceiveUntilConnectionChanges(
+      std::chrono::steady_clock::time_point deadline) = 0;
   // Wakes a Receive blocked in another thread (it returns nullopt); thread-safe, also from a
   // signal-handling thread.
   virtual void Interrupt() = 0;

@@ -9,6 +9,10 @@
 //   /vtl/free                     "<epoch> <seq> <now_ns>": handle it at simulated time now_ns.
 //   /vtl/sim/clock  sim → server  "<epoch> <seq> <now_ns>": the lease deadline now_ns has come
 //                                 (TrafficLightServer::OnTick).
+//   /vtl/sim/disconnect, /vtl/sim/reconnect
+//                   sim → server  "<epoch> <seq> <now_ns>": the simulated broker went away or came
+//                                 back at now_ns (a broker_outage fault; TrafficLightServer::
+//                                 OnDisconnected, OnReconnected). The real broker stays up.
 //   /vtl/response   server → all  "<car><0|1>" as in the lab, with user property
 //                                 autonomsim-response = "<epoch> <seq> <index>".
 //   /vtl/sim/ack    server → sim  JSON Ack: step seq is done; its responses (which went out on
@@ -36,6 +40,8 @@ namespace autonomsim::sim {
 
 inline constexpr std::string_view kSimResetTopic = "/vtl/sim/reset";
 inline constexpr std::string_view kSimClockTopic = "/vtl/sim/clock";
+inline constexpr std::string_view kSimDisconnectTopic = "/vtl/sim/disconnect";
+inline constexpr std::string_view kSimReconnectTopic = "/vtl/sim/reconnect";
 inline constexpr std::string_view kSimAckTopic = "/vtl/sim/ack";
 // Retained JSON: the server's state per intersection (holder, queue) and its counters.
 inline constexpr std::string_view kVtlStatusTopic = "/vtl/status";

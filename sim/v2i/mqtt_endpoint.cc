@@ -184,9 +184,21 @@ std::vector<world::Response> MqttTrafficLightEndpoint::OnFree(Time now, const wo
 }
 
 std::vector<world::Response> MqttTrafficLightEndpoint::OnTick(Time now) {
+  return Exchange(Step(kSimClockTopic, now));
+}
+
+std::vector<world::Response> MqttTrafficLightEndpoint::OnDisconnected(Time now) {
+  return Exchange(Step(kSimDisconnectTopic, now));
+}
+
+std::vector<world::Response> MqttTrafficLightEndpoint::OnReconnected(Time now) {
+  return Exchange(Step(kSimReconnectTopic, now));
+}
+
+MqttMessage MqttTrafficLightEndpoint::Step(std::string_view topic, Time now) {
   ++seq_;
-  return Exchange(MqttMessage{.topic = std::string(kSimClockTopic),
-                              .payload = EncodeStepTag(StepTag{options_.epoch, seq_, now})});
+  return MqttMessage{.topic = std::string(topic),
+                     .payload = EncodeStepTag(StepTag{options_.epoch, seq_, now})};
 }
 
 std::optional<int> MqttTrafficLightEndpoint::Holder(int intersection) const {
@@ -327,6 +339,12 @@ class PrivateMqttEndpoint final : public TrafficLightEndpoint {
     return endpoint_->OnFree(now, free);
   }
   std::vector<world::Response> OnTick(Time now) override { return endpoint_->OnTick(now); }
+  std::vector<world::Response> OnDisconnected(Time now) override {
+    return endpoint_->OnDisconnected(now);
+  }
+  std::vector<world::Response> OnReconnected(Time now) override {
+    return endpoint_->OnReconnected(now);
+  }
   void Restart() override { endpoint_->Restart(); }
   std::optional<Time> NextDeadline() const override { return endpoint_->NextDeadline(); }
   std::optional<int> Holder(int intersection) const override {

@@ -48,6 +48,8 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
   std::vector<world::Response> OnRequest(Time now, const world::Request& request) override;
   std::vector<world::Response> OnFree(Time now, const world::Free& free) override;
   std::vector<world::Response> OnTick(Time now) override;
+  std::vector<world::Response> OnDisconnected(Time now) override;
+  std::vector<world::Response> OnReconnected(Time now) override;
   // Resets the tlserver under a new epoch (a fresh server); the counters go on.
   void Restart() override;
   std::optional<Time> NextDeadline() const override { return deadline_; }
@@ -69,6 +71,8 @@ class MqttTrafficLightEndpoint final : public TrafficLightEndpoint {
  private:
   std::vector<world::Response> Exchange(const MqttMessage& message);
   MqttMessage Tagged(std::string_view topic, std::string payload, Time now);
+  // A step of the simulation's own (/vtl/sim/clock, disconnect, reconnect) at `now`.
+  MqttMessage Step(std::string_view topic, Time now);
   void Reset();
 
   std::unique_ptr<MqttClient> client_;

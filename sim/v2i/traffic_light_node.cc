@@ -45,6 +45,16 @@ void TrafficLightNode::Restart() {
   RescheduleTick();  // the new server has no lease running
 }
 
+void TrafficLightNode::BrokerDown() {
+  Publish(endpoint_->OnDisconnected(kernel_->Now()));  // the link, itself down, loses them
+  RescheduleTick();
+}
+
+void TrafficLightNode::BrokerUp() {
+  Publish(endpoint_->OnReconnected(kernel_->Now()));
+  RescheduleTick();
+}
+
 void TrafficLightNode::OnMessage(int from_car, const world::V2IMessage& message) {
   const world::Decoded<world::V2IPayload> decoded = world::Decode(message);
   // Simulated cars encode well-formed requests for their track's intersections, which the server

@@ -26,6 +26,10 @@ class TrafficLightEndpoint {
   virtual std::vector<world::Response> OnRequest(Time now, const world::Request& request) = 0;
   virtual std::vector<world::Response> OnFree(Time now, const world::Free& free) = 0;
   virtual std::vector<world::Response> OnTick(Time now) = 0;
+  // The broker is away from `now` / back at `now` (a broker_outage fault): the server's leases
+  // pause while it is away (world::TrafficLightServer::OnDisconnected, OnReconnected).
+  virtual std::vector<world::Response> OnDisconnected(Time now) = 0;
+  virtual std::vector<world::Response> OnReconnected(Time now) = 0;
   // The server restarts (a fault): every holder, queue and lease is forgotten, as the lab's server
   // forgets them (vtl.py keeps its slots in memory only); the counters go on.
   virtual void Restart() = 0;
@@ -50,6 +54,13 @@ class EmbeddedTrafficLightEndpoint final : public TrafficLightEndpoint {
     return server_.OnFree(now, free);
   }
   std::vector<world::Response> OnTick(Time now) override { return server_.OnTick(now); }
+  std::vector<world::Response> OnDisconnected(Time now) override {
+    return server_.OnDisconnected(now);
+  }
+  std::vector<world::Response> OnReconnected(Time now) override {
+    server_.OnReconnected(now);
+    return {};
+  }
   void Restart() override;
   std::optional<Time> NextDeadline() const override { return server_.NextDeadline(); }
   std::optional<int> Holder(int intersection) const override {
@@ -82,6 +93,9 @@ class TrafficLightNode {
   void set_link(V2ILink* link) { link_ = link; }
   // A server_restart fault: the server forgets its state now (TrafficLightEndpoint::Restart).
   void Restart();
+  // A broker_outage fault begins / ends now: the server's leases pause meanwhile.
+  void BrokerDown();
+  void BrokerUp();
   // A message from `from_car` (as the link saw it) arrives at the server.
   void OnMessage(int from_car, const world::V2IMessage& message);
 

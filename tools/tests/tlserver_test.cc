@@ -7,6 +7,7 @@
 #include <csignal>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "sim/mqtt/tests/mqtt_fixture.h"
 #include "tools/tlserver_service.h"
@@ -232,6 +233,35 @@ TEST_F(ServiceTest, SimulationStepsAreTakenOnceInOrderAtTheirTime) {
   // and none of them stopped the server
   EXPECT_EQ(Ack(s.OnMessage(Step("/vtl/free", "1", 4, 8.0), {}))->responses.size(), 0u);
   EXPECT_EQ(s.server().Holder(0), std::nullopt);
+}
+
+// Issue 33: leases pause while the broker is away, on the wall clock (tlserver polls its
+// connection) and on a simulation's clock (its broker_outage fault as /vtl/sim/disconnect).
+TEST_F(ServiceTest, NoLeaseRunsOutWhileTheBrokerIsAway) {
+  Service wall(Options());
+  wall.OnMessage(Msg("/vtl/request", "00"), FromSeconds(1));
+  wall.OnMessage(Msg("/vtl/request", "10"), FromSeconds(1.5));
+  EXPECT_TRUE(wall.OnConnection(true, FromSeconds(1.6)).empty());  // up as before: nothing
+  wall.OnConnection(false, FromSeconds(2));
+  EXPECT_EQ(wall.NextTimer(), std::nullopt);
+  EXPECT_TRUE(Responses(wall.OnTimer(FromSeconds(4))).empty());
+  wall.OnConnection(true, FromSeconds(5));
+  EXPECT_EQ(wall.NextTimer(), FromSeconds(7));  // a full lease (2 s) from the reconnect
+  EXPECT_EQ(wall.server().Holder(0), 0);
+
+  Service sim(Options(true));
+  sim.OnMessage(Reset(), kZeroTime);
+  sim.OnMessage(Step("/vtl/request", "00", 1, 1.0), {});
+  sim.OnMessage(Step("/vtl/request", "10", 2, 1.5), {});
+  EXPECT_TRUE(sim.OnConnection(false, FromSeconds(1.7)).empty());  // ignored: the sim says
+  std::optional<sim::SimAck> ack =
+      Ack(sim.OnMessage(Msg(std::string(sim::kSimDisconnectTopic), "run1 3 2000000000"), {}));
+  ASSERT_TRUE(ack);
+  EXPECT_EQ(ack->deadline, std::nullopt);
+  ack = Ack(sim.OnMessage(Msg(std::string(sim::kSimReconnectTopic), "run1 4 5000000000"), {}));
+  ASSERT_TRUE(ack);
+  EXPECT_EQ(ack->deadline, FromSeconds(7));
+  EXPECT_EQ(ack->holders, (std::vector<std::pair<int, std::optional<int>>>{{0, 0}, {1, {}}}));
 }
 
 TEST_F(ServiceTest, ANewRunResetsTheServer) {
@@ -497,6 +527,51 @@ TEST_F(TlserverProcessTest, AfterABrokerCrashLosesTheFreesEveryIntersectionIsGra
   std::cout << "both intersections granted again "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - restarted).count()
             << " s after the broker's restart (lease 2 s)\n";
+  EXPECT_TRUE(server->Running());
+}
+
+// Issue 33: the broker is killed while car 0 holds intersection 0 and car 1 waits for it, and
+// stays away longer than the lease. Before, car 0's lease ran out meanwhile and car 1, asking
+// again after the restart, was granted an intersection car 0 might still be inside. Now the lease
+// pauses: car 1 is denied until car 0 has been silent for a lease after the broker came back.
+TEST_F(TlserverProcessTest, ALeaseDoesNotRunOutWhileTheBrokerIsAway) {
+  auto server = Start({"--lease-s", "2"});
+  auto car1 = t::Connect(*broker_, "car1", "car1-session", {"/vtl/response"});
+  // car 1's next answer on /vtl/response (the broadcast carries every car's)
+  const auto answer_to_car1 = [&](std::chrono::milliseconds within) {
+    const auto until = std::chrono::steady_clock::now() + within;
+    while (std::optional<MqttMessage> m = car1->Receive(until)) {
+      if (m->topic == "/vtl/response" && m->payload.rfind('1', 0) == 0) return m->payload;
+    }
+    return std::string("none");
+  };
+  auto car0 = t::Connect(*broker_, "car0", "car0-session", {"/vtl/response"});
+  car0->Publish({.topic = "/vtl/request/car0", .payload = "00"});
+  std::optional<MqttMessage> r = t::ReceiveOn(*car0, "/vtl/response");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->payload, "01");
+  car1->Publish({.topic = "/vtl/request/car1", .payload = "10"});
+  EXPECT_EQ(answer_to_car1(std::chrono::seconds(2)), "10");
+
+  broker_->Kill();
+  std::this_thread::sleep_for(std::chrono::seconds(3));  // longer than the lease
+  broker_->Start();
+  std::string first_answer = "none";
+  t::WaitUntil([&] {
+    car1->Publish({.topic = "/vtl/request/car1", .payload = "10"});
+    first_answer = answer_to_car1(std::chrono::milliseconds(300));
+    return first_answer != "none";
+  });
+  EXPECT_EQ(first_answer, "10") << server->LogTail();  // car 0 keeps its grant
+  EXPECT_NE(server->LogTail().find("leases paused"), std::string::npos) << server->LogTail();
+  // car 0 stays silent: one lease after the broker came back, car 1 is granted
+  bool granted = false;
+  t::WaitUntil([&] {
+    car1->Publish({.topic = "/vtl/request/car1", .payload = "10"});
+    granted = answer_to_car1(std::chrono::milliseconds(500)) == "11";
+    return granted;
+  });
+  EXPECT_TRUE(granted) << Status() << server->LogTail();
   EXPECT_TRUE(server->Running());
 }
 

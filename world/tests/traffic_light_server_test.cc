@@ -156,6 +156,56 @@ TEST(TrafficLightServerTest, LeaseExpiryFreesASilentHolderAndGrantsTheNextExactl
   EXPECT_EQ(server.NextDeadline(), At(10.5));  // now car 1's lease
 }
 
+// Issue 33: a holder stalled inside its intersection whose renewals cannot reach the server while
+// the broker is away must not lose its grant to the car queued behind it. No lease runs out while
+// the server is disconnected; on reconnecting every holder and queued car has a full lease.
+TEST(TrafficLightServerTest, NoLeaseRunsOutWhileTheBrokerIsAwayAndReconnectingRenewsThemAll) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(3.7), {1, kI0});  // car 1 holds
+  server.OnRequest(At(6.2), {0, kI0});  // car 0 queued
+  server.OnRequest(At(6.7), {1, kI0});  // car 1's last renewal before the outage
+  EXPECT_THAT(server.OnDisconnected(At(6.9)), IsEmpty());
+  EXPECT_FALSE(server.connected());
+  EXPECT_EQ(server.NextDeadline(), std::nullopt);
+  EXPECT_THAT(server.OnTick(At(11.7)), IsEmpty());  // car 1's lease would have ended here
+  server.OnReconnected(At(11.9));
+  EXPECT_TRUE(server.connected());
+  EXPECT_EQ(server.Holder(kI0), 1);
+  EXPECT_EQ(server.Queue(kI0), std::vector<int>{0});
+  EXPECT_EQ(server.NextDeadline(), At(16.9));  // a full lease for both from the reconnect
+  // car 0 asks first after the outage: still denied
+  EXPECT_THAT(server.OnRequest(At(12.2), {0, kI0}), ElementsAre(Denied(0)));
+  EXPECT_THAT(server.OnRequest(At(12.7), {1, kI0}), ElementsAre(Granted(1)));  // renewal
+  EXPECT_EQ(server.counters().lease_expiries, 0u);
+  EXPECT_THAT(server.OnRequest(At(15.0), {0, kI0}), ElementsAre(Denied(0)));  // car 0 asks on
+  // a holder that stays silent after the reconnect loses its grant one lease later, as ever
+  EXPECT_THAT(server.OnTick(At(17.7)), ElementsAre(Granted(0)));
+  EXPECT_EQ(server.counters().lease_expiries, 1u);
+}
+
+TEST(TrafficLightServerTest, ExpiriesDueBeforeADisconnectStillApply) {
+  auto server = MakeServer("fifo", 5.0);
+  server.OnRequest(At(1.0), {0, kI0});
+  server.OnRequest(At(2.0), {1, kI0});
+  server.OnRequest(At(5.0), {1, kI0});
+  // car 0's lease ended at 6 s; the broker goes at 7 s: car 1 is granted (the link loses it)
+  EXPECT_THAT(server.OnDisconnected(At(7.0)), ElementsAre(Granted(1)));
+  EXPECT_EQ(server.Holder(kI0), 1);
+  EXPECT_THAT(server.OnDisconnected(At(8.0)), IsEmpty());  // already down: nothing changes
+  server.OnReconnected(At(9.0));
+  server.OnReconnected(At(9.5));  // already up: the leases stay from 9 s
+  EXPECT_EQ(server.NextDeadline(), At(14.0));
+}
+
+TEST(TrafficLightServerOriginalTest, TheBrokerGoingAwayChangesNothing) {
+  auto server = MakeServer("original");
+  server.OnRequest(At(1.0), {0, kI0});
+  EXPECT_THAT(server.OnDisconnected(At(2.0)), IsEmpty());
+  server.OnReconnected(At(30.0));
+  EXPECT_EQ(server.Holder(kI0), 0);
+  EXPECT_EQ(server.NextDeadline(), std::nullopt);
+}
+
 TEST(TrafficLightServerTest, TheRecordsAddUpToTheCountersAndNameTheIntersection) {
   using K = ServerRecord::Kind;
   auto server = MakeServer("fifo", 5.0);

@@ -343,6 +343,34 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
   EXPECT_LT(*safe.cars[0].min_obstacle_gap_m, 0.15);  // well short of the first stop's 0.30 m
 }
 
+// Issue 33, item 1: car 1 stalls inside intersection 0 (6 s to 18 s) while car 0 waits for it, and
+// the broker is away from 6.9 s to 11.9 s, so car 1's renewals cannot reach the server for more
+// than a lease (5 s). Before, its lease ran out at 11.73 s, car 0 was granted at 12.19 s, drove in
+// and hit car 1 at 15.4 s. The server's leases now pause while its broker is away: car 0 waits
+// until car 1 has left and freed. The same under stack.preset safe.
+TEST(SimulationFaultTest, ALeaseDoesNotRunOutWhileTheBrokerIsAway) {
+  for (const char* preset : {"", "safe"}) {
+    SCOPED_TRACE(preset);
+    std::vector<std::string> overrides = {
+        "duration_s=40",
+        "faults=[car_stall: {car: 1, at_s: 6.0, for_s: 12}, broker_outage: {at_s: 6.9, for_s: 5}]",
+        "expect=[no_collision: {}, intersection_mutex: {}, no_entry_without_grant: {}]"};
+    if (*preset != '\0') overrides.push_back(std::string("stack.preset=") + preset);
+    const LoadedScenario scenario = LoadScenario("scenarios/lab_two_cars_oracle.yaml", overrides);
+    const RunRecord record = RunScenario(scenario);
+    for (const ExpectationResult& r : EvaluateExpectations(scenario.scenario, record)) {
+      EXPECT_TRUE(r.passed) << r.name << ": " << r.detail;
+    }
+    EXPECT_EQ(record.server.lease_expiries, 0u);
+    for (const Event& e : record.events) {
+      if (e.type == EventKind::kGrant && e.car == 0) {
+        EXPECT_GT(ToSeconds(e.t), 18.0);  // after car 1 moved on
+        break;
+      }
+    }
+  }
+}
+
 // The lab's intersection client as it runs (intersection_checker.cpp:69-105 and :120-223, lab
 // commit 02c5ab4: one request, blocked until granted, free on the first tick outside every box)
 // against the lab's server (vtl.py), stack-driven, nothing lost: car 1 crosses both intersections

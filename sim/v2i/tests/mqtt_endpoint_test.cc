@@ -58,6 +58,9 @@ class FakeServerClient final : public MqttClient {
     inbox_.pop_front();
     return m;
   }
+  std::optional<MqttMessage> ReceiveUntilConnectionChanges(Clock::time_point deadline) override {
+    return Receive(deadline);  // always connected
+  }
   void Interrupt() override {}
   bool WaitReady(Clock::time_point) override { return true; }
   bool Flush(Clock::time_point) override { return true; }
