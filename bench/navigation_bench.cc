@@ -6,11 +6,15 @@
 //   BM_GlobalPlanLabScratch  the same with the search's memory kept from plan to plan.
 //   BM_PlanThroughPosesLab the planner node's plan (1 Hz per car): ten goals 0.25 m apart along
 //                          the outer south lane, one Smac 2D leg each.
+//   BM_PlanThroughPosesLabMemo  the node's plans as the car drives: every plan 0.4 m further
+//                          along the lane through the stations ahead, the legs between two
+//                          stations the last plan shared kept (PlanLegMemo); per plan.
 //   BM_InflateGlobal       static layer + inflation rebuild of the global costmap.
 //   BM_LocalCostmapUpdate  one 5 × 5 m rolling local costmap update with the 234 marks of the
 //                          obstacle grid (reference §4), the car moving along the lane.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -82,6 +86,28 @@ void BM_PlanThroughPosesLab(benchmark::State& state) {
   state.counters["costmap_bytes"] = static_cast<double>(global.bytes());
 }
 BENCHMARK(BM_PlanThroughPosesLab)->Unit(benchmark::kMicrosecond);
+
+void BM_PlanThroughPosesLabMemo(benchmark::State& state) {
+  const autonomsim::stack::GlobalCostmap global({}, LabMap());
+  const autonomsim::stack::GlobalPlannerParams params;
+  autonomsim::stack::PlannerScratch scratch;
+  autonomsim::stack::PlanLegMemo memo;
+  double x_m = -2.0;  // along the outer south lane (y = -2.17), back again after 3.6 m
+  for (auto _ : state) {
+    x_m = x_m > 1.6 ? -2.0 : x_m + 0.4;
+    std::vector<Vec2> goals;
+    for (int n = static_cast<int>(std::floor(x_m / 0.25)) + 1; n * 0.25 <= x_m + 2.5; ++n) {
+      goals.emplace_back(n * 0.25, -2.17);
+    }
+    const auto plan =
+        PlanThroughPoses(params, global.costmap(), Vec2(x_m, -2.17), goals, &scratch, &memo);
+    if (!plan.ok()) state.SkipWithError("no plan");
+    benchmark::DoNotOptimize(plan.path_m.data());
+  }
+  state.counters["legs_reused"] =
+      static_cast<double>(memo.reused()) / static_cast<double>(memo.reused() + memo.planned());
+}
+BENCHMARK(BM_PlanThroughPosesLabMemo)->Unit(benchmark::kMicrosecond);
 
 void BM_InflateGlobal(benchmark::State& state) {
   autonomsim::stack::GlobalCostmap global({}, LabMap());
