@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <map>
 
 #include "sim/core/config.h"
 #include "sim/core/files.h"
@@ -114,6 +115,18 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
   }
   if (out) {  // every result folder is refused before anything runs
     try {
+      // a result folder is named by its scenario's file name: two of one name would mix
+      std::map<std::string, fs::path> by_name;
+      for (const fs::path& file : files) {
+        const auto [it, added] = by_name.emplace(file.stem().string(), file);
+        if (!added) {
+          throw sim::ConfigError(
+              it->second.string() + " and " + file.string() + " would both write " +
+              (fs::path(*out) / file.stem()).string() +
+              " (check names a result folder by its scenario's file name): check them with "
+              "different --out folders, or copy one under another name");
+        }
+      }
       for (const fs::path& file : files) {
         sim::CheckOutputFolder((fs::path(*out) / file.stem()).string(), force);
       }

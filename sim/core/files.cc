@@ -1,9 +1,13 @@
 #include "sim/core/files.h"
 
+#include <fcntl.h>
+#include <stdio.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 
 #include "sim/core/config.h"
@@ -155,12 +159,38 @@ fs::path CheckOutputFile(const std::string& given, bool force, const std::string
                " this program did not write; choose another --out, or add --force to replace it");
 }
 
+namespace {
+
+// What identifies the folder at `path` and its state: device, inode and status-change time (a new
+// folder in the place of a removed one may get the same inode; one whose entries changed has
+// another ctime), or nullopt when nothing is there.
+std::optional<FolderState> StateOf(const fs::path& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return std::nullopt;
+  return FolderState{static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino),
+                     static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1'000'000'000 +
+                         static_cast<std::int64_t>(st.st_ctim.tv_nsec)};
+}
+
+// "<target>-2", "<target>-3", ...: the first that nothing holds.
+fs::path FreeSibling(const fs::path& target) {
+  for (int n = 2;; ++n) {
+    fs::path candidate = target.string() + "-" + std::to_string(n);
+    if (!fs::exists(fs::symlink_status(candidate))) return candidate;
+  }
+}
+
+}  // namespace
+
 PartialFolder::PartialFolder(const fs::path& target, bool force)
-    : target_(CheckOutputFolder(target.string(), force)),
-      partial_(target_.string() + ".partial-" + std::to_string(::getpid())) {
+    : target_(CheckOutputFolder(target.string(), force)), checked_(StateOf(target_)) {
   fs::create_directories(target_.parent_path());
-  fs::remove_all(partial_);
-  fs::create_directory(partial_);
+  // a name of its own, also beside another PartialFolder of this process for the same target
+  for (int k = 0;; ++k) {
+    partial_ = target_.string() + ".partial-" + std::to_string(::getpid()) +
+               (k == 0 ? std::string() : "-" + std::to_string(k));
+    if (fs::create_directory(partial_)) break;
+  }
 }
 
 PartialFolder::~PartialFolder() {
@@ -172,13 +202,31 @@ PartialFolder::~PartialFolder() {
 void PartialFolder::Commit() {
   WriteFile(partial_ / kOutputMarker,
             "Written by autonomsim. The next output written here may replace this folder.\n");
-  if (fs::exists(fs::symlink_status(target_))) {
+  // The target is replaced only if it is still what was checked before the run: nothing, or the
+  // same folder, unchanged. Whatever appeared or changed there meanwhile is left alone, and the
+  // result is kept beside it.
+  const std::optional<FolderState> now = StateOf(target_);
+  if (now != checked_) {
+    const fs::path kept = FreeSibling(target_);
+    fs::rename(partial_, kept);
+    committed_ = true;
+    throw ConfigError("--out " + target_.string() + ": " +
+                      (checked_ ? "changed during the run" : "appeared during the run") +
+                      ", so it is left as it is; the results are in " + kept.string());
+  }
+  if (now) {
     const fs::path old = target_.string() + ".old-" + std::to_string(::getpid());
     fs::rename(target_, old);
     fs::rename(partial_, target_);
     fs::remove_all(old);
-  } else {
-    fs::rename(partial_, target_);
+  } else if (::renameat2(AT_FDCWD, partial_.c_str(), AT_FDCWD, target_.c_str(), RENAME_NOREPLACE) !=
+             0) {
+    const fs::path kept = FreeSibling(target_);
+    fs::rename(partial_, kept);
+    committed_ = true;
+    throw ConfigError("--out " + target_.string() +
+                      ": appeared during the run, so it is left as it is; the results are in " +
+                      kept.string());
   }
   committed_ = true;
 }

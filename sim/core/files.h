@@ -2,8 +2,10 @@
 // written to a temporary name and renamed when complete).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace autonomsim::sim {
@@ -46,9 +48,20 @@ std::filesystem::path PrepareOutputFolder(const std::string& given, bool force);
 // A folder written under a temporary name and renamed to its target when complete, for outputs
 // written over time (a run streams its trajectory into its folder): the constructor checks the
 // target (CheckOutputFolder, before anything runs) and creates "<target>.partial-<pid>"; Commit
-// gives it the marker and renames it to the target, replacing a previous one only then. Destroyed
-// uncommitted (an error, an exception), it removes the partial folder: nothing half-written is
-// left looking complete.
+// gives it the marker and renames it to the target, replacing a previous one only then, and only
+// if the target is still what the constructor checked (nothing, or the same folder, unchanged): a
+// folder that appeared there meanwhile, or replaced or changed the checked one, is left alone, the
+// result is renamed to the first free "<target>-2", "<target>-3", ... and Commit throws ConfigError
+// (exit 2) saying where it is. Destroyed uncommitted (an error, an exception), it removes the
+// partial folder: nothing half-written is left looking complete. A folder's device, inode and
+// status-change time (ns): equal while nothing replaced or changed it.
+struct FolderState {
+  std::uint64_t device{0};
+  std::uint64_t inode{0};
+  std::int64_t ctime_ns{0};
+  friend bool operator==(const FolderState&, const FolderState&) = default;
+};
+
 class PartialFolder {
  public:
   PartialFolder(const std::filesystem::path& target, bool force);
@@ -62,6 +75,7 @@ class PartialFolder {
 
  private:
   std::filesystem::path target_;
+  std::optional<FolderState> checked_;  // the target when checked (nullopt: nothing was there)
   std::filesystem::path partial_;
   bool committed_{false};
 };

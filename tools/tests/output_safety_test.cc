@@ -117,5 +117,25 @@ TEST(OutputSafety, RenderAndCheckRefuseToo) {
   EXPECT_EQ(Cli("check scenarios/intersection_conflict.yaml --out " + ours.string()).exit_code, 0);
 }
 
+// Issue 33: two scenario files of one name in different folders wrote one result folder through
+// one temporary name (with --jobs 2 a false "cannot write", or a folder mixing one run's summary
+// with the other's trajectory). check now refuses them before anything runs.
+TEST(OutputSafety, CheckRefusesTwoScenariosThatWouldWriteOneResultFolder) {
+  const fs::path dir = Scratch();
+  fs::create_directories(dir / "a");
+  fs::create_directories(dir / "b");
+  fs::copy_file("scenarios/intersection_conflict.yaml", dir / "a" / "x.yaml");
+  fs::copy_file("scenarios/intersection_conflict.yaml", dir / "b" / "x.yaml");
+  const Result both =
+      Cli("check " + (dir / "a" / "x.yaml").string() + " " + (dir / "b" / "x.yaml").string() +
+          " --jobs 2 --out " + (dir / "out").string());
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_THAT(both.output, HasSubstr("would both write"));
+  EXPECT_THAT(both.output, Not(HasSubstr("pass ")));  // refused before anything ran
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  // without --out nothing is written, so nothing can mix: both run
+  EXPECT_NE(Cli("check " + (dir / "a").string() + " " + (dir / "b").string()).exit_code, 2);
+}
+
 }  // namespace
 }  // namespace autonomsim::testing

@@ -109,5 +109,61 @@ TEST(Files, AFolderWrittenAtomicallyAppearsWhole) {
   EXPECT_EQ(Entries(dir.path), 1u);        // and no partial one
 }
 
+// Issue 33: --out was checked only before the run; a folder that appeared there during the run
+// was deleted when the run finished. Now it is left alone and the result goes beside it.
+TEST(Files, AFolderThatAppearsDuringTheRunIsNeverReplaced) {
+  TempDir dir;
+  const fs::path target = dir.path / "run";
+  PartialFolder folder(target, false);
+  WriteFile(folder.path() / "a", "result");
+  fs::create_directory(target);  // someone else's, meanwhile
+  WriteFile(target / "notes.txt", "mine");
+  try {
+    folder.Commit();
+    ADD_FAILURE() << "Commit replaced a folder that appeared during the run";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("appeared during the run"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find((dir.path / "run-2").string()), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadText(target / "notes.txt"), "mine");
+  EXPECT_EQ(ReadText(dir.path / "run-2" / "a"), "result");
+  EXPECT_TRUE(fs::exists(dir.path / "run-2" / kOutputMarker));
+  EXPECT_EQ(Entries(dir.path), 2u);  // no partial folder left
+}
+
+TEST(Files, AFolderReplacedDuringTheRunIsNeverReplacedInTurn) {
+  TempDir dir;
+  const fs::path target = dir.path / "run";
+  WriteFolderAtomically(target, [](const fs::path& partial) { WriteFile(partial / "a", "old"); });
+  WriteFolderAtomically(dir.path / "run-2", [](const fs::path& p) { WriteFile(p / "a", "x"); });
+  PartialFolder folder(target, false);  // checked: our old run, replaceable
+  WriteFile(folder.path() / "a", "new");
+  fs::remove_all(target);  // meanwhile another program's output takes its place
+  fs::create_directory(target);
+  WriteFile(target / "a", "theirs");
+  EXPECT_THROW(folder.Commit(), ConfigError);
+  EXPECT_EQ(ReadText(target / "a"), "theirs");
+  EXPECT_EQ(ReadText(dir.path / "run-3" / "a"), "new");  // run-2 was taken
+  // unchanged since the check: replaced as before
+  PartialFolder again(target / ".." / "run-3", false);
+  WriteFile(again.path() / "a", "newer");
+  again.Commit();
+  EXPECT_EQ(ReadText(dir.path / "run-3" / "a"), "newer");
+}
+
+TEST(Files, TwoPartialFoldersOfOneProcessForOneTargetDoNotShareTheirFolder) {
+  TempDir dir;
+  PartialFolder a(dir.path / "x", false);
+  PartialFolder b(dir.path / "x", false);
+  EXPECT_NE(a.path(), b.path());
+  WriteFile(a.path() / "f", "a");
+  WriteFile(b.path() / "f", "b");
+  a.Commit();
+  EXPECT_THROW(b.Commit(), ConfigError);  // a's result appeared meanwhile: b's goes beside it
+  EXPECT_EQ(ReadText(dir.path / "x" / "f"), "a");
+  EXPECT_EQ(ReadText(dir.path / "x-2" / "f"), "b");
+}
+
 }  // namespace
 }  // namespace autonomsim::sim
