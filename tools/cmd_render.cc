@@ -30,7 +30,7 @@ struct RenderArgs {
 
 int RenderCommand(const RenderArgs& a) {
   try {  // refused before anything runs
-    sim::CheckOutputFolder(a.out, a.force);
+    sim::CheckOutputFolder(a.out, a.force, sim::OutputKind::kRender);
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;

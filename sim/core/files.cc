@@ -7,8 +7,11 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "sim/core/config.h"
 
@@ -74,7 +77,66 @@ void CheckAncestors(const fs::path& target, const Refuse& refuse) {
 
 }  // namespace
 
-fs::path CheckOutputFolder(const std::string& given, bool force) {
+const char* OutputKindName(OutputKind kind) {
+  switch (kind) {
+    case OutputKind::kRun:
+      return "run";
+    case OutputKind::kRender:
+      return "render";
+    case OutputKind::kSweep:
+      return "sweep";
+  }
+  return "?";
+}
+
+std::string MarkerText(OutputKind kind, const std::vector<std::string>& files) {
+  const std::string what =
+      kind == OutputKind::kSweep
+          ? "Later sweeps may add to or replace what is here."
+          : std::string("The next ") + OutputKindName(kind) + " written here may replace it.";
+  std::string text = "Written by autonomsim. " + what + "\nkind: " + OutputKindName(kind) + "\n";
+  if (!files.empty()) {
+    text += "files:";
+    for (const std::string& f : files) text += " " + f;
+    text += "\n";
+  }
+  return text;
+}
+
+namespace {
+
+// The kind a marker names; a marker from before kinds: a sweep's said "add to", the others any.
+std::optional<OutputKind> MarkerKind(const fs::path& marker) {
+  std::ifstream in(marker);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (OutputKind k : {OutputKind::kRun, OutputKind::kRender, OutputKind::kSweep}) {
+    if (text.find(std::string("kind: ") + OutputKindName(k) + "\n") != std::string::npos) return k;
+  }
+  if (text.find("add to") != std::string::npos) return OutputKind::kSweep;
+  return std::nullopt;
+}
+
+// The files a marker lists as its folder's own.
+bool MarkerOwns(const fs::path& marker, const std::string& name) {
+  std::ifstream in(marker);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("files:", 0) != 0) continue;
+    std::istringstream words(line.substr(6));
+    for (std::string word; words >> word;) {
+      if (word == name) return true;
+    }
+  }
+  return false;
+}
+
+bool MarkerAllows(const fs::path& marker, OutputKind kind) {
+  const std::optional<OutputKind> found = MarkerKind(marker);
+  return found ? *found == kind : kind != OutputKind::kSweep;
+}
+
+}  // namespace
+
+fs::path CheckOutputFolder(const std::string& given, bool force, OutputKind kind) {
   const auto refuse = [&](const std::string& why) -> ConfigError {
     return ConfigError("--out " + given + ": " + why);
   };
@@ -95,18 +157,22 @@ fs::path CheckOutputFolder(const std::string& given, bool force) {
   }
   CheckAncestors(target, refuse);
   const fs::file_status status = fs::symlink_status(target);
-  const std::string kind = KindOf(status);
-  if (kind.empty()) return target;
-  if (fs::is_directory(status) && fs::exists(target / kOutputMarker)) return target;
+  const std::string what_is = KindOf(status);
+  if (what_is.empty()) return target;
+  const bool marked = fs::is_directory(status) && fs::exists(target / kOutputMarker);
+  if (marked && MarkerAllows(target / kOutputMarker, kind)) return target;
   if (fs::is_block_file(status) || fs::is_character_file(status) || fs::is_fifo(status) ||
       fs::is_socket(status)) {
-    throw refuse("is " + kind + ", never replaced");
+    throw refuse("is " + what_is + ", never replaced");
   }
   if (force) return target;
-  const std::string what = fs::is_directory(status)
-                               ? "is a folder this program did not write (it has no " +
-                                     std::string(kOutputMarker) + " marker)"
-                               : "is " + kind;
+  const std::string what =
+      marked ? std::string("is a ") + OutputKindName(*MarkerKind(target / kOutputMarker)) +
+                   " folder (its " + kOutputMarker + " marker says so), and a " +
+                   OutputKindName(kind) + " replaces only a " + OutputKindName(kind) + " folder"
+      : fs::is_directory(status) ? "is a folder this program did not write (it has no " +
+                                       std::string(kOutputMarker) + " marker)"
+                                 : "is " + what_is;
   throw refuse(what + "; choose another --out, or add --force to replace it and all it holds");
 }
 
@@ -114,14 +180,13 @@ fs::path PrepareOutputFolder(const std::string& given, bool force) {
   std::string trimmed = given;
   while (trimmed.size() > 1 && trimmed.back() == '/') trimmed.pop_back();
   const bool empty_folder = fs::is_directory(fs::symlink_status(trimmed)) && fs::is_empty(trimmed);
-  const fs::path target = CheckOutputFolder(given, force || empty_folder);
+  const fs::path target = CheckOutputFolder(given, force || empty_folder, OutputKind::kSweep);
   if (fs::exists(fs::symlink_status(target)) && !fs::is_directory(fs::symlink_status(target))) {
     throw ConfigError("--out " + given + ": is not a folder; choose another --out");
   }
   fs::create_directories(target);
-  if (!fs::exists(target / kOutputMarker)) {
-    WriteFile(target / kOutputMarker,
-              "Written by autonomsim. Later outputs may add to or replace what is here.\n");
+  if (!fs::exists(target / kOutputMarker) || !MarkerKind(target / kOutputMarker)) {
+    WriteFile(target / kOutputMarker, MarkerText(OutputKind::kSweep));
   }
   return target;
 }
@@ -146,13 +211,19 @@ fs::path CheckOutputFile(const std::string& given, bool force, const std::string
   }
   if (force) return target;
   if (fs::is_regular_file(status)) {
-    if (fs::exists(target.parent_path() / kOutputMarker)) return target;
     if (!signature.empty()) {
       std::ifstream in(target, std::ios::binary);
       std::string head(4096, '\0');
       in.read(head.data(), static_cast<std::streamsize>(head.size()));
       head.resize(static_cast<std::size_t>(in.gcount()));
       if (head.find(signature) != std::string::npos) return target;
+    }
+    const fs::path marker = target.parent_path() / kOutputMarker;
+    if (fs::exists(marker)) {
+      if (MarkerOwns(marker, target.filename().string())) {
+        throw refuse("is one of its run's own files; choose another --out");
+      }
+      return target;
     }
   }
   throw refuse("is " + kind +
@@ -182,8 +253,10 @@ fs::path FreeSibling(const fs::path& target) {
 
 }  // namespace
 
-PartialFolder::PartialFolder(const fs::path& target, bool force)
-    : target_(CheckOutputFolder(target.string(), force)), checked_(StateOf(target_)) {
+PartialFolder::PartialFolder(const fs::path& target, bool force, OutputKind kind)
+    : target_(CheckOutputFolder(target.string(), force, kind)),
+      kind_(kind),
+      checked_(StateOf(target_)) {
   fs::create_directories(target_.parent_path());
   // a name of its own, also beside another PartialFolder of this process for the same target
   for (int k = 0;; ++k) {
@@ -200,8 +273,12 @@ PartialFolder::~PartialFolder() {
 }
 
 void PartialFolder::Commit() {
-  WriteFile(partial_ / kOutputMarker,
-            "Written by autonomsim. The next output written here may replace this folder.\n");
+  std::vector<std::string> own;
+  for (const auto& entry : fs::directory_iterator(partial_)) {
+    if (entry.is_regular_file()) own.push_back(entry.path().filename().string());
+  }
+  std::sort(own.begin(), own.end());
+  WriteFile(partial_ / kOutputMarker, MarkerText(kind_, own));
   // The target is replaced only if it is still what was checked before the run: nothing, or the
   // same folder, unchanged. Whatever appeared or changed there meanwhile is left alone, and the
   // result is kept beside it.
@@ -232,8 +309,9 @@ void PartialFolder::Commit() {
 }
 
 void WriteFolderAtomically(const fs::path& target_dir,
-                           const std::function<void(const fs::path& partial)>& fill, bool force) {
-  PartialFolder folder(target_dir, force);
+                           const std::function<void(const fs::path& partial)>& fill, bool force,
+                           OutputKind kind) {
+  PartialFolder folder(target_dir, force, kind);
   fill(folder.path());
   folder.Commit();
 }

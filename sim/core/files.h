@@ -7,6 +7,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace autonomsim::sim {
 
@@ -19,8 +20,16 @@ void WriteFile(const std::filesystem::path& file, const std::string& content);
 // file) propagates.
 void WriteFileAtomically(const std::filesystem::path& file, const std::string& content);
 // Output folders. Every folder this program writes (a run, a render, a sweep) carries this marker
-// file; only a folder that has it is ever replaced, unless the user says --force.
+// file, which names its kind; only a folder that has it, of the same kind, is ever replaced,
+// unless the user says --force. (check's result folders are run folders.) A marker written
+// before kinds were recorded: a sweep's says it accumulates ("add to"), the others are taken as
+// any kind but a sweep.
 inline constexpr const char* kOutputMarker = ".autonomsim";
+enum class OutputKind { kRun, kRender, kSweep };
+const char* OutputKindName(OutputKind kind);  // "run", "render", "sweep"
+// The marker's text for a folder of `kind` that holds `files` (its own: nothing writes over them
+// without --force; CheckOutputFile).
+std::string MarkerText(OutputKind kind, const std::vector<std::string>& files = {});
 
 // The folder `given` (as the user wrote it; a trailing slash is allowed) checked as the target of
 // an output that replaces it: it may be absent (its parent is created; every existing ancestor
@@ -28,12 +37,15 @@ inline constexpr const char* kOutputMarker = ".autonomsim";
 // runs, for the filesystem root or a folder holding the working folder (never replaced), a device
 // node, FIFO or socket (never replaced), and — unless `force` — a folder without the marker, a
 // file or a symbolic link. Returns the path to use.
-std::filesystem::path CheckOutputFolder(const std::string& given, bool force);
+// A folder with the marker of another kind is refused like one without it (its kind named).
+std::filesystem::path CheckOutputFolder(const std::string& given, bool force,
+                                        OutputKind kind = OutputKind::kRun);
 
 // The file `given` checked as the target of an output written over it (a report, a video): it may
-// be absent (its parent folder is created), or a plain file this program wrote — one inside a
-// folder with the marker, or one whose first 4 KiB hold `signature` (when not empty). Throws
-// ConfigError (exit 2), before anything is made, for a folder, a device node, FIFO or socket
+// be absent (its parent folder is created), or a plain file this program wrote — one whose first
+// 4 KiB hold `signature` (when not empty), or one inside a folder with the marker that is not one
+// of the folder's own files (a run's summary.json, trajectory.csv, ...: its marker lists them).
+// Throws ConfigError (exit 2), before anything is made, for a folder, a device node, FIFO or socket
 // (never replaced), and — unless `force` — any other existing file or symbolic link. Returns the
 // path to use.
 std::filesystem::path CheckOutputFile(const std::string& given, bool force,
@@ -64,7 +76,8 @@ struct FolderState {
 
 class PartialFolder {
  public:
-  PartialFolder(const std::filesystem::path& target, bool force);
+  PartialFolder(const std::filesystem::path& target, bool force,
+                OutputKind kind = OutputKind::kRun);
   ~PartialFolder();
   PartialFolder(const PartialFolder&) = delete;
   PartialFolder& operator=(const PartialFolder&) = delete;
@@ -75,6 +88,7 @@ class PartialFolder {
 
  private:
   std::filesystem::path target_;
+  OutputKind kind_;
   std::optional<FolderState> checked_;  // the target when checked (nullopt: nothing was there)
   std::filesystem::path partial_;
   bool committed_{false};
@@ -86,6 +100,6 @@ class PartialFolder {
 // gets the marker. If `fill` throws, the partial folder is removed and the exception propagates.
 void WriteFolderAtomically(const std::filesystem::path& target,
                            const std::function<void(const std::filesystem::path& partial)>& fill,
-                           bool force = false);
+                           bool force = false, OutputKind kind = OutputKind::kRun);
 
 }  // namespace autonomsim::sim

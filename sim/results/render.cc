@@ -391,7 +391,7 @@ void WriteRenderFolder(const std::vector<RenderedInstant>& instants, int car_id,
           }
         }
       },
-      force);
+      force, OutputKind::kRender);
 }
 
 }  // namespace autonomsim::sim

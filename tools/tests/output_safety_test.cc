@@ -137,5 +137,30 @@ TEST(OutputSafety, CheckRefusesTwoScenariosThatWouldWriteOneResultFolder) {
   EXPECT_NE(Cli("check " + (dir / "a").string() + " " + (dir / "b").string()).exit_code, 2);
 }
 
+// Issue 33: `run --out` at a sweep's folder replaced the whole sweep (with the notes a user added);
+// `report RUN --out RUN/trajectory.csv` overwrote the trajectory.
+TEST(OutputSafety, ACommandReplacesOnlyItsOwnKindAndNeverARunsFiles) {
+  const fs::path dir = Scratch();
+  const fs::path sweep = dir / "sweep";
+  fs::create_directories(sweep);
+  WriteText(sweep / ".autonomsim", "Written by autonomsim.\nkind: sweep\n");
+  WriteText(sweep / "notes.txt", "precious");
+  const Result run = Cli(std::string("run ") + kQuick + " --out " + sweep.string());
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("is a sweep folder"));
+  EXPECT_EQ(Read(sweep / "notes.txt"), "precious");
+
+  const fs::path ours = dir / "run";
+  ASSERT_EQ(Cli(std::string("run ") + kQuick + " --out " + ours.string()).exit_code, 0);
+  const std::string trajectory = Read(ours / "trajectory.csv");
+  const Result report =
+      Cli("report " + ours.string() + " --out " + (ours / "trajectory.csv").string());
+  EXPECT_EQ(report.exit_code, 2) << report.output;
+  EXPECT_THAT(report.output, HasSubstr("own files"));
+  EXPECT_EQ(Read(ours / "trajectory.csv"), trajectory);
+  EXPECT_EQ(Cli("report " + ours.string()).exit_code, 0);  // its report.html, again and again
+  EXPECT_EQ(Cli("report " + ours.string()).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace autonomsim::testing

@@ -152,6 +152,44 @@ TEST(Files, AFolderReplacedDuringTheRunIsNeverReplacedInTurn) {
   EXPECT_EQ(ReadText(dir.path / "run-3" / "a"), "newer");
 }
 
+// Issue 33: `run --out` at a sweep's folder replaced the whole sweep, and `report RUN --out
+// RUN/trajectory.csv` wrote over the run's trajectory. The marker names the folder's kind and
+// its own files.
+TEST(Files, ACommandReplacesOnlyAFolderOfItsKindAndNeverARunsOwnFiles) {
+  TempDir dir;
+  const fs::path sweep = PrepareOutputFolder((dir.path / "sweep").string(), false);
+  EXPECT_THROW(CheckOutputFolder(sweep.string(), false), ConfigError);  // a run
+  EXPECT_THROW(CheckOutputFolder(sweep.string(), false, OutputKind::kRender), ConfigError);
+  try {
+    CheckOutputFolder(sweep.string(), false);
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a sweep folder"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(CheckOutputFolder(sweep.string(), true));     // --force
+  EXPECT_NO_THROW(PrepareOutputFolder(sweep.string(), false));  // a sweep resumes it
+
+  const fs::path run = dir.path / "run";
+  WriteFolderAtomically(run, [](const fs::path& p) { WriteFile(p / "trajectory.csv", "t"); });
+  EXPECT_NO_THROW(CheckOutputFolder(run.string(), false));
+  EXPECT_THROW(CheckOutputFolder(run.string(), false, OutputKind::kRender), ConfigError);
+  EXPECT_THROW(PrepareOutputFolder(run.string(), false), ConfigError);
+  EXPECT_THROW(CheckOutputFile((run / "trajectory.csv").string(), false), ConfigError);
+  EXPECT_NO_THROW(CheckOutputFile((run / "replay.mp4").string(), false));  // not its own
+  EXPECT_NO_THROW(CheckOutputFile((run / "trajectory.csv").string(), true));
+
+  // markers from before kinds: a sweep's said "add to"; the others serve run and render
+  fs::create_directory(dir.path / "old_sweep");
+  WriteFile(dir.path / "old_sweep" / kOutputMarker,
+            "Written by autonomsim. Later outputs may add to or replace what is here.\n");
+  EXPECT_THROW(CheckOutputFolder((dir.path / "old_sweep").string(), false), ConfigError);
+  fs::create_directory(dir.path / "old_run");
+  WriteFile(dir.path / "old_run" / kOutputMarker,
+            "Written by autonomsim. The next output written here may replace this folder.\n");
+  EXPECT_NO_THROW(CheckOutputFolder((dir.path / "old_run").string(), false));
+  EXPECT_NO_THROW(CheckOutputFolder((dir.path / "old_run").string(), false, OutputKind::kRender));
+  EXPECT_THROW(PrepareOutputFolder((dir.path / "old_run").string(), false), ConfigError);
+}
+
 TEST(Files, TwoPartialFoldersOfOneProcessForOneTargetDoNotShareTheirFolder) {
   TempDir dir;
   PartialFolder a(dir.path / "x", false);
