@@ -283,14 +283,14 @@ void PartialFolder::Commit() {
   // same folder, unchanged. Whatever appeared or changed there meanwhile is left alone, and the
   // result is kept beside it.
   const std::optional<FolderState> now = StateOf(target_);
-  if (now != checked_) {
+  const auto keep_beside = [&](const char* why) {
     const fs::path kept = FreeSibling(target_);
     fs::rename(partial_, kept);
     committed_ = true;
-    throw ConfigError("--out " + target_.string() + ": " +
-                      (checked_ ? "changed during the run" : "appeared during the run") +
+    throw ConfigError("--out " + target_.string() + ": " + why +
                       ", so it is left as it is; the results are in " + kept.string());
-  }
+  };
+  if (now != checked_) keep_beside(checked_ ? "changed during the run" : "appeared during the run");
   if (now) {
     const fs::path old = target_.string() + ".old-" + std::to_string(::getpid());
     fs::rename(target_, old);
@@ -298,12 +298,7 @@ void PartialFolder::Commit() {
     fs::remove_all(old);
   } else if (::renameat2(AT_FDCWD, partial_.c_str(), AT_FDCWD, target_.c_str(), RENAME_NOREPLACE) !=
              0) {
-    const fs::path kept = FreeSibling(target_);
-    fs::rename(partial_, kept);
-    committed_ = true;
-    throw ConfigError("--out " + target_.string() +
-                      ": appeared during the run, so it is left as it is; the results are in " +
-                      kept.string());
+    keep_beside("appeared during the run");
   }
   committed_ = true;
 }
