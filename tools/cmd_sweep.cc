@@ -82,6 +82,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     }
     spec.overrides.insert(spec.overrides.end(), o.overrides.begin(), o.overrides.end());
     for (const std::string& v : o.vary) spec.axes.push_back(sim::ParseVary(v));
+    sim::CheckAxesDistinct(spec.axes);
     if (repeat_given) spec.repeat = o.repeat;
     options.jobs = o.jobs;
     options.shard = sim::ParseShard(o.shard);

@@ -255,7 +255,25 @@ SweepSpec LoadStudy(const fs::path& file) {
   if (!vary.IsSequence())
     throw StudyError(file, vary, "vary: a list of {key, values} or {key, range}");
   for (const YAML::Node& entry : vary) spec.axes.push_back(StudyAxis(file, entry));
+  try {
+    CheckAxesDistinct(spec.axes);
+  } catch (const ConfigError& e) {
+    throw StudyError(file, vary, e.what());
+  }
   return spec;
+}
+
+void CheckAxesDistinct(const std::vector<VaryAxis>& axes) {
+  for (std::size_t a = 0; a < axes.size(); ++a) {
+    for (std::size_t b = 0; b < a; ++b) {
+      if (axes[a].key == axes[b].key) {
+        throw ConfigError("--vary " + axes[a].key +
+                          " is varied twice (two columns of one name, the same runs twice): give "
+                          "all its values in one --vary " +
+                          axes[a].key + "=...");
+      }
+    }
+  }
 }
 
 // ---- The grid ----

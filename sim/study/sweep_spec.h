@@ -35,6 +35,11 @@ std::optional<double> ParseFiniteNumber(const std::string& text);
 // start to stop inclusive, or count = 1: start). ConfigError naming the spec when malformed.
 VaryAxis ParseVary(const std::string& spec);
 
+// A key varied twice (two --vary of one key, or a study's vary and a --vary) would give two table
+// columns of one name and the same run twice: ConfigError naming the key and saying to give its
+// values in one --vary.
+void CheckAxesDistinct(const std::vector<VaryAxis>& axes);
+
 struct SweepSpec {
   std::filesystem::path scenario;
   std::vector<std::string> overrides;  // --set, applied to every run before the varied keys

@@ -175,6 +175,20 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
 }
 
+// Issue 33: `--vary K=a,b --vary K=c` was accepted: two columns named K, and rows of the same run.
+TEST(Sweep, AKeyVariedTwiceIsRefused) {
+  EXPECT_NO_THROW(CheckAxesDistinct({ParseVary("a=1,2"), ParseVary("b=3")}));
+  try {
+    CheckAxesDistinct({ParseVary("v2i.loss=0,0.1"), ParseVary("a=1"), ParseVary("v2i.loss=0.2")});
+    FAIL() << "a key varied twice was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("v2i.loss is varied twice"));
+  }
+  TempDir dir;
+  std::ofstream(dir.path / "study.yaml") << "scenario: x.yaml\nvary: [a=1, a=2]\n";
+  EXPECT_THROW(LoadStudy(dir.path / "study.yaml"), ConfigError);
+}
+
 TEST(Sweep, AStudyFileGivesTheScenarioSetRepeatAndVary) {
   TempDir dir;
   std::ofstream(dir.path / "study.yaml") << R"(
