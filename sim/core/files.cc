@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <iterator>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -77,24 +76,13 @@ void CheckAncestors(const fs::path& target, const Refuse& refuse) {
 
 }  // namespace
 
-const char* OutputKindName(OutputKind kind) {
-  switch (kind) {
-    case OutputKind::kRun:
-      return "run";
-    case OutputKind::kRender:
-      return "render";
-    case OutputKind::kSweep:
-      return "sweep";
-  }
-  return "?";
-}
-
 std::string MarkerText(OutputKind kind, const std::vector<std::string>& files) {
   const std::string what =
       kind == OutputKind::kSweep
           ? "Later sweeps may add to or replace what is here."
-          : std::string("The next ") + OutputKindName(kind) + " written here may replace it.";
-  std::string text = "Written by autonomsim. " + what + "\nkind: " + OutputKindName(kind) + "\n";
+          : "The next " + std::string(ToName(kind)) + " written here may replace it.";
+  std::string text =
+      "Written by autonomsim. " + what + "\nkind: " + std::string(ToName(kind)) + "\n";
   if (!files.empty()) {
     text += "files:";
     for (const std::string& f : files) text += " " + f;
@@ -108,11 +96,10 @@ namespace {
 // The kind a marker names; a marker from before kinds: a sweep's said "add to", the others any.
 std::optional<OutputKind> MarkerKind(const fs::path& marker) {
   std::ifstream in(marker);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (OutputKind k : {OutputKind::kRun, OutputKind::kRender, OutputKind::kSweep}) {
-    if (text.find(std::string("kind: ") + OutputKindName(k) + "\n") != std::string::npos) return k;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("kind: ", 0) == 0) return FromName<OutputKind>(line.substr(6));
+    if (line.find("add to") != std::string::npos) return OutputKind::kSweep;
   }
-  if (text.find("add to") != std::string::npos) return OutputKind::kSweep;
   return std::nullopt;
 }
 
@@ -167,9 +154,10 @@ fs::path CheckOutputFolder(const std::string& given, bool force, OutputKind kind
   }
   if (force) return target;
   const std::string what =
-      marked ? std::string("is a ") + OutputKindName(*MarkerKind(target / kOutputMarker)) +
-                   " folder (its " + kOutputMarker + " marker says so), and a " +
-                   OutputKindName(kind) + " replaces only a " + OutputKindName(kind) + " folder"
+      marked
+          ? "is a " + std::string(ToName(*MarkerKind(target / kOutputMarker))) + " folder (its " +
+                kOutputMarker + " marker says so), and a " + std::string(ToName(kind)) +
+                " replaces only a " + std::string(ToName(kind)) + " folder"
       : fs::is_directory(status) ? "is a folder this program did not write (it has no " +
                                        std::string(kOutputMarker) + " marker)"
                                  : "is " + what_is;

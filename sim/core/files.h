@@ -2,12 +2,17 @@
 // written to a temporary name and renamed when complete).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
+
+#include "world/enum_names.h"
 
 namespace autonomsim::sim {
 
@@ -26,7 +31,19 @@ void WriteFileAtomically(const std::filesystem::path& file, const std::string& c
 // any kind but a sweep.
 inline constexpr const char* kOutputMarker = ".autonomsim";
 enum class OutputKind { kRun, kRender, kSweep };
-const char* OutputKindName(OutputKind kind);  // "run", "render", "sweep"
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::OutputKind> {  // ToName / FromName: "run", "render", "sweep"
+  static constexpr std::array<std::pair<sim::OutputKind, std::string_view>, 3> kEntries{
+      {{sim::OutputKind::kRun, "run"},
+       {sim::OutputKind::kRender, "render"},
+       {sim::OutputKind::kSweep, "sweep"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::sim {
 // The marker's text for a folder of `kind` that holds `files` (its own: nothing writes over them
 // without --force; CheckOutputFile).
 std::string MarkerText(OutputKind kind, const std::vector<std::string>& files = {});
