@@ -2,6 +2,7 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <bit>
 #include <climits>
 #include <cmath>
 #include <cstring>
@@ -31,6 +32,14 @@ constexpr int kHsvShift = 12;
 // enough that a line's tiles are few, large enough that the bookkeeping costs little.
 constexpr int kTileSize = 16;
 constexpr int kCellSize = 8;
+
+// Two bytes read with memcpy as (first | second << 8), whatever the machine's byte order.
+constexpr std::uint32_t LittleEndianPair(std::uint16_t read) {
+  if constexpr (std::endian::native == std::endian::big) {
+    return static_cast<std::uint32_t>((read >> 8) | ((read & 0xFFu) << 8));
+  }
+  return read;
+}
 // Newton's method for the inverse of the lens distortion (as the vehicle's camera model does).
 
 using Point = std::array<double, 2>;
@@ -700,11 +709,18 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
   for (const Tile& tile : tables.tiles_) {
     if (!AnyLineCell(tile)) continue;
     for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
+      // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
+      // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
+      // products land on distinct bits, so nothing carries into bits 24-27)
       const std::uint8_t* p = classes + pixel_src[i];
-      const int c0 = p[0], c1 = p[1], c2 = p[stride], c3 = p[stride + 1];
-      if ((c0 | c1 | c2 | c3) == 0) continue;
-      const int yellow_bits = (c0 & 1) | ((c1 & 1) << 1) | ((c2 & 1) << 2) | ((c3 & 1) << 3);
-      const int white_bits = ((c0 >> 1) & 1) | (c1 & 2) | ((c2 & 2) << 1) | ((c3 & 2) << 2);
+      std::uint16_t top, bottom;
+      std::memcpy(&top, p, sizeof top);
+      std::memcpy(&bottom, p + stride, sizeof bottom);
+      const std::uint32_t quad = LittleEndianPair(top) | (LittleEndianPair(bottom) << 16);
+      if (quad == 0) continue;
+      constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
+      const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
+      const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
       visit(pixel_dst[i], pixel_lut[i], yellow_bits, white_bits);
     }
   }

@@ -494,6 +494,7 @@ struct CameraRenderer::FloorPass {
     for (int k = 0; k < CameraRays::kBlockSize; ++k) {
       std::memcpy(common_block.data() + 3 * k, &tex.palette()[tex.common_index()], 3);
     }
+    if (labels != nullptr) common_label = labels->palette[tex.common_index()];
   }
 
   std::uint8_t* LabelRow(int v) const {
@@ -511,8 +512,12 @@ struct CameraRenderer::FloorPass {
     const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
     const std::uint8_t* texel_index = tex.palette_index();
     const std::uint32_t* palette = tex.palette();
+    const std::uint8_t* label_palette = labels != nullptr ? labels->palette.data() : nullptr;
     const float* fx = rays.floor_x().data();
     const float* fy = rays.floor_y().data();
+    // (the row's start once: the byte stores below may alias anything, so the compiler would
+    // compute it again for every chunk)
+    std::uint8_t* const label_row = labels != nullptr ? LabelRow(v) : nullptr;
     for (int i = begin; i < end; i += kLanes) {
       const int n = std::min(kLanes, end - i);
       const F4 x = Load(fx + i, n);
@@ -524,8 +529,8 @@ struct CameraRenderer::FloorPass {
       const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
       const I4 index = inside ? texel_row * width + texel_col : outside;
       if (labels != nullptr) {
-        std::uint8_t* label = LabelRow(v) + i;
-        for (int k = 0; k < n; ++k) label[k] = labels->palette[texel_index[index[k]]];
+        std::uint8_t* label = label_row + i;
+        for (int k = 0; k < n; ++k) label[k] = label_palette[texel_index[index[k]]];
         continue;
       }
       for (int k = 0; k < n; ++k) {
@@ -558,7 +563,7 @@ struct CameraRenderer::FloorPass {
   // Pixels [i, i + kBlockSize) of row v: the common colour.
   void FillCommon(int v, int i) const {
     if (labels != nullptr) {
-      std::memset(LabelRow(v) + i, labels->palette[tex.common_index()], CameraRays::kBlockSize);
+      std::memset(LabelRow(v) + i, common_label, CameraRays::kBlockSize);
     } else {
       std::memcpy(out + 3 * i, common_block.data(), common_block.size());
     }
@@ -572,6 +577,7 @@ struct CameraRenderer::FloorPass {
   float a00, a01, a02, a10, a11, a12;
   float texels_per_m;
   std::array<std::uint8_t, 3 * CameraRays::kBlockSize> common_block;
+  std::uint8_t common_label{0};  // with labels: the common colour's
 };
 
 void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* color,
