@@ -16,9 +16,13 @@ using Time = std::chrono::nanoseconds;  // time since the start of a run
 
 inline constexpr Duration kZeroTime{0};
 
-// Seconds (finite, within ±292 years) to nanoseconds, rounded to the nearest nanosecond.
+// The largest magnitude a time in seconds may have: int64 nanoseconds reach 9.22e18 ns, about
+// 292 years. The config reader refuses any `_s` key beyond it, at the key.
+inline constexpr double kMaxTimeSeconds = 9.2e9;
+
+// Seconds (finite, within ±kMaxTimeSeconds) to nanoseconds, rounded to the nearest nanosecond.
 inline Duration FromSeconds(double s) {
-  if (!std::isfinite(s) || std::abs(s) > 9.2e9) {
+  if (!std::isfinite(s) || std::abs(s) > kMaxTimeSeconds) {
     throw std::invalid_argument("time value out of range: " + std::to_string(s) + " s");
   }
   return Duration{static_cast<std::int64_t>(std::llround(s * 1e9))};

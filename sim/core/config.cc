@@ -11,6 +11,38 @@
 #include <unordered_set>
 
 namespace autonomsim::sim {
+// The unit a key's name gives (docs/scenarios.md's "unit" column), by the naming convention: the
+// unit words at its end, e.g. `lease_s` s, `q_position_m2_per_s` m²/s, `gain_per_mps` 1/(m/s).
+std::string UnitOfKey(std::string_view key) {
+  static const std::map<std::string_view, std::string_view> kUnits = {
+      {"s", "s"},       {"s2", "s²"},     {"s3", "s³"},     {"m", "m"},
+      {"m2", "m²"},     {"mps", "m/s"},   {"mps2", "m/s²"}, {"rad", "rad"},
+      {"rad2", "rad²"}, {"deg", "deg"},   {"hz", "Hz"},     {"px", "px"},
+      {"kg", "kg"},     {"percent", "%"}, {"bytes", "B"},   {"ms", "ms"}};
+  std::vector<std::string_view> words;
+  for (std::size_t start = 0; start <= key.size();) {
+    const std::size_t end = std::min(key.find('_', start), key.size());
+    words.push_back(key.substr(start, end - start));
+    start = end + 1;
+  }
+  // the unit words at the end, with "per" between them
+  std::size_t first = words.size();
+  while (first > 1 && (kUnits.count(words[first - 1]) || words[first - 1] == "per")) --first;
+  std::string numerator, denominator;
+  bool below = false;
+  for (std::size_t i = first; i < words.size(); ++i) {
+    if (words[i] == "per") {
+      below = true;
+      continue;
+    }
+    std::string& part = below ? denominator : numerator;
+    part += (part.empty() ? "" : "·") + std::string(kUnits.at(words[i]));
+  }
+  if (denominator.empty()) return numerator;
+  if (denominator.find('/') != std::string::npos) denominator = "(" + denominator + ")";
+  return (numerator.empty() ? "1" : numerator) + "/" + denominator;
+}
+
 namespace detail {
 namespace {
 
@@ -194,6 +226,15 @@ void ReadScalar(const YAML::Node& node, double& out, const std::string& path,
   }
   if (!std::isfinite(out))
     Fail(node, path, source, "expected a finite number, got " + Describe(node));
+  // A time (a key in seconds or milliseconds) within the int64-nanosecond range, so that nothing
+  // fails mid-run converting it.
+  const std::string unit = UnitOfKey(LastKey(path));
+  const double scale = unit == "s" ? 1.0 : unit == "ms" ? 1e-3 : 0.0;
+  if (scale != 0.0 && std::abs(out) * scale > kMaxTimeSeconds) {
+    Fail(node, path, source,
+         fmt::format("a time must be within ±{:g} s (int64 nanoseconds: about 292 years), got {}",
+                     kMaxTimeSeconds, Describe(node)));
+  }
 }
 
 void ReadScalar(const YAML::Node& node, std::string& out, const std::string& path,

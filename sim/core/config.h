@@ -17,6 +17,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -73,6 +74,11 @@ template <class T>
 struct IsKindVariant : std::false_type {};
 template <class... Ts>
 struct IsKindVariant<std::variant<Ts...>> : std::true_type {};
+
+// The unit a key's name gives by the naming convention (docs/scenarios.md's "unit" column): the
+// unit words at its end, e.g. `lease_s` "s", `q_position_m2_per_s` "m²/s", `gain_per_mps`
+// "1/(m/s)"; "" for a key without one.
+std::string UnitOfKey(std::string_view key);
 
 namespace detail {
 

@@ -166,6 +166,7 @@ void Simulation::Impl::ScheduleFaults() {
     // the events, and the actions at their instants
     const FaultKind kind = KindOf(fault);
     const Time begin_at = FromSeconds(FaultStart_s(fault));
+    if (begin_at >= end) continue;  // never strikes (the scenario's load warned)
     const int car = FaultCar(fault).value_or(-1);
     kernel.ScheduleAt(
         begin_at,

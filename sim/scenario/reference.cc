@@ -12,38 +12,6 @@
 namespace autonomsim::sim {
 namespace {
 
-// The unit a key's name gives (docs/scenarios.md's "unit" column), by the naming convention: the
-// unit words at its end, e.g. `lease_s` s, `q_position_m2_per_s` m²/s, `gain_per_mps` 1/(m/s).
-std::string UnitOf(std::string_view key) {
-  static const std::map<std::string_view, std::string_view> kUnits = {
-      {"s", "s"},       {"s2", "s²"},     {"s3", "s³"},     {"m", "m"},
-      {"m2", "m²"},     {"mps", "m/s"},   {"mps2", "m/s²"}, {"rad", "rad"},
-      {"rad2", "rad²"}, {"deg", "deg"},   {"hz", "Hz"},     {"px", "px"},
-      {"kg", "kg"},     {"percent", "%"}, {"bytes", "B"},   {"ms", "ms"}};
-  std::vector<std::string_view> words;
-  for (std::size_t start = 0; start <= key.size();) {
-    const std::size_t end = std::min(key.find('_', start), key.size());
-    words.push_back(key.substr(start, end - start));
-    start = end + 1;
-  }
-  // the unit words at the end, with "per" between them
-  std::size_t first = words.size();
-  while (first > 1 && (kUnits.count(words[first - 1]) || words[first - 1] == "per")) --first;
-  std::string numerator, denominator;
-  bool below = false;
-  for (std::size_t i = first; i < words.size(); ++i) {
-    if (words[i] == "per") {
-      below = true;
-      continue;
-    }
-    std::string& part = below ? denominator : numerator;
-    part += (part.empty() ? "" : "·") + std::string(kUnits.at(words[i]));
-  }
-  if (denominator.empty()) return numerator;
-  if (denominator.find('/') != std::string::npos) denominator = "(" + denominator + ")";
-  return (numerator.empty() ? "1" : numerator) + "/" + denominator;
-}
-
 struct Row {
   std::string key, type, unit, default_value;
 };
@@ -125,12 +93,12 @@ void Describe(ReferenceWriter& writer, const std::string& path, const T& value) 
       writer.rows.push_back({path, "list", "", fmt::format("{} entries", value.size())});
       Describe(writer, path + "[i]", E{});
     } else {
-      writer.rows.push_back({path, "list of " + TypeName<E>(), UnitOf(Last(path)),
+      writer.rows.push_back({path, "list of " + TypeName<E>(), UnitOfKey(Last(path)),
                              detail::ToJsonValue(value).dump()});
     }
   } else if constexpr (detail::IsArray<T>::value) {
     writer.rows.push_back(
-        {path, TypeName<T>(), UnitOf(Last(path)), detail::ToJsonValue(value).dump()});
+        {path, TypeName<T>(), UnitOfKey(Last(path)), detail::ToJsonValue(value).dump()});
   } else if constexpr (detail::IsMap<T>::value) {
     writer.rows.push_back({path, "mapping by name", "", "{}"});
     Describe(writer, path + ".<name>", typename T::mapped_type{});
@@ -141,7 +109,7 @@ void Describe(ReferenceWriter& writer, const std::string& path, const T& value) 
     writer.SetPrefix(outer);
   } else {
     writer.rows.push_back(
-        {path, TypeName<T>(), UnitOf(Last(path)), detail::ToJsonValue(value).dump()});
+        {path, TypeName<T>(), UnitOfKey(Last(path)), detail::ToJsonValue(value).dump()});
   }
 }
 

@@ -296,7 +296,10 @@ bool NeedsBoard(FaultKind kind) {
 }
 
 // Each fault's car exists and has what the fault strikes, and the fault starts within the run.
-void CheckFaults(const Scenario& scenario, const std::set<int>& car_ids, const ScenarioSite& site) {
+// A fault that starts at or after the run's end is a warning, not an error: a sweep over
+// duration_s may cut one off in some of its points.
+void CheckFaults(const Scenario& scenario, const std::set<int>& car_ids, const ScenarioSite& site,
+                 std::vector<std::string>* warnings) {
   for (std::size_t i = 0; i < scenario.faults.size(); ++i) {
     const FaultKind kind = KindOf(scenario.faults[i]);
     const std::string name(ToName(kind));
@@ -311,8 +314,11 @@ void CheckFaults(const Scenario& scenario, const std::set<int>& car_ids, const S
       fail("car", "no car with id " + std::to_string(*car_id));
     }
     if (at_s >= ToSeconds(scenario.duration)) {
-      fail("at_s", "at_s " + Num(at_s) + " s is not before the run's end (duration_s " +
-                       Num(ToSeconds(scenario.duration)) + " s): the fault would never strike");
+      warnings->push_back(
+          ErrorAt(site.root, site.source, {"faults", i, name, "at_s"},
+                  "at_s " + Num(at_s) + " s is not before the run's end (duration_s " +
+                      Num(ToSeconds(scenario.duration)) + " s): the fault never strikes")
+              .what());
     }
     if (scenario.v2i.link == V2ILinkKind::kRealtime && ActsOnModeledLink(kind)) {
       fail("", name +
@@ -429,10 +435,10 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
   CheckPlatformSettingsApply(scenario, site);
   CheckExpectations(loaded, car_ids, site);
-  CheckFaults(scenario, car_ids, site);
+  loaded.warnings = StackMixWarnings(scenario);
+  CheckFaults(scenario, car_ids, site, &loaded.warnings);
   loaded.key_locations = BoardNameLocations(scenario, site);
   loaded.preset_overrides = std::move(preset_overrides);
-  loaded.warnings = StackMixWarnings(scenario);
   Resolve(&loaded);
   return loaded;
 }

@@ -110,6 +110,29 @@ TEST(ConfigTest, ErrorsNameLineColumnAndKeyPath) {
               HasSubstr("test.yaml:2:5: named: expected a name as key, got a mapping"));
 }
 
+// Issue 33, item 3: a fault's `for_s: 1e12` was accepted and failed mid-run ("time value out of
+// range", no location); every key in seconds is now checked where it is read.
+TEST(ConfigTest, ATimeBeyondTheNanosecondRangeIsRefusedAtItsKey) {
+  EXPECT_THAT(ErrorOf("inner: {period_s: 1.0e12}\n"),
+              HasSubstr("test.yaml:1:19: inner.period_s: a time must be within ±9.2e+09 s"));
+  EXPECT_THAT(ErrorOf("inner: {period_s: -1.0e10}\n"), HasSubstr("a time must be within"));
+  EXPECT_THAT(ErrorOf("{}\n", {"inner.period_s=1e20"}),
+              HasSubstr("--set inner.period_s: a time must be within ±9.2e+09 s"));
+  EXPECT_EQ(Read("inner: {period_s: 9.0e9}\n").inner.period, FromSeconds(9.0e9));  // allowed
+  // only keys in seconds (or ms): a gain of 1e12 is not a time
+  EXPECT_EQ(Read("inner: {gain: 1.0e12}\n").inner.gain, 1.0e12);
+}
+
+TEST(ConfigTest, AKeysUnitComesFromTheWordsAtItsEnd) {
+  EXPECT_EQ(UnitOfKey("lease_s"), "s");
+  EXPECT_EQ(UnitOfKey("latency_ms"), "ms");
+  EXPECT_EQ(UnitOfKey("q_position_m2_per_s"), "m²/s");
+  EXPECT_EQ(UnitOfKey("speed_gain_per_mps"), "1/(m/s)");
+  EXPECT_EQ(UnitOfKey("gyro_bias_rad_per_s"), "rad/s");
+  EXPECT_EQ(UnitOfKey("gain"), "");
+  EXPECT_EQ(UnitOfKey("s"), "");  // a key needs a word before its unit
+}
+
 TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {
   const Outer o = Read("items: [{gain: 2}]\n", {"items[0].gain=5", "inner.period_s=0.5",
                                                 "named.b.gain=7", "rgb=[4, 5, 6]"});

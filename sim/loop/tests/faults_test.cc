@@ -376,9 +376,25 @@ TEST(FaultKeys, MistakesNameTheKey) {
   ExpectLoadError("[{v2i_loss_burst: {at_s: 1}}]", "v2i_loss_burst needs loss");
   ExpectLoadError("[{v2i_loss_burst: {at_s: 1, loss: 1.5}}]", "loss must be in (0, 1]");
   ExpectLoadError("[{server_restart: {car: 0, at_s: 1}}]", "takes no key 'car'");
-  ExpectLoadError("[{car_stall: {car: 0, at_s: 500}}]", "never strike");
   ExpectLoadError("[{camera_freeze: {car: 0, camera: thermal, at_s: 1}}]", "camera");
   ExpectLoadError("[{car_stall: {car: 0, at_s: 1}, car_crash: {}}]", "car_crash");
+}
+
+// Issue 33, item 3: a fault that starts at or after the run's end is a warning at its key (a
+// sweep over duration_s may cut it off in some points), and the run goes on without it. A time
+// beyond the int64-nanosecond range is an error at its key (ConfigTest).
+TEST(FaultKeys, AFaultAfterTheRunsEndIsAWarningAndNeverStrikes) {
+  const LoadedScenario loaded = LoadScenario(
+      kScenario,
+      {"duration_s=2", "expect=[]", "faults=[{car_stall: {car: 0, at_s: 9.0e9, for_s: 9.0e9}}]"});
+  ASSERT_FALSE(loaded.warnings.empty());
+  EXPECT_NE(loaded.warnings.back().find("--set faults[0].car_stall.at_s: at_s 9e+09 s is not "
+                                        "before the run's end (duration_s 2 s): the fault never "
+                                        "strikes"),
+            std::string::npos)
+      << loaded.warnings.back();
+  const RunRecord record = RunScenario(loaded);
+  EXPECT_TRUE(EventsOf(record, EventKind::kFaultBegin).empty());
 }
 
 TEST(FaultKeys, AnUnknownNodeIsAnErrorListingTheBoardsNodes) {
