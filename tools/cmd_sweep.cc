@@ -59,6 +59,7 @@ struct SweepOptions {
   std::vector<std::string> vary;
   std::vector<std::string> overrides;
   int repeat{1};
+  std::uint64_t max_runs{sim::kDefaultMaxRuns};
   std::string out;
   int jobs = DefaultJobs();
   std::string shard{"1/1"};
@@ -84,6 +85,8 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     for (const std::string& v : o.vary) spec.axes.push_back(sim::ParseVary(v));
     sim::CheckAxesDistinct(spec.axes);
     if (repeat_given) spec.repeat = o.repeat;
+    options.max_runs = o.max_runs;
+    sim::CheckSweepSize(spec, options.max_runs);  // before the folder is made
     options.jobs = o.jobs;
     options.shard = sim::ParseShard(o.shard);
     options.plots = !o.no_plots;
@@ -180,6 +183,11 @@ Command AddSweepCommand(CLI::App& parent) {
       sweep
           ->add_option("--repeat", o->repeat, "Seeds per grid point: seed, seed+1, ... (default 1)")
           ->check(CLI::PositiveNumber);
+  sweep
+      ->add_option("--max-runs", o->max_runs,
+                   "The most runs (grid points x seeds) the sweep may have; more is refused before "
+                   "anything runs (default 100000)")
+      ->check(CLI::PositiveNumber);
   sweep
       ->add_option("--out", o->out,
                    "Sweep folder (shared by its shards and resumed runs); an existing folder that "

@@ -12,10 +12,13 @@ namespace autonomsim::world {
 
 class Track;
 
+// The floor raster's texel: 5 mm (the cameras' texture and track.png).
+inline constexpr double kFloorTexel_m = 0.005;
+
 struct FloorRaster {
   int width_px{0};
   int height_px{0};
-  double m_per_px{0.005};
+  double m_per_px{kFloorTexel_m};
   // Map coordinates of the top-left corner of pixel (0,0); image row 0 is the north edge (y max),
   // column 0 the west edge.
   Vec2 origin_m{0.0, 0.0};
@@ -34,6 +37,6 @@ struct FloorRaster {
 // an open line's ends are round); later lines paint over earlier ones. Cost: proportional to the
 // painted area, not to the image times the lines (lab, 5 mm/px: ~2 ms). Throws
 // std::invalid_argument if m_per_px is not positive.
-FloorRaster RasterizeFloor(const Track& track, double m_per_px = 0.005);
+FloorRaster RasterizeFloor(const Track& track, double m_per_px = kFloorTexel_m);
 
 }  // namespace autonomsim::world

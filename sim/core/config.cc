@@ -25,9 +25,14 @@ std::string UnitOfKey(std::string_view key) {
     words.push_back(key.substr(start, end - start));
     start = end + 1;
   }
-  // the unit words at the end, with "per" between them
+  // the unit word at the end, and before it "per" and a unit word (or "per" alone: 1/...) as
+  // often as they come; two unit words side by side are a name and a unit (`start_s_m`: m)
   std::size_t first = words.size();
-  while (first > 1 && (kUnits.count(words[first - 1]) || words[first - 1] == "per")) --first;
+  if (first > 1 && kUnits.count(words[first - 1])) --first;
+  while (first > 1 && words[first - 1] == "per") {
+    --first;
+    if (first > 1 && kUnits.count(words[first - 1])) --first;
+  }
   std::string numerator, denominator;
   bool below = false;
   for (std::size_t i = first; i < words.size(); ++i) {

@@ -1,5 +1,7 @@
 #include "sim/scenario/scenario.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -12,6 +14,7 @@
 
 #include "sim/core/hash.h"
 #include "sim/core/track_loader.h"
+#include "world/floor_raster.h"
 #include "world/validation.h"
 
 namespace autonomsim::sim {
@@ -83,6 +86,11 @@ void V2IConfig::Validate() const {
   Require(latency >= kZeroTime, "latency_s must be >= 0");
   Require(jitter >= kZeroTime, "jitter_s must be >= 0");
   Require(loss >= 0.0 && loss < 1.0, "loss must be in [0, 1), got " + Num(loss));
+}
+
+void LimitsConfig::Validate() const {
+  Require(grid_cells >= 1, "grid_cells must be >= 1");
+  Require(trajectory_rows >= 1, "trajectory_rows must be >= 1");
 }
 
 void OutputConfig::Validate() const {
@@ -281,6 +289,80 @@ void CheckExpectations(const LoadedScenario& loaded, const std::set<int>& car_id
   }
 }
 
+// ---- The sizes a scenario asks for, against its limits (issue 33, item 3) ----
+
+// Cells of a grid of side_x × side_y at `cell` (as the grids round: up to whole cells), in double
+// so that no size overflows.
+double GridCells(double side_x, double side_y, double cell) {
+  return std::ceil(side_x / cell) * std::ceil(side_y / cell);
+}
+
+// "16.8 M", "37.4 G": a count in millions, or in billions from a thousand million on.
+std::string Millions(double count) {
+  return count < 1e9 ? fmt::format("{:.3g} M", count / 1e6) : fmt::format("{:.3g} G", count / 1e9);
+}
+
+// A grid of `cells` beyond limits.grid_cells: the error at `keys`, saying what the grid is, its
+// size and how to lower or raise it.
+void CheckGrid(double cells, const std::string& what, const ScenarioSite& site,
+               const LoadedScenario::KeyPath& keys, std::uint64_t limit) {
+  if (cells <= static_cast<double>(limit)) return;
+  FailAt(
+      site.root, site.source, keys,
+      fmt::format("{} has {} cells; the limit is limits.grid_cells = {} ({}): lower it, or raise "
+                  "limits.grid_cells in the scenario if the machine has the memory",
+                  what, Millions(cells), limit, Millions(static_cast<double>(limit))));
+}
+
+// Every grid the run would allocate, and trajectory.csv's rows, within the scenario's limits.
+void CheckSizes(const LoadedScenario& loaded, const ScenarioSite& site) {
+  const Scenario& scenario = loaded.scenario;
+  const world::TrackSpec& track = loaded.track.spec();
+  const std::uint64_t limit = scenario.limits.grid_cells;
+  CheckGrid(GridCells(track.size_m, track.size_m, world::kFloorTexel_m),
+            fmt::format("the track's floor raster (size_m {} m at {} m per texel)",
+                        Num(track.size_m), Num(world::kFloorTexel_m)),
+            site, {"track"}, limit);
+  const double map_m = track.planner_map_size_m.value_or(track.size_m);
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const CarConfig& car = scenario.cars[i];
+    const std::string name = "car " + std::to_string(car.id);
+    const double resolution_m = car.stack.global_costmap.resolution_m;
+    CheckGrid(GridCells(map_m, map_m, resolution_m),
+              fmt::format("{}'s planner map (the track's planner_map_size_m {} m at "
+                          "global_costmap.resolution_m {} m)",
+                          name, Num(map_m), Num(resolution_m)),
+              site, {"cars", i, "stack", "global_costmap", "resolution_m"}, limit);
+    const stack::LocalCostmapParams& local = car.stack.local_costmap;
+    CheckGrid(GridCells(local.width_m, local.height_m, local.resolution_m),
+              name + "'s local costmap", site, {"cars", i, "stack", "local_costmap"}, limit);
+    const stack::ObstacleGridParams& grid = car.perception.obstacle_grid;
+    CheckGrid(GridCells(grid.x_max_m - grid.x_min_m, grid.y_max_m - grid.y_min_m, grid.cell_size_m),
+              name + "'s obstacle grid", site, {"cars", i, "perception", "obstacle_grid"}, limit);
+    for (const auto& [key, stream] : {std::pair{"color_camera", &car.sensors.color_camera},
+                                      std::pair{"depth_camera", &car.sensors.depth_camera}}) {
+      const vehicle::CameraParams& camera = stream->camera;
+      CheckGrid(
+          static_cast<double>(camera.width_px) * camera.height_px,
+          fmt::format("{}'s {} image ({} × {} px)", name, key, camera.width_px, camera.height_px),
+          site, {"cars", i, "sensors", key, "camera"}, limit);
+    }
+  }
+  const double rows =
+      std::ceil(ToSeconds(scenario.duration) / ToSeconds(scenario.output.trajectory_period)) *
+      static_cast<double>(scenario.cars.size());
+  if (rows > static_cast<double>(scenario.limits.trajectory_rows)) {
+    FailAt(site.root, site.source, {"output", "trajectory_period_s"},
+           fmt::format("trajectory.csv would have {} rows (duration_s {} s / trajectory_period_s "
+                       "{} s × {} cars, about 180 bytes each); the limit is "
+                       "limits.trajectory_rows = {}: raise trajectory_period_s, or raise "
+                       "limits.trajectory_rows if the disk has the room",
+                       Millions(rows), Num(ToSeconds(scenario.duration)),
+                       Num(ToSeconds(scenario.output.trajectory_period)), scenario.cars.size(),
+                       scenario.limits.trajectory_rows));
+  }
+}
+
 // What a fault acts on: the modeled link and server (not with a real-time link), a car's stack
 // (localization, IMU), a car's board (nodes, cameras).
 bool ActsOnModeledLink(FaultKind kind) {
@@ -369,7 +451,9 @@ std::map<std::string, std::string> BoardNameLocations(const Scenario& scenario,
 }
 
 // The scenario, its track and its boards' profiles with every default: what the run's
-// scenario.resolved.json holds and its scenario_sha256 hashes.
+// scenario.resolved.json holds and its scenario_sha256 hashes, all but `limits`: a limit decides
+// whether a scenario loads, not what its run does, so raising one keeps the hash (and a sweep's
+// run ids) as they were.
 void Resolve(LoadedScenario* loaded) {
   loaded->resolved = {{"scenario", ToJson(loaded->scenario)},
                       {"track", ToJson(loaded->track.spec())}};
@@ -378,7 +462,9 @@ void Resolve(LoadedScenario* loaded) {
       loaded->resolved["platforms"]["car" + std::to_string(car.config->id)] = ToJson(*car.profile);
     }
   }
-  loaded->sha256 = Sha256Hex(loaded->resolved.dump());
+  nlohmann::json hashed = loaded->resolved;
+  hashed["scenario"].erase("limits");
+  loaded->sha256 = Sha256Hex(hashed.dump());
 }
 
 }  // namespace
@@ -432,6 +518,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     car_ids.insert(scenario.cars[i].id);
     loaded.cars.push_back(ResolveCar(scenario, i, loaded.track, file.parent_path(), site));
   }
+  CheckSizes(loaded, site);
   CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
   CheckPlatformSettingsApply(scenario, site);
   CheckExpectations(loaded, car_ids, site);

@@ -169,6 +169,26 @@ struct OutputConfig {
   void Validate() const;
 };
 
+// The sizes a scenario may ask for (issue 33): each guards the memory or the disk against a typo
+// (a track of size_m 1000 would need 40 GB), and a scenario that needs more raises it here. Checked
+// at load, at the key that sets the size (docs/writing-scenarios.md, "Limits").
+struct LimitsConfig {
+  // Any one grid: the floor raster (size_m / 5 mm per side), a car's planner map
+  // (planner_map_size_m / global_costmap.resolution_m), its local costmap and obstacle grid, a
+  // camera's image. 2^24: the lab's planner map (10 m at 5.17 mm) is 3.7 M cells.
+  std::uint64_t grid_cells{std::uint64_t{1} << 24};
+  // trajectory.csv's rows: duration_s / output.trajectory_period_s × cars (about 180 bytes
+  // each; 24 h of 10 cars at the default 50 ms is 17.3 M).
+  std::uint64_t trajectory_rows{20'000'000};
+
+  template <class V>
+  void Describe(V& v) {
+    v("grid_cells", grid_cells);
+    v("trajectory_rows", trajectory_rows);
+  }
+  void Validate() const;  // both >= 1
+};
+
 struct Scenario {
   // The car with this id, or null.
   const CarConfig* FindCar(int id) const {
@@ -196,6 +216,7 @@ struct Scenario {
   // How the cameras' images are made: "raycast", the ray caster (vehicle/ray_caster.h), or "gl",
   // the rasteriser in an offscreen OpenGL ES context (vehicle/gl_camera.h), its cross-check.
   CameraBackend camera_backend{CameraBackend::kRayCast};
+  LimitsConfig limits;
 
   template <class V>
   void Describe(V& v) {
@@ -215,6 +236,7 @@ struct Scenario {
     v("output", output);
     v("appearance", appearance);
     v("camera_backend", camera_backend);
+    v("limits", limits);
   }
   void Validate() const;
 };

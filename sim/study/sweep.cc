@@ -319,6 +319,7 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
 
 SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   SweepSummary summary;
+  CheckSweepSize(spec, options.max_runs);
   const std::vector<SweepPoint> grid = ExpandGrid(spec);
   summary.grid_points = grid.size();
   std::vector<SweepPoint> selected;

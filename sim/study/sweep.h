@@ -45,6 +45,7 @@ struct SweepOptions {
   int jobs{1};
   Shard shard;
   bool plots{true};
+  std::uint64_t max_runs{kDefaultMaxRuns};  // more runs in the grid: ConfigError (CheckSweepSize)
   std::function<void(const SweepProgress&)> progress;  // called after each run, from any thread
   // None: every wall time is 0 (no elapsed time in progress; summary.json: wall_seconds 0,
   // real_time_factor null).

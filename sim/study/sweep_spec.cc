@@ -83,9 +83,11 @@ VaryAxis ParseVary(const std::string& spec) {
     const double start = ParseNumber(range[0], spec);
     const double stop = ParseNumber(range[1], spec);
     const double count_d = ParseNumber(range[2], spec);
-    if (count_d < 1 || count_d != std::floor(count_d) || count_d > 100000) {
-      throw ConfigError("--vary " + spec + ": count must be a whole number >= 1, got '" + range[2] +
-                        "'");
+    if (count_d < 1 || count_d != std::floor(count_d) || count_d > kMaxRangeCount) {
+      throw ConfigError(fmt::format(
+          "--vary {}: count must be a whole number in [1, {}], got '{}' (a sweep has at most "
+          "--max-runs runs in all, {} unless raised)",
+          spec, kMaxRangeCount, range[2], kDefaultMaxRuns));
     }
     const int count = static_cast<int>(count_d);
     for (int i = 0; i < count; ++i) {
@@ -277,6 +279,21 @@ void CheckAxesDistinct(const std::vector<VaryAxis>& axes) {
 }
 
 // ---- The grid ----
+
+std::uint64_t CheckSweepSize(const SweepSpec& spec, std::uint64_t max_runs) {
+  // in double: a product of sizes cannot overflow it, and below 2^53 it is exact
+  double grid = 1.0;
+  for (const VaryAxis& axis : spec.axes) grid *= static_cast<double>(axis.values.size());
+  const double runs = grid * std::max(1, spec.repeat);
+  if (runs > static_cast<double>(max_runs)) {
+    throw ConfigError(fmt::format(
+        "the sweep has {:.0f} runs ({:.0f} grid point(s) × {} seed(s)); the limit is --max-runs "
+        "{}: narrow the grid, or raise --max-runs (each run takes a fraction of a core-second "
+        "to minutes, and the sweep's table of runs is built before the first)",
+        runs, grid, std::max(1, spec.repeat), max_runs));
+  }
+  return static_cast<std::uint64_t>(runs);
+}
 
 std::vector<SweepPoint> ExpandGrid(const SweepSpec& spec) {
   std::size_t total = static_cast<std::size_t>(std::max(1, spec.repeat));

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -40,6 +41,13 @@ VaryAxis ParseVary(const std::string& spec);
 // values in one --vary.
 void CheckAxesDistinct(const std::vector<VaryAxis>& axes);
 
+// The most values one range --vary (start:stop:count) may give.
+inline constexpr int kMaxRangeCount = 1'000'000;
+// The most runs (grid points × repeat) a sweep may have unless `sweep --max-runs` raises it: its
+// table of points is built before the first run, and 10^5 runs of the default scenario are 1.5
+// core-days.
+inline constexpr std::uint64_t kDefaultMaxRuns = 100'000;
+
 struct SweepSpec {
   std::filesystem::path scenario;
   std::vector<std::string> overrides;  // --set, applied to every run before the varied keys
@@ -49,6 +57,10 @@ struct SweepSpec {
   nlohmann::json ToJson() const;
   static SweepSpec FromJson(const nlohmann::json& json);
 };
+
+// The sweep's runs (the axes' sizes times repeat, without overflow). ConfigError, naming the
+// grid, the seeds and how to raise the limit, when they are more than `max_runs`.
+std::uint64_t CheckSweepSize(const SweepSpec& spec, std::uint64_t max_runs);
 
 // A study file (scenarios/studies/*.yaml): `scenario` (relative to the study file's folder),
 // optional `description`, `set` (list of key=value), `repeat`, and `vary` (none: one point,

@@ -130,7 +130,9 @@ TEST(ConfigTest, AKeysUnitComesFromTheWordsAtItsEnd) {
   EXPECT_EQ(UnitOfKey("speed_gain_per_mps"), "1/(m/s)");
   EXPECT_EQ(UnitOfKey("gyro_bias_rad_per_s"), "rad/s");
   EXPECT_EQ(UnitOfKey("gain"), "");
-  EXPECT_EQ(UnitOfKey("s"), "");  // a key needs a word before its unit
+  EXPECT_EQ(UnitOfKey("imu_yaw_rate_variance_rad2_per_s2"), "rad²/s²");
+  EXPECT_EQ(UnitOfKey("start_s_m"), "m");  // arc length s, in metres (was "s·m")
+  EXPECT_EQ(UnitOfKey("s"), "");           // a key needs a word before its unit
 }
 
 TEST(ConfigTest, OverridesCreateKeysAndIndexLists) {

@@ -66,6 +66,11 @@ TEST(ScenarioTest, TheHashFollowsTheResolvedScenarioNotTheText) {
   EXPECT_EQ(LoadScenario(a.path()).sha256, LoadScenario(b.path()).sha256);
   EXPECT_NE(LoadScenario(a.path()).sha256, LoadScenario(c.path()).sha256);
   EXPECT_EQ(LoadScenario(a.path(), {}, 4).sha256, LoadScenario(c.path()).sha256);
+  // a limit decides whether the scenario loads, not what it does: the hash stays, the resolved
+  // scenario records it
+  const LoadedScenario raised = LoadScenario(a.path(), {"limits.grid_cells=50000000"});
+  EXPECT_EQ(raised.sha256, LoadScenario(a.path()).sha256);
+  EXPECT_EQ(raised.resolved["scenario"]["limits"]["grid_cells"].get<std::uint64_t>(), 50000000u);
 }
 
 TEST(ScenarioTest, OverridesReachAnyField) {
@@ -230,6 +235,33 @@ INSTANTIATE_TEST_SUITE_P(
             {},
             {F("mapping_without_board") + ":9:",
              "cars[0].platform.mapping.lane_detektion: car 0 has no board"}},
+        // issue 33, item 3: sizes beyond the limits were a std::bad_alloc with no location (a
+        // track of size_m 100: 5 GB for a 3 s run); each is refused at its key, with the limit
+        BrokenCase{"floor_raster_beyond_the_limit",
+                   kValid,
+                   {"limits.grid_cells=100000"},
+                   {F("floor_raster_beyond_the_limit") +
+                        ":4:8: track: the track's floor raster (size_m 5 m at 0.005 m per texel) "
+                        "has 1 M cells; the limit is limits.grid_cells = 100000 (0.1 M)",
+                    "raise limits.grid_cells"}},
+        BrokenCase{"planner_map_beyond_the_limit",
+                   kValid,
+                   {"cars[1].stack.global_costmap.resolution_m=0.0001"},
+                   {"--set cars[1].stack.global_costmap.resolution_m: car 1's planner map",
+                    "has 10 G cells; the limit is limits.grid_cells = 16777216 (16.8 M)"}},
+        BrokenCase{"camera_beyond_the_limit",
+                   kValid,
+                   {"cars[0].sensors.depth_camera.camera.width_px=8192",
+                    "cars[0].sensors.depth_camera.camera.height_px=8192"},
+                   {"cars[0].sensors.depth_camera.camera: car 0's depth_camera image (8192 × "
+                    "8192 px) has 67.1 M cells"}},
+        BrokenCase{"trajectory_beyond_the_limit",
+                   kValid,
+                   {"output.trajectory_period_s=1e-7"},
+                   {"--set output.trajectory_period_s: trajectory.csv would have 200 M rows "
+                    "(duration_s 10 s / trajectory_period_s 1e-07 s × 2 cars",
+                    "limits.trajectory_rows = 20000000"}},
+        BrokenCase{"limit_zero", kValid, {"limits.grid_cells=0"}, {"grid_cells must be >= 1"}},
         BrokenCase{"top_level_list_with_set",
                    "- a\n- b\n",
                    {"duration_s=3"},

@@ -189,6 +189,41 @@ TEST(Sweep, AKeyVariedTwiceIsRefused) {
   EXPECT_THROW(LoadStudy(dir.path / "study.yaml"), ConfigError);
 }
 
+// Issue 33, items 3 and 4: `sweep --repeat 1e9` and a 10^4 × 10^4 grid ended in std::bad_alloc
+// with no word of why; a 10^6-point range was refused as "count must be >= 1".
+TEST(Sweep, ASweepBeyondItsRunLimitIsRefusedSayingHowToRaiseIt) {
+  SweepSpec spec;
+  spec.axes = {ParseVary("seed=1:10000:10000"), ParseVary("duration_s=1:100:10000")};
+  try {
+    CheckSweepSize(spec, kDefaultMaxRuns);
+    FAIL() << "10^8 runs accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("the sweep has 100000000 runs (100000000 grid point(s) × 1 "
+                                    "seed(s)); the limit is --max-runs 100000"));
+  }
+  spec.axes.clear();
+  spec.repeat = 1'000'000'000;
+  EXPECT_THROW(CheckSweepSize(spec, kDefaultMaxRuns), ConfigError);
+  EXPECT_EQ(CheckSweepSize(spec, 2'000'000'000), 1'000'000'000u);  // raised: accepted
+  spec.repeat = 4;
+  spec.axes = {ParseVary("a=1,2,3")};
+  EXPECT_EQ(CheckSweepSize(spec, 12), 12u);
+  EXPECT_THROW(CheckSweepSize(spec, 11), ConfigError);
+  // RunSweep checks too, before it makes anything
+  TempDir dir;
+  SweepOptions options;
+  options.out_dir = dir.path / "out";
+  options.max_runs = 11;
+  EXPECT_THROW(RunSweep(spec, options), ConfigError);
+  EXPECT_FALSE(std::filesystem::exists(options.out_dir / "results.csv"));
+  try {
+    ParseVary("seed=1:2000000:2000000");
+    FAIL() << "a 2·10^6-point range accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("count must be a whole number in [1, 1000000], got '2000000'"));
+  }
+}
+
 TEST(Sweep, AStudyFileGivesTheScenarioSetRepeatAndVary) {
   TempDir dir;
   std::ofstream(dir.path / "study.yaml") << R"(
