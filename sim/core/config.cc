@@ -10,6 +10,8 @@
 #include <map>
 #include <unordered_set>
 
+#include "sim/core/files.h"
+
 namespace autonomsim::sim {
 // The unit a key's name gives (docs/scenarios.md's "unit" column), by the naming convention: the
 // unit words at its end, e.g. `lease_s` s, `q_position_m2_per_s` m²/s, `gain_per_mps` 1/(m/s).
@@ -372,10 +374,7 @@ void CheckTree(const YAML::Node& root, const std::string& where) {
 }  // namespace
 
 YAML::Node LoadYamlFile(const std::filesystem::path& file) {
-  std::error_code error;
-  if (std::filesystem::is_directory(file, error)) {
-    throw ConfigError(file.string() + ": is a folder, not a YAML file");
-  }
+  RequireRegularFile(file);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(file.string() + ": cannot open file");
   std::string text;

@@ -18,6 +18,27 @@ namespace autonomsim::sim {
 
 namespace fs = std::filesystem;
 
+void RequireRegularFile(const std::filesystem::path& file) {
+  std::error_code error;
+  const fs::file_status status = fs::status(file, error);
+  if (status.type() == fs::file_type::regular) return;
+  if (status.type() == fs::file_type::not_found) {
+    throw ConfigError(file.string() + ": no such file");
+  }
+  if (status.type() == fs::file_type::directory) {
+    throw ConfigError(file.string() + ": is a folder, not a file");
+  }
+  if (error) throw ConfigError(file.string() + ": cannot read: " + error.message());
+  const char* what =
+      status.type() == fs::file_type::fifo     ? "a FIFO (named pipe)"
+      : status.type() == fs::file_type::socket ? "a socket"
+      : status.type() == fs::file_type::block || status.type() == fs::file_type::character
+          ? "a device"
+          : "something other than a file";
+  throw ConfigError(file.string() + ": is " + std::string(what) +
+                    ", not a file; give a regular file (a pipe would be waited on for ever)");
+}
+
 void WriteFile(const fs::path& file, const std::string& content) {
   std::ofstream out(file, std::ios::binary);
   out << content;

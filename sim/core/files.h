@@ -16,6 +16,11 @@
 
 namespace autonomsim::sim {
 
+// Throws ConfigError naming `file` and what it is unless it is a regular file (or a link to one):
+// no such file, a folder, or a FIFO, device or socket (reading a FIFO would wait for ever for a
+// writer). Every input file goes through it before it is opened.
+void RequireRegularFile(const std::filesystem::path& file);
+
 // Writes `content` to `file`; throws std::runtime_error naming the file on failure.
 void WriteFile(const std::filesystem::path& file, const std::string& content);
 

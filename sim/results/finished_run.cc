@@ -8,6 +8,7 @@
 #include <string>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/scenario/record_files.h"
 
 namespace autonomsim::sim {
@@ -22,6 +23,7 @@ FinishedRun ReadFinishedRun(const fs::path& dir) {
   RunSummary summary = ReadSummaryFile(dir / "summary.json");
 
   const fs::path resolved_file = dir / "scenario.resolved.json";
+  RequireRegularFile(resolved_file);
   std::ifstream in(resolved_file);
   if (!in) throw ConfigError(resolved_file.string() + ": cannot read");
   nlohmann::json resolved;

@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 #include "sim/platform/node_metrics.h"
 
 #ifndef AUTONOMSIM_VERSION
@@ -193,6 +194,7 @@ RunSummary ParseSummary(const nlohmann::json& json) {
 }
 
 RunSummary ReadSummaryFile(const std::filesystem::path& file) {
+  RequireRegularFile(file);
   std::ifstream in(file);
   if (!in) throw ConfigError(file.string() + ": cannot read");
   try {

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/core/files.h"
 #include "sim/core/hash.h"
 
 namespace autonomsim::sim {
@@ -18,6 +19,7 @@ std::ofstream OpenForWriting(const fs::path& file) {
 }
 
 std::ifstream OpenForReading(const fs::path& file) {
+  RequireRegularFile(file);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read " + file.string());
   return in;

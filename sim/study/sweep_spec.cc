@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "sim/core/config.h"
+#include "sim/core/files.h"
 
 namespace autonomsim::sim {
 
@@ -221,6 +222,7 @@ VaryAxis StudyAxis(const fs::path& file, const YAML::Node& entry) {
 }  // namespace
 
 bool IsStudyFile(const fs::path& file) {
+  RequireRegularFile(file);  // (a FIFO would block YAML::LoadFile for ever)
   try {
     const YAML::Node root = YAML::LoadFile(file.string());
     return root.IsMap() && root["scenario"];  // a scenario file has no `scenario:` key

@@ -69,7 +69,7 @@ std::uint64_t CheckSweepSize(const SweepSpec& spec, std::uint64_t max_runs);
 // [start, stop, count]}, or a string "key=..." as on the command line. ConfigError on bad input.
 SweepSpec LoadStudy(const std::filesystem::path& file);
 // Whether `file` is a study file (a YAML mapping with a top-level `scenario` key) rather than a
-// scenario.
+// scenario. ConfigError if it is not a regular file (RequireRegularFile).
 bool IsStudyFile(const std::filesystem::path& file);
 
 // One run of the grid: its place in grid order (the axes in the order given, the last varying

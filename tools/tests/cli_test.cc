@@ -214,7 +214,7 @@ TEST(CliTest, ANegativeSeedOrAFolderAsScenarioIsUnusableInput) {
   EXPECT_THAT(r.output, HasSubstr("a seed is a whole number >= 0, got '-1'"));
   r = Cli("run scenarios/tracks");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("scenarios/tracks: is a folder, not a YAML file"));
+  EXPECT_THAT(r.output, HasSubstr("scenarios/tracks: is a folder, not a file"));
   r = Cli("run scenarios/lab_two_cars_oracle.yaml --set 'cars.0.route=south_loop'");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_THAT(r.output, HasSubstr("index lists as [N]"));

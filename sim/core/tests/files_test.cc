@@ -2,6 +2,7 @@
 #include "sim/core/files.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -39,6 +40,35 @@ struct TempDir {
 std::size_t Entries(const fs::path& dir) {
   return static_cast<std::size_t>(
       std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+// Issue 33, item 4: a FIFO given as scenario or track hung for ever (a read waits for a writer).
+std::string RegularFileError(const fs::path& file) {
+  try {
+    RequireRegularFile(file);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(Files, OnlyARegularFileIsAnInput) {
+  TempDir dir;
+  std::ofstream(dir.path / "x.yaml") << "a: 1\n";
+  fs::create_symlink(dir.path / "x.yaml", dir.path / "link.yaml");
+  ASSERT_EQ(::mkfifo((dir.path / "pipe.yaml").c_str(), 0600), 0);
+  EXPECT_EQ(RegularFileError(dir.path / "x.yaml"), "(accepted)");
+  EXPECT_EQ(RegularFileError(dir.path / "link.yaml"), "(accepted)");  // a link to a file
+  EXPECT_NE(RegularFileError(dir.path / "pipe.yaml")
+                .find("pipe.yaml: is a FIFO (named pipe), not "
+                      "a file"),
+            std::string::npos);
+  EXPECT_NE(RegularFileError("/dev/null").find("/dev/null: is a device"), std::string::npos);
+  EXPECT_NE(RegularFileError(dir.path).find(": is a folder"), std::string::npos);
+  EXPECT_NE(RegularFileError(dir.path / "none.yaml").find("none.yaml: no such file"),
+            std::string::npos);
+  // the YAML reader (scenarios, tracks, profiles, studies) refuses it at once
+  EXPECT_THROW(LoadYamlFile(dir.path / "pipe.yaml"), ConfigError);
 }
 
 TEST(Files, AnAtomicWriteReplacesTheFileAndLeavesNoTemporary) {
