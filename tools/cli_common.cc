@@ -157,21 +157,23 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
 
 Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
                 const std::optional<fs::path>& out_dir, bool force) {
+  // a scenario that could not run: its outcome carries the reason
+  const auto cannot_run = [&](const std::exception& e) {
+    Outcome outcome;
+    outcome.file = file.string();
+    outcome.scenario_name = file.stem().string();
+    outcome.input_error = e.what();
+    return outcome;
+  };
   try {
     if (out_dir) sim::CheckOutputFolder(out_dir->string(), force);  // before the run
     return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr, force);
   } catch (const sim::ConfigError& e) {
-    Outcome outcome;
-    outcome.file = file.string();
-    outcome.scenario_name = file.stem().string();
-    outcome.input_error = e.what();
-    return outcome;
+    return cannot_run(e);
   } catch (const sim::MqttError& e) {  // v2i.link: mqtt, and the broker or tlserver failed us
-    Outcome outcome;
-    outcome.file = file.string();
-    outcome.scenario_name = file.stem().string();
-    outcome.input_error = e.what();
-    return outcome;
+    return cannot_run(e);
+  } catch (const sim::OutputError& e) {  // its results could not be written (disk full, ...)
+    return cannot_run(e);
   }
 }
 

@@ -129,7 +129,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
   fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
   if (!summary.failures.empty()) {
-    return summary.input_error ? kExitUnusableInput : kExitExpectationFailed;
+    return summary.cannot_run ? kExitUnusableInput : kExitExpectationFailed;
   }
   return summary.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
 }

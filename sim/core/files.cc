@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -39,11 +41,20 @@ void RequireRegularFile(const std::filesystem::path& file) {
                     ", not a file; give a regular file (a pipe would be waited on for ever)");
 }
 
+void ThrowCannotWrite(const fs::path& file) {
+  const int error = errno;
+  throw OutputError("cannot write " + file.string() + ": " +
+                    (error != 0 ? std::string(std::strerror(error)) : "no reason given by the OS"));
+}
+
 void WriteFile(const fs::path& file, const std::string& content) {
+  errno = 0;
   std::ofstream out(file, std::ios::binary);
+  if (!out) ThrowCannotWrite(file);
   out << content;
+  if (!out) ThrowCannotWrite(file);
   out.close();
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  if (!out) ThrowCannotWrite(file);
 }
 
 void WriteFileAtomically(const fs::path& file, const std::string& content) {

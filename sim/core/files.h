@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -21,7 +22,17 @@ namespace autonomsim::sim {
 // writer). Every input file goes through it before it is opened.
 void RequireRegularFile(const std::filesystem::path& file);
 
-// Writes `content` to `file`; throws std::runtime_error naming the file on failure.
+// The program could not write its output: a full disk, a permission, an I/O error. The CLI exits 2
+// (the run could not be made, not "an expectation failed") with the path and the OS's reason.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// Throws OutputError "cannot write FILE: <the OS's reason>", the reason from errno as it stands
+// (call it right after the failed write).
+[[noreturn]] void ThrowCannotWrite(const std::filesystem::path& file);
+
+// Writes `content` to `file`; throws OutputError naming the file and the OS's reason on failure.
 void WriteFile(const std::filesystem::path& file, const std::string& content);
 
 // Writes `content` to `file` through a sibling "<file>.tmp-<pid>" renamed over it, so a reader

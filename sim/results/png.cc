@@ -16,9 +16,9 @@ void WritePng(const std::filesystem::path& file, const cv::Mat& image) {
   try {
     encoded = cv::imencode(".png", image, png);
   } catch (const cv::Exception& e) {
-    throw std::runtime_error("cannot write " + file.string() + ": " + e.what());
+    throw OutputError("cannot write " + file.string() + ": " + e.what());
   }
-  if (!encoded) throw std::runtime_error("cannot write " + file.string() + ": PNG encoding failed");
+  if (!encoded) throw OutputError("cannot write " + file.string() + ": PNG encoding failed");
   WriteFile(file, std::string(png.begin(), png.end()));
 }
 

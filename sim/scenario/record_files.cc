@@ -1,5 +1,6 @@
 #include "sim/scenario/record_files.h"
 
+#include <cerrno>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,7 +15,7 @@ namespace fs = std::filesystem;
 
 std::ofstream OpenForWriting(const fs::path& file) {
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  if (!out) ThrowCannotWrite(file);
   return out;
 }
 
@@ -26,8 +27,9 @@ std::ifstream OpenForReading(const fs::path& file) {
 }
 
 void Write(std::ofstream& out, const std::string& text, const fs::path& file) {
+  errno = 0;  // the reason a failure gives is this write's
   out << text;
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  if (!out) ThrowCannotWrite(file);
 }
 
 // Calls `visit` with each non-empty line of `file` (without its newline), after its header line if
@@ -86,7 +88,7 @@ void RecordFiles::Close() {
   closed_ = true;
   for (auto [out, file] : {std::pair{&trajectory_, &trajectory_file_}, {&events_, &events_file_}}) {
     out->close();
-    if (!*out) throw std::runtime_error("cannot write " + file->string());
+    if (!*out) ThrowCannotWrite(*file);
   }
 }
 

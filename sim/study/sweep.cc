@@ -289,12 +289,15 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
   ParallelFor(todo.size(), options.jobs, [&](std::size_t t) {
     const std::size_t i = todo[t];
     std::string failure;
-    bool input_error = false;
+    bool cannot_run = false;
     try {
       RunPoint(loaded[i], options.wall_clock, RunFolderOf(options.out_dir, records[i].run_id));
     } catch (const ConfigError& e) {
       failure = e.what();
-      input_error = true;
+      cannot_run = true;
+    } catch (const OutputError& e) {  // a full disk, a permission: with the path and the reason
+      failure = e.what();
+      cannot_run = true;
     } catch (const std::exception& e) {
       failure = e.what();
     }
@@ -303,7 +306,7 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
     if (!failure.empty()) {
       summary->failures.push_back(
           fmt::format("run {} (point {}): {}", records[i].run_id, records[i].index, failure));
-      summary->input_error = summary->input_error || input_error;
+      summary->cannot_run = summary->cannot_run || cannot_run;
     } else {
       ++summary->ran;
     }

@@ -58,7 +58,9 @@ struct SweepSummary {
   std::size_t already_done{0};
   std::size_t ran{0};
   std::vector<std::string> failures;  // "run <id> (point <index>): message"
-  bool input_error{false};            // a failure was unusable input (ConfigError)
+  // A failure was unusable input (ConfigError) or output that could not be written
+  // (OutputError: a full disk, a permission): the CLI exits 2, not 1.
+  bool cannot_run{false};
   // The shard's complete runs (ran now or before) whose expectations did not all hold:
   // "run <id> (point <index>): <each failed expectation's name>".
   std::vector<std::string> failed_expectations;

@@ -73,6 +73,22 @@ TEST(SweepCliTest, TheIndexLinksEveryRunsReport) {
   EXPECT_THAT(Read(scratch / "merged" / "index.html"), HasSubstr("../sweep/runs/"));
 }
 
+// Issue 33, item 4: a sweep on a full disk exited 1 (the "an expectation failed" code) and never
+// said why. Here the writes fail with the file-size limit (ulimit -f, SIGXFSZ ignored: EFBIG, as a
+// full disk gives ENOSPC): exit 2, each run with its path and the OS's reason. 24 blocks of 512
+// bytes let the sweep's own files through (index.html is about 9 KB) and stop each run's
+// trajectory.csv (about 35 KB).
+TEST(SweepCliTest, ARunThatCannotBeWrittenExitsTwoWithTheOsReason) {
+  const fs::path dir = Scratch() / "full";
+  const Result r = Shell("trap '' XFSZ; ulimit -f 24; " + Bin() + " " + kSweep +
+                         " --no-plots --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("4 failed to run"));
+  EXPECT_THAT(r.output, HasSubstr("cannot write " + (dir / "runs").string()));
+  EXPECT_THAT(r.output, HasSubstr(": File too large"));
+  EXPECT_FALSE(fs::exists(dir / "runs") && !fs::is_empty(dir / "runs"));  // no half-written run
+}
+
 TEST(SweepCliTest, HelpAnswers) {
   const Result sweep = Cli("sweep --help");
   EXPECT_EQ(sweep.exit_code, 0);

@@ -71,6 +71,16 @@ TEST(Files, OnlyARegularFileIsAnInput) {
   EXPECT_THROW(LoadYamlFile(dir.path / "pipe.yaml"), ConfigError);
 }
 
+// Issue 33, item 4: a write that fails says the OS's reason (/dev/full: a disk with no room).
+TEST(Files, AFailedWriteSaysThePathAndTheOsReason) {
+  try {
+    WriteFile("/dev/full", std::string(1 << 16, 'x'));
+    FAIL() << "a write to /dev/full succeeded";
+  } catch (const OutputError& e) {
+    EXPECT_STREQ(e.what(), "cannot write /dev/full: No space left on device");
+  }
+}
+
 TEST(Files, AnAtomicWriteReplacesTheFileAndLeavesNoTemporary) {
   TempDir dir;
   const fs::path file = dir.path / "results.csv";
