@@ -33,24 +33,37 @@ void Write(std::ofstream& out, const std::string& text, const fs::path& file) {
 }
 
 // Calls `visit` with each non-empty line of `file` (without its newline), after its header line if
-// it has one; a line `visit` cannot take (std::invalid_argument) is an error at file:line.
-void ForEachLine(const fs::path& file, bool header,
-                 const std::function<void(const std::string&)>& visit) {
+// it has one (`header`, without its newline: the first line must be it); a line `visit` cannot
+// take (std::invalid_argument) is an error at file:line. Returns the lines visited.
+int ForEachLine(const fs::path& file, const std::string* header,
+                const std::function<void(const std::string&)>& visit) {
   std::ifstream in = OpenForReading(file);
   std::string line;
   int number = 0;
-  if (header && std::getline(in, line)) ++number;
+  if (header != nullptr) {
+    if (!std::getline(in, line)) {
+      throw std::runtime_error(file.string() + ": empty, not even its header");
+    }
+    number = 1;
+    if (line != *header) {
+      throw std::runtime_error(file.string() + ":1: not the header a run writes: expected '" +
+                               *header + "', got '" + line + "'");
+    }
+  }
+  int visited = 0;
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
     try {
       visit(line);
+      ++visited;
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(file.string() + ":" + std::to_string(number) +
                                ": not a line a run wrote: " + e.what());
     }
   }
   if (in.bad()) throw std::runtime_error("cannot read " + file.string());
+  return visited;
 }
 
 void HashFile(const fs::path& file, Sha256* hash) {
@@ -94,11 +107,18 @@ void RecordFiles::Close() {
 
 void ReadTrajectoryCsv(const fs::path& file,
                        const std::function<void(const TrajectorySample&)>& visit) {
-  ForEachLine(file, true, [&](const std::string& line) { visit(ParseTrajectoryCsvLine(line)); });
+  std::string header = TrajectoryCsvHeader();
+  header.pop_back();  // its newline
+  const int rows = ForEachLine(
+      file, &header, [&](const std::string& line) { visit(ParseTrajectoryCsvLine(line)); });
+  if (rows == 0) {
+    throw std::runtime_error(file.string() +
+                             ": no rows after the header (a run writes every car's at t = 0)");
+  }
 }
 
 void ReadEventsJsonl(const fs::path& file, const std::function<void(const Event&)>& visit) {
-  ForEachLine(file, false, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
+  ForEachLine(file, nullptr, [&](const std::string& line) { visit(ParseEventJsonLine(line)); });
 }
 
 void RecordFiles::ForEachSample(const std::function<void(const TrajectorySample&)>& visit) const {

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -23,6 +24,14 @@ T ParseField(std::string_view text, std::string_view line) {
     throw std::invalid_argument("not a trajectory.csv line: '" + std::string(line) + "'");
   }
   return value;
+}
+
+// The name of trajectory.csv's column i (from 0), as its header gives it.
+std::string ColumnName(std::size_t i) {
+  const std::string header = TrajectoryCsvHeader();
+  std::size_t start = 0;
+  for (std::size_t k = 0; k < i; ++k) start = header.find(',', start) + 1;
+  return header.substr(start, header.find_first_of(",\n", start) - start);
 }
 
 }  // namespace
@@ -70,7 +79,14 @@ TrajectorySample ParseTrajectoryCsvLine(std::string_view line) {
     start = comma + 1;
   }
   if (count != kTrajectoryColumns) throw malformed();
-  auto number = [&](std::size_t i) { return ParseField<double>(fields[i], line); };
+  auto number = [&](std::size_t i) {
+    const double value = ParseField<double>(fields[i], line);
+    if (!std::isfinite(value)) {  // from_chars takes "nan" and "inf"; a run writes neither
+      throw std::invalid_argument(fmt::format("column {} ({}) is '{}': a run writes finite numbers",
+                                              i + 1, ColumnName(i), fields[i]));
+    }
+    return value;
+  };
   return TrajectorySample{.t = FromSeconds(number(0)),
                           .car = ParseField<int>(fields[1], line),
                           .x_m = number(2),

@@ -119,6 +119,46 @@ TEST_F(ReportTest, ReplacesOnlyItsOwnReports) {
   EXPECT_THAT(not_a_run.output, HasSubstr("not a finished run"));
 }
 
+// Issue 33, item 4: report and video drew 13 kinds of damaged run folders without a word (an empty
+// trajectory, a wrong header, NaN coordinates, an unknown car, ...). Each is refused, exit 2, at
+// the file and line, saying what is wrong.
+TEST_F(ReportTest, ADamagedRunFolderIsRefusedAtItsFileAndLine) {
+  ASSERT_TRUE(fs::exists(*run_dir_ / "summary.json")) << *run_output_;
+  struct Damage {
+    std::string name, edit, says;
+  };
+  const std::vector<Damage> damages = {
+      {"empty", ": > trajectory.csv", "trajectory.csv: empty, not even its header"},
+      {"header_only", "head -1 trajectory.csv > x && mv x trajectory.csv",
+       "trajectory.csv: no rows after the header"},
+      {"wrong_header", "sed -i 1s/t_s/time/ trajectory.csv",
+       "trajectory.csv:1: not the header a run writes"},
+      {"nan", "sed -i '5s/^\\([^,]*\\),\\([^,]*\\),[^,]*,/\\1,\\2,nan,/' trajectory.csv",
+       "trajectory.csv:5: not a line a run wrote: column 3 (x_m) is 'nan'"},
+      {"unknown_car", "sed -i '5s/^\\([^,]*\\),[^,]*,/\\1,7,/' trajectory.csv",
+       "trajectory.csv:5: not a line a run wrote: car 7 is not in the run's scenario (cars 0, 1)"},
+      {"backwards", "sed -i '5s/^[^,]*,/0.001,/' trajectory.csv",
+       "trajectory.csv:5: not a line a run wrote: t_s 0.001 is before the row above"},
+      {"far_off", "sed -i '5s/^\\([^,]*\\),\\([^,]*\\),[^,]*,/\\1,\\2,1e300,/' trajectory.csv",
+       "far off the track's floor"},
+      {"event_car", "sed -i '1s/\"car\":[0-9]/\"car\":8/' events.jsonl",
+       "events.jsonl:1: not a line a run wrote: car 8 is not in the run's scenario"},
+      {"no_trajectory", "rm trajectory.csv", "trajectory.csv: no such file"},
+  };
+  for (const Damage& d : damages) {
+    const fs::path copy = *root_ / ("damaged_" + d.name);
+    fs::remove_all(copy);
+    fs::copy(*run_dir_, copy, fs::copy_options::recursive);
+    ASSERT_EQ(Shell("cd " + copy.string() + " && " + d.edit).exit_code, 0) << d.name;
+    for (const auto& [command, out] : {std::pair{"report ", "out.html"}, {"video ", "out.mp4"}}) {
+      const Result r =
+          Cli(command + copy.string() + " --out " + (*root_ / out).string() + " --force");
+      EXPECT_EQ(r.exit_code, 2) << d.name << ": " << command << r.output;
+      EXPECT_THAT(r.output, HasSubstr(d.says)) << d.name << ": " << command;
+    }
+  }
+}
+
 TEST_F(ReportTest, TheDataCarryTheFailureAndItsCameraSnapshot) {
   const sim::FinishedRun run = sim::ReadFinishedRun(*run_dir_);
   const nlohmann::json data = sim::ReportData(run);
