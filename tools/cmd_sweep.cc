@@ -126,8 +126,12 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
   if (!summary.plots_error.empty())
     fmt::print(stderr, "warning: no plots: {}\n", summary.plots_error);
-  fmt::print("results: {}\n", (fs::path(o.out) / "results.csv").string());
-  fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
+  fmt::print("results: {}\n", summary.table.string());
+  if (options.shard.n == 1) {
+    fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
+  } else {
+    fmt::print("(a shard's table: `sweep merge` joins the shards' folders into results.csv)\n");
+  }
   if (!summary.failures.empty()) {
     return summary.cannot_run ? kExitUnusableInput : kExitExpectationFailed;
   }

@@ -122,11 +122,18 @@ void WriteIndex(const SweepSpec& spec, const ResultsTable& table,
   WriteFileAtomically(out_dir / "index.html", SweepIndexHtml(index));
 }
 
-// results.csv and the plots of `points` (grid order), reading summaries from the first of `dirs`
-// that has each run.
+// The table of a shard: its own file, so that a shard run into a complete sweep's folder never
+// rewrites that sweep's results.csv.
+std::string TableName(const Shard& shard) {
+  return shard.n == 1 ? "results.csv" : fmt::format("results.{}-of-{}.csv", shard.k, shard.n);
+}
+
+// A table of `points` (grid order), reading summaries from the first of `dirs` that has each run:
+// results.csv with the plots and the index, or (a shard's, `table_name` another name) that file
+// alone.
 SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                                      const std::vector<fs::path>& dirs, const fs::path& out_dir,
-                                     bool plots) {
+                                     bool plots, const std::string& table_name = "results.csv") {
   std::vector<PointRecord> complete;
   std::vector<RunSummary> summaries;
   std::map<std::string, RunSummary> cache;  // points may share a run
@@ -148,19 +155,22 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
   }
   const ResultsTable table = BuildResultsTable(AxisKeys(spec), complete, summaries);
   fs::create_directories(out_dir);
-  WriteFileAtomically(out_dir / "results.csv", table.Csv());
+  WriteFileAtomically(out_dir / table_name, table.Csv());
   SweepTableSummary result{.missing = points.size() - complete.size()};
-  if (plots) {
+  const bool whole = table_name == "results.csv";
+  if (plots && whole) {
     try {
       WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
     } catch (const std::runtime_error& e) {  // the table stands without them
       result.plots_error = e.what();
     }
   }
-  WriteIndex(
-      spec, table, folders, out_dir, result.missing,
-      static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
-                                             [](const RunSummary& r) { return !r.passed; })));
+  if (whole) {
+    WriteIndex(
+        spec, table, folders, out_dir, result.missing,
+        static_cast<std::size_t>(std::count_if(summaries.begin(), summaries.end(),
+                                               [](const RunSummary& r) { return !r.passed; })));
+  }
   for (std::size_t i = 0; i < complete.size(); ++i) {
     if (summaries[i].passed) continue;
     std::vector<std::string> names;
@@ -343,8 +353,9 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
 
   const std::vector<std::size_t> todo = RunsToDo(records, options.out_dir, &summary.already_done);
   RunPoints(loaded, records, todo, options, &summary);
-  SweepTableSummary table =
-      WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots);
+  summary.table = options.out_dir / TableName(options.shard);
+  SweepTableSummary table = WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir,
+                                               options.plots, TableName(options.shard));
   summary.failed_expectations = std::move(table.failed_expectations);
   summary.plots_error = std::move(table.plots_error);
   return summary;

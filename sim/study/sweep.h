@@ -65,6 +65,9 @@ struct SweepSummary {
   // "run <id> (point <index>): <each failed expectation's name>".
   std::vector<std::string> failed_expectations;
   std::string plots_error;  // as in SweepTableSummary
+  // The table it wrote: results.csv for the whole grid; a shard's own results.<k>-of-<n>.csv
+  // (never results.csv, which only the whole grid or `sweep merge` writes), with no plots or index.
+  std::filesystem::path table;
 };
 
 // What the results table of a sweep (or of merged shards) found.

@@ -403,6 +403,20 @@ TEST(SweepRun, ResumesAndGivesTheSameTableWhateverTheJobsAndShards) {
   EXPECT_EQ(ReadText(dir.path / "merged" / "results.csv"), table);
   // one shard alone is incomplete, and says so
   EXPECT_EQ(MergeSweeps({dir.path / "s1"}, dir.path / "half", false).missing, 2u);
+  // a shard writes its own table, never results.csv (issue 33: `--shard 1/2` into a complete
+  // sweep's folder rewrote its results.csv with the shard's two rows)
+  EXPECT_FALSE(fs::exists(dir.path / "s1" / "results.csv"));
+  EXPECT_FALSE(fs::exists(dir.path / "s1" / "index.html"));
+  EXPECT_EQ(RunSweep(spec, shard1).table, dir.path / "s1" / "results.1-of-2.csv");
+  SweepOptions into_complete = shard1;
+  into_complete.out_dir = dir.path / "two";  // the complete sweep's folder
+  EXPECT_EQ(RunSweep(spec, into_complete).already_done, 2u);
+  EXPECT_EQ(ReadText(dir.path / "two" / "results.csv"), table);
+  const std::string shard_table = ReadText(dir.path / "two" / "results.1-of-2.csv");
+  EXPECT_EQ(std::count(shard_table.begin(), shard_table.end(), '\n'), 3);  // header + 2 rows
+  // merged in place, the folder's table is the whole grid's again
+  EXPECT_EQ(MergeSweeps({dir.path / "two"}, dir.path / "two", false).missing, 0u);
+  EXPECT_EQ(ReadText(dir.path / "two" / "results.csv"), table);
 }
 
 // The sweep reads the wall clock only through the one it is given: a fake clock, 1.5 s later at
