@@ -13,6 +13,7 @@
 #include "sim/mqtt/mqtt_process.h"  // TempDir
 #include "sim/results/outputs.h"
 #include "sim/results/report.h"
+#include "tools/interrupt.h"
 
 namespace autonomsim::cli {
 
@@ -53,6 +54,11 @@ int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>
       if (*command.app) return command.run();
     }
     return kExitUnusableInput;
+  } catch (const Interrupted&) {
+    fmt::print(stderr,
+               "autonomsim: interrupted; what it was writing was removed, nothing complete was "
+               "touched\n");
+    return kExitInterrupted;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -139,12 +145,12 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   }
   const auto start = std::chrono::steady_clock::now();
   sim::Simulation simulation(loaded, store);
-  if (progress) {
-    simulation.Run([progress](Time t) { progress->Update(ToSeconds(t)); });
-    progress->Done();
-  } else {
-    simulation.Run();
-  }
+  // every simulated second: Ctrl-C stops the run there, and its partial folder goes with it
+  simulation.Run([progress](Time t) {
+    ThrowIfInterrupted();
+    if (progress) progress->Update(ToSeconds(t));
+  });
+  if (progress) progress->Done();
   outcome.wall_seconds = WallSecondsSince(start);
   if (simulation.record().realtime) PrintPacing(*simulation.record().realtime);
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);

@@ -9,6 +9,7 @@
 #include "sim/core/parallel.h"
 #include "sim/results/report.h"
 #include "tools/cli_common.h"
+#include "tools/interrupt.h"
 
 namespace autonomsim::cli {
 namespace {
@@ -139,6 +140,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
   // depend on the order or the thread a run lands on.
   std::vector<Outcome> outcomes(files.size());
   sim::ParallelFor(files.size(), jobs, [&](std::size_t i) {
+    if (InterruptRequested()) return;  // Ctrl-C: start nothing more
     std::optional<fs::path> dir;
     if (out) dir = fs::path(*out) / files[i].stem();
     try {
@@ -151,6 +153,12 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
     }
   });
 
+  if (InterruptRequested()) {
+    fmt::print(stderr,
+               "autonomsim check: interrupted; the result folders it was writing were removed, "
+               "no verdicts are given\n");
+    return kExitInterrupted;
+  }
   int failed = 0, unusable = 0, failed_expectations = 0;
   for (const Outcome& o : outcomes) {
     if (o.input_error) {

@@ -12,6 +12,7 @@
 #include "sim/mqtt/mqtt_client.h"
 #include "sim/study/sweep.h"
 #include "tools/cli_common.h"
+#include "tools/interrupt.h"
 
 namespace autonomsim::cli {
 namespace {
@@ -96,6 +97,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
+  options.stop_requested = InterruptRequested;  // Ctrl-C: stop, keep the complete runs
   SweepProgressPrinter printer(o.quiet);
   options.progress = [&printer](const sim::SweepProgress& p) { printer.Update(p); };
   options.wall_clock = [] {
@@ -117,6 +119,12 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
+  if (summary.stopped) {
+    fmt::print(stderr,
+               "autonomsim sweep: interrupted after {} run(s); the runs in flight were removed, "
+               "the complete ones kept and tabled: the same command resumes where it stopped\n",
+               summary.ran);
+  }
   fmt::print(
       "{} run(s) in this shard: {} ran, {} already complete, {} failed to run, {} with failed "
       "expectations\n",
@@ -132,6 +140,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   } else {
     fmt::print("(a shard's table: `sweep merge` joins the shards' folders into results.csv)\n");
   }
+  if (summary.stopped) return kExitInterrupted;
   if (!summary.failures.empty()) {
     return summary.cannot_run ? kExitUnusableInput : kExitExpectationFailed;
   }

@@ -270,11 +270,18 @@ double SecondsSince(std::chrono::nanoseconds start, const WallClock& clock) {
 
 // Runs one point and writes its folder. Its wall time is the simulation's alone: not loading the
 // scenario, judging it or writing the folder.
-void RunPoint(const LoadedScenario& loaded, const WallClock& clock, const fs::path& folder) {
+// A stop request (SweepOptions::stop_requested) ends it at the next simulated second: RunStopped
+// unwinds it, and its partial folder goes with it.
+struct RunStopped {};
+
+void RunPoint(const LoadedScenario& loaded, const SweepOptions& options, const fs::path& folder) {
+  const WallClock& clock = options.wall_clock;
   RunFolder run_folder(folder);
   const std::chrono::nanoseconds start = Now(clock);
   Simulation simulation(loaded, run_folder.store());
-  simulation.Run();
+  simulation.Run([&options](Time) {
+    if (options.stop_requested && options.stop_requested()) throw RunStopped{};
+  });
   const double wall_s = SecondsSince(start, clock);
   const auto expectations = EvaluateExpectations(loaded.scenario, simulation.record());
   run_folder.Complete(loaded, simulation.record(), expectations, wall_s);
@@ -298,10 +305,16 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
   }
   ParallelFor(todo.size(), options.jobs, [&](std::size_t t) {
     const std::size_t i = todo[t];
+    const auto stop = [&] { return options.stop_requested && options.stop_requested(); };
     std::string failure;
     bool cannot_run = false;
     try {
-      RunPoint(loaded[i], options.wall_clock, RunFolderOf(options.out_dir, records[i].run_id));
+      if (stop()) throw RunStopped{};  // start nothing more
+      RunPoint(loaded[i], options, RunFolderOf(options.out_dir, records[i].run_id));
+    } catch (const RunStopped&) {
+      std::lock_guard<std::mutex> lock(mutex);
+      summary->stopped = true;
+      return;
     } catch (const ConfigError& e) {
       failure = e.what();
       cannot_run = true;

@@ -46,6 +46,10 @@ struct SweepOptions {
   Shard shard;
   bool plots{true};
   std::uint64_t max_runs{kDefaultMaxRuns};  // more runs in the grid: ConfigError (CheckSweepSize)
+  // Polled before each run and every simulated second within one (from any thread): true stops
+  // the sweep there, the runs in flight unwound (their partial folders removed), the complete ones
+  // kept and tabled (SweepSummary::stopped). None: never.
+  std::function<bool()> stop_requested;
   std::function<void(const SweepProgress&)> progress;  // called after each run, from any thread
   // None: every wall time is 0 (no elapsed time in progress; summary.json: wall_seconds 0,
   // real_time_factor null).
@@ -68,6 +72,7 @@ struct SweepSummary {
   // The table it wrote: results.csv for the whole grid; a shard's own results.<k>-of-<n>.csv
   // (never results.csv, which only the whole grid or `sweep merge` writes), with no plots or index.
   std::filesystem::path table;
+  bool stopped{false};  // options.stop_requested stopped it: runs are missing, resume to finish
 };
 
 // What the results table of a sweep (or of merged shards) found.
