@@ -104,6 +104,24 @@ std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
   return files;
 }
 
+// Each scenario's result folder under `out`, named by its file name, checked as an output (before
+// anything runs); two scenarios of one file name would mix their results in one: ConfigError.
+void CheckResultFolders(const std::vector<fs::path>& files, const std::string& out, bool force) {
+  std::map<std::string, fs::path> by_name;
+  for (const fs::path& file : files) {
+    const auto [it, added] = by_name.emplace(file.stem().string(), file);
+    if (!added) {
+      throw sim::ConfigError(it->second.string() + " and " + file.string() + " would both write " +
+                             (fs::path(out) / file.stem()).string() +
+                             " (check names a result folder by its scenario's file name): check "
+                             "them with different --out folders, or copy one under another name");
+    }
+  }
+  for (const fs::path& file : files) {
+    sim::CheckOutputFolder((fs::path(out) / file.stem()).string(), force);
+  }
+}
+
 int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
                  const std::optional<std::string>& out, const std::vector<std::string>& overrides,
                  int jobs, bool force, bool report) {
@@ -116,21 +134,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
   }
   if (out) {  // every result folder is refused before anything runs
     try {
-      // a result folder is named by its scenario's file name: two of one name would mix
-      std::map<std::string, fs::path> by_name;
-      for (const fs::path& file : files) {
-        const auto [it, added] = by_name.emplace(file.stem().string(), file);
-        if (!added) {
-          throw sim::ConfigError(
-              it->second.string() + " and " + file.string() + " would both write " +
-              (fs::path(*out) / file.stem()).string() +
-              " (check names a result folder by its scenario's file name): check them with "
-              "different --out folders, or copy one under another name");
-        }
-      }
-      for (const fs::path& file : files) {
-        sim::CheckOutputFolder((fs::path(*out) / file.stem()).string(), force);
-      }
+      CheckResultFolders(files, *out, force);
     } catch (const sim::ConfigError& e) {
       fmt::print(stderr, "error: {}\n", e.what());
       return kExitUnusableInput;
