@@ -1,5 +1,6 @@
 #include "stack/intersection_client.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -153,6 +154,20 @@ class ClientStep {
     }
   }
 
+  // enter_only_if_clear: granted, not yet inside, and another car seen in the area: wait in the
+  // stop zone (or the release margin before the area) as a car without a grant does.
+  void HoldWhileOccupied() {
+    if (!params_.enter_only_if_clear || s_.phase != Phase::kHolding || s_.crossed) return;
+    if (std::find(input_.occupied_areas.begin(), input_.occupied_areas.end(), s_.intersection) ==
+        input_.occupied_areas.end()) {
+      return;
+    }
+    const world::IntersectionSpec* spec = Find(intersections_, s_.intersection);
+    if (spec == nullptr || !InStopZoneClosed(*spec, input_.p_map, params_.release_margin_m)) return;
+    out_.may_proceed = false;
+    out_.waiting_for = s_.intersection;
+  }
+
   void SetWaitOutputs() {
     if (s_.phase != Phase::kWaiting) return;
     out_.waiting_for = s_.intersection;
@@ -265,6 +280,7 @@ IntersectionClientOutput StepIntersectionClient(
   step.LeaveOrRenew();
   step.EnterStopZone();
   step.SetWaitOutputs();
+  step.HoldWhileOccupied();
   return out;
 }
 

@@ -17,7 +17,14 @@
 //   release_on_failure  the original client runs on when the car's navigation has failed; with
 //                       it, a car that can no longer drive frees what it holds and asks no more
 //                       (unless it stands inside the intersection's area, which it blocks: then
-//                       it keeps its grant alive).
+//                       it keeps its grant alive);
+//   enter_only_if_clear the original enters on its grant whatever is in the area; with it, a
+//                       granted car that has not yet been inside waits in the stop zone while its
+//                       sensors see another car in the area (input.occupied_areas). A grant can
+//                       reach a second car while the first stands inside: the holder's renewals
+//                       cut off (a partitioned uplink) or a restarted server, which knows no
+//                       holder, so its lease runs out (issue 33). Nothing on the server's side
+//                       can tell a dead holder from a silent one; the car in front of the area can.
 // Under blocking: true none of these five applies (the lab's client has none of them), nor do
 // retry_period_s and keepalive_period_s: blocking overrides them, whatever they are set to.
 //
@@ -91,6 +98,8 @@ struct IntersectionClientParams {
   bool latch_wait{false};
   // Beyond the lab's client: a car whose navigation failed frees its intersection and retires.
   bool release_on_failure{false};
+  // Beyond the lab's client: a granted car waits while another car is seen in the area (above).
+  bool enter_only_if_clear{false};
   // The lab's client as it runs (above): the node blocks from its request until its grant.
   // Default false, ours, as the other options whose defaults are ours.
   bool blocking{false};
@@ -105,6 +114,7 @@ struct IntersectionClientParams {
     v("re_request", re_request);
     v("latch_wait", latch_wait);
     v("release_on_failure", release_on_failure);
+    v("enter_only_if_clear", enter_only_if_clear);
     v("blocking", blocking);
   }
   void Validate() const;
@@ -122,6 +132,8 @@ struct IntersectionClientInput {
   // responses are ignored.
   std::vector<world::Response> responses;
   bool navigation_failed{false};  // the car's navigation gave up (behaviour mode `failed`)
+  // The intersections whose area the car's sensors see another car in (enter_only_if_clear).
+  std::vector<int> occupied_areas;
 };
 
 struct IntersectionClientOutput {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "sim/loop/area_sensing.h"
 #include "sim/loop/simulation_impl.h"
 
 namespace autonomsim::sim {
@@ -204,6 +205,9 @@ std::optional<bool> Simulation::Impl::StepClient(CarAgent* agent, const world::V
   input.now = kernel.Now();
   input.p_map = p_map;
   input.navigation_failed = navigation_failed;
+  if (agent->config->intersection_client.enter_only_if_clear) {
+    input.occupied_areas = OccupiedAreasSeenBy(*agent);
+  }
   input.responses = std::move(agent->inbox);
   agent->inbox.clear();
   const stack::IntersectionClientOutput out =
@@ -219,6 +223,18 @@ std::optional<bool> Simulation::Impl::StepClient(CarAgent* agent, const world::V
                        &agent->metrics);
   if (out.stuck) return std::nullopt;
   return out.may_proceed;
+}
+
+std::vector<int> Simulation::Impl::OccupiedAreasSeenBy(const CarAgent& agent) const {
+  std::vector<world::OrientedBox> others;
+  for (const CarAgent& other : agents) {
+    if (&other == &agent) continue;
+    others.push_back(world::OrientedBox{.pose = other.car->pose(),
+                                        .length_m = other.config->vehicle.length_m,
+                                        .width_m = other.config->vehicle.width_m});
+  }
+  return OccupiedAreasSeen(WedgeOf(agent.car->pose(), agent.config->sensors.depth_camera.camera),
+                           loaded.track.spec().intersections, others);
 }
 
 void Simulation::Impl::ReceiveAtCar(int car_id, const world::V2IMessage& message) {

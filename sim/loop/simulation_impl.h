@@ -93,6 +93,8 @@ struct Simulation::Impl {
   void StepDriver(CarAgent* agent);
   std::optional<double> ObstacleGap(const CarAgent& agent) const;
   // may_proceed, or nothing while a blocking client is stuck in its wait.
+  // The intersections whose area the agent's depth camera sees another car in (area_sensing.h).
+  std::vector<int> OccupiedAreasSeenBy(const CarAgent& agent) const;
   std::optional<bool> StepClient(CarAgent* agent, const world::Vec2& p_map,
                                  bool navigation_failed = false);
   void AddStack(CarAgent* agent, SensorSuite* suite, const PerceptionTopics& perception,

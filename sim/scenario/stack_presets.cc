@@ -41,6 +41,7 @@ constexpr PresetOption kCarOptions[] = {
     {"intersection_client.exit_margin_m", "0.0", "0.15"},
     {"intersection_client.latch_wait", "false", "true"},
     {"intersection_client.release_on_failure", "false", "true"},
+    {"intersection_client.enter_only_if_clear", "false", "true"},
     {"perception.lane_detection.hw_pixel_classes", "exact", "non_zero"},
     {"perception.lane_detection.hw_no_line", "both_below_min", "white_below_min"},
     {"perception.lane_detection.hw_truncate_points", "true", "false"},

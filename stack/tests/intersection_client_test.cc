@@ -81,7 +81,7 @@ TEST(IntersectionClientParamsTest, DefaultsKeysAndValidation) {
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s",
                                 "release_margin_m", "exit_margin_m", "re_request", "latch_wait",
-                                "release_on_failure", "blocking"));
+                                "release_on_failure", "enter_only_if_clear", "blocking"));
   EXPECT_FALSE(params.blocking);
 
   params.retry_period = Duration::zero();
@@ -306,6 +306,46 @@ TEST(IntersectionClientTest, AFailedNavigationFreesTheGrantAndRetires) {
       EXPECT_THAT(out.frees, IsEmpty());
       EXPECT_EQ(client.state.phase, Phase::kHolding);
     }
+  }
+}
+
+// Issue 33: a grant reached a second car while the first stood inside, its renewals cut off (a
+// partitioned uplink) or forgotten (a restarted server). With enter_only_if_clear a granted car
+// that has not been inside waits in its stop zone while it sees another car in the area, and goes
+// once the area is clear; inside, what it sees no longer holds it. The lab's client
+// (intersection_checker.cpp:84-104) goes on its grant whatever is in the area.
+TEST(IntersectionClientTest, AGrantedCarWaitsWhileItSeesAnotherCarInTheArea) {
+  for (const bool guard : {false, true}) {
+    Client client;
+    client.params.enter_only_if_clear = guard;
+    const Vec2 in_zone = OuterNorth(-1.0);
+    client.Step(0.0, in_zone);
+    const auto step = [&](double t_s, Vec2 p, std::vector<int> occupied,
+                          std::vector<Response> responses = {}) {
+      IntersectionClientInput input{At(t_s), p, std::move(responses)};
+      input.occupied_areas = std::move(occupied);
+      return StepIntersectionClient(client.params, kCar, client.intersections, input,
+                                    &client.state);
+    };
+    auto out = step(0.1, in_zone, {0}, {Response{kCar, true}});
+    EXPECT_EQ(client.state.phase, Phase::kHolding);
+    EXPECT_EQ(out.may_proceed, !guard);
+    if (guard) {
+      EXPECT_EQ(out.waiting_for, 0);
+    }
+    // another intersection's area occupied: no matter
+    EXPECT_TRUE(step(0.2, in_zone, {1}).may_proceed);
+    // held while the area stays occupied, renewing its lease all along
+    int keepalives = 0;
+    for (int k = 3; k <= 30; ++k) {
+      out = step(0.1 * k, in_zone, {0});
+      EXPECT_EQ(out.may_proceed, !guard) << k;
+      keepalives += static_cast<int>(out.requests.size());
+    }
+    EXPECT_GE(keepalives, 2);
+    EXPECT_TRUE(step(3.1, in_zone, {}).may_proceed);  // clear: go
+    // inside the area, another car seen in it does not stop the car
+    EXPECT_TRUE(step(3.2, OuterNorth(0.0), {0}).may_proceed);
   }
 }
 

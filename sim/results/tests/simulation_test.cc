@@ -371,6 +371,42 @@ TEST(SimulationFaultTest, ALeaseDoesNotRunOutWhileTheBrokerIsAway) {
   }
 }
 
+// Issue 33, item 1: the other paths by which a lease runs out while its holder stands inside: the
+// holder's uplink partitioned, or the server restarted (it knows no holder). No server can tell a
+// dead holder from a silent one, so the lease runs out and car 0 is granted (lease_expired, or
+// the new server's first grant); with intersection_client.enter_only_if_clear (safe) car 0 waits
+// at the stop line while its depth camera sees car 1 in the area, goes once car 1 has left, and
+// nothing collides. Without it (the scenario as written) car 0 drives into car 1.
+TEST(SimulationFaultTest, NoSecondCarEntersWhileAStalledHolderIsCutOffOrForgotten) {
+  for (const char* fault : {"v2i_partition: {car: 1, direction: up, at_s: 6.9, for_s: 8}",
+                            "v2i_partition: {car: 1, direction: both, at_s: 6.9, for_s: 8}",
+                            "server_restart: {at_s: 6.9, for_s: 1}"}) {
+    for (const bool guard : {false, true}) {
+      SCOPED_TRACE(std::string(fault) + (guard ? ", guard" : ""));
+      std::vector<std::string> overrides = {
+          "duration_s=40",
+          std::string("faults=[car_stall: {car: 1, at_s: 6.0, for_s: 12}, ") + fault + "]",
+          "expect=[no_collision: {}, intersection_mutex: {}, no_gridlock: {}]"};
+      if (guard) overrides.push_back("stack.preset=safe");
+      const LoadedScenario scenario = LoadScenario("scenarios/lab_two_cars_oracle.yaml", overrides);
+      const RunRecord record = RunScenario(scenario);
+      const auto results = EvaluateExpectations(scenario.scenario, record);
+      EXPECT_EQ(results[0].passed, guard) << results[0].detail;  // no_collision
+      EXPECT_EQ(results[1].passed, guard) << results[1].detail;  // intersection_mutex
+      if (!guard) continue;
+      EXPECT_TRUE(results[2].passed) << results[2].detail;  // car 0 goes once the area is clear
+      std::optional<double> car1_exit, car0_enter;
+      for (const Event& e : record.events) {
+        if (e.intersection != 0 || ToSeconds(e.t) < 6.0) continue;
+        if (e.type == EventKind::kExit && e.car == 1 && !car1_exit) car1_exit = ToSeconds(e.t);
+        if (e.type == EventKind::kEnter && e.car == 0 && !car0_enter) car0_enter = ToSeconds(e.t);
+      }
+      ASSERT_TRUE(car1_exit && car0_enter);
+      EXPECT_GT(*car0_enter, *car1_exit);
+    }
+  }
+}
+
 // The lab's intersection client as it runs (intersection_checker.cpp:69-105 and :120-223, lab
 // commit 02c5ab4: one request, blocked until granted, free on the first tick outside every box)
 // against the lab's server (vtl.py), stack-driven, nothing lost: car 1 crosses both intersections
