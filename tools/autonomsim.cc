@@ -5,14 +5,14 @@
 #include <vector>
 
 #include "tools/cli_common.h"
-#include "tools/interrupt.h"
 
 int main(int argc, char** argv) {
   using namespace autonomsim::cli;
   CLI::App app{
       "autonomsim: closed-loop simulator of the AutonomROS model-car fleet.\n"
       "Exit codes: 0 all expectations held, 1 an expectation failed, 2 unusable input (or output\n"
-      "that could not be written), 130 stopped by Ctrl-C (what was half-written is removed)."};
+      "that could not be written), 130 run, check or sweep stopped by Ctrl-C (what was "
+      "half-written is removed)."};
   app.set_version_flag("--version", std::string("autonomsim ") + AUTONOMSIM_VERSION);
   app.require_subcommand(1);
   const std::vector<Command> commands = {AddRunCommand(app),       AddCheckCommand(app),
@@ -20,6 +20,5 @@ int main(int argc, char** argv) {
                                          AddSweepCommand(app),     AddReportCommand(app),
                                          AddReferenceCommand(app), AddVideoForwarder(app)};
 
-  InstallInterruptHandlers();
   return ParseAndRun(app, argc, argv, commands);
 }

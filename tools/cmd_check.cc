@@ -125,6 +125,7 @@ void CheckResultFolders(const std::vector<fs::path>& files, const std::string& o
 int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
                  const std::optional<std::string>& out, const std::vector<std::string>& overrides,
                  int jobs, bool force, bool report) {
+  InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
   std::vector<fs::path> files;
   try {
     files = ExpandScenarioArgs(args);

@@ -5,6 +5,7 @@
 #include "sim/core/files.h"
 #include "sim/mqtt/mqtt_client.h"
 #include "tools/cli_common.h"
+#include "tools/interrupt.h"
 
 namespace autonomsim::cli {
 namespace {
@@ -14,6 +15,7 @@ namespace fs = std::filesystem;
 int RunCommand(const std::string& scenario_file, const std::optional<std::string>& out,
                std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
                bool quiet, bool force, bool report) {
+  InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
   std::optional<sim::LoadedScenario> loaded;
   try {
     loaded.emplace(sim::LoadScenario(scenario_file, overrides, seed));

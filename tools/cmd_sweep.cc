@@ -72,6 +72,7 @@ struct SweepOptions {
 };
 
 int SweepCommand(const SweepOptions& o, bool repeat_given) {
+  InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
   sim::SweepSpec spec;
   sim::SweepOptions options;
   try {

@@ -17,7 +17,8 @@ class Interrupted : public std::runtime_error {
   Interrupted() : std::runtime_error("interrupted") {}
 };
 
-// Installs the handlers for SIGINT and SIGTERM (once, at the start of main).
+// Installs the handlers for SIGINT and SIGTERM: only a command that polls (run, check, sweep) does,
+// at its start; the others keep the default action (Ctrl-C ends them at once).
 void InstallInterruptHandlers();
 // Whether the user asked to stop.
 bool InterruptRequested();

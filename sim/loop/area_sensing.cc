@@ -11,9 +11,9 @@ CameraWedge WedgeOf(const world::Pose2& X_map_car, const vehicle::CameraParams& 
   const vehicle::CameraMount& m = camera.mount;
   const double fx_px = camera.K[0];
   return CameraWedge{
-      .X_map_camera = world::Pose2{X_map_car.x_m + c * m.x_m - s * m.y_m,
-                                   X_map_car.y_m + s * m.x_m + c * m.y_m,
-                                   X_map_car.yaw_rad + m.yaw_deg * std::numbers::pi / 180.0},
+      .X_map_camera =
+          world::Pose2{X_map_car.x_m + c * m.x_m - s * m.y_m, X_map_car.y_m + s * m.x_m + c * m.y_m,
+                       X_map_car.yaw_rad + m.yaw_deg * std::numbers::pi / 180.0},
       .half_fov_rad = std::atan2(0.5 * camera.width_px, fx_px),
       .near_m = camera.clip_near_m,
       .far_m = camera.clip_far_m};
