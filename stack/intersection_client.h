@@ -25,7 +25,7 @@
 //                       cut off (a partitioned uplink) or a restarted server, which knows no
 //                       holder, so its lease runs out (issue 33). Nothing on the server's side
 //                       can tell a dead holder from a silent one; the car in front of the area can.
-// Under blocking: true none of these five applies (the lab's client has none of them), nor do
+// Under blocking: true none of these six applies (the lab's client has none of them), nor do
 // retry_period_s and keepalive_period_s: blocking overrides them, whatever they are set to.
 //
 // The blocking client (intersection_checker.cpp, lab commit 02c5ab4; lines below):
