@@ -7,6 +7,16 @@
 #include "sim/loop/simulation_impl.h"
 
 namespace autonomsim::sim {
+
+namespace {
+
+// The car's footprint where it stands now: its body's box at its pose.
+world::OrientedBox FootprintOf(const detail::CarAgent& agent) {
+  return world::OrientedBox{agent.car->pose(), agent.config->vehicle.length_m,
+                            agent.config->vehicle.width_m};
+}
+
+}  // namespace
 namespace {
 
 using detail::CarAgent;
@@ -228,10 +238,7 @@ std::optional<bool> Simulation::Impl::StepClient(CarAgent* agent, const world::V
 std::vector<int> Simulation::Impl::OccupiedAreasSeenBy(const CarAgent& agent) const {
   std::vector<world::OrientedBox> others;
   for (const CarAgent& other : agents) {
-    if (&other == &agent) continue;
-    others.push_back(world::OrientedBox{.pose = other.car->pose(),
-                                        .length_m = other.config->vehicle.length_m,
-                                        .width_m = other.config->vehicle.width_m});
+    if (&other != &agent) others.push_back(FootprintOf(other));
   }
   return OccupiedAreasSeen(WedgeOf(agent.car->pose(), agent.config->sensors.depth_camera.camera),
                            loaded.track.spec().intersections, others);
@@ -299,7 +306,7 @@ void Simulation::Impl::RecordContacts(Time t) {
 void Simulation::Impl::MeasureObstacleGaps() {
   for (CarAgent& agent : agents) {
     const vehicle::CarParams& car = agent.config->vehicle;
-    const world::OrientedBox footprint{agent.car->pose(), car.length_m, car.width_m};
+    const world::OrientedBox footprint = FootprintOf(agent);
     for (std::size_t o = 0; o < physics.obstacle_count(); ++o) {
       if (!physics.obstacle_enabled(o)) continue;
       const vehicle::ObstacleBox& box = physics.obstacle(o);

@@ -40,9 +40,13 @@ nlohmann::json ReadJsonFile(const fs::path& file) {
 
 // The grid's manifest file of a shard: sweep.json for the whole grid, sweep.<k>-of-<n>.json for
 // a shard, so shards may share one folder.
-std::string ManifestName(const Shard& shard) {
-  return shard.n == 1 ? "sweep.json" : fmt::format("sweep.{}-of-{}.json", shard.k, shard.n);
+// A file of the whole grid, `stem.ext`, or of one shard, `stem.<k>-of-<n>.ext`.
+std::string ShardFileName(const Shard& shard, std::string_view stem, std::string_view ext) {
+  return shard.n == 1 ? fmt::format("{}.{}", stem, ext)
+                      : fmt::format("{}.{}-of-{}.{}", stem, shard.k, shard.n, ext);
 }
+
+std::string ManifestName(const Shard& shard) { return ShardFileName(shard, "sweep", "json"); }
 
 fs::path RunFolderOf(const fs::path& dir, const std::string& id) { return dir / "runs" / id; }
 
@@ -124,9 +128,7 @@ void WriteIndex(const SweepSpec& spec, const ResultsTable& table,
 
 // The table of a shard: its own file, so that a shard run into a complete sweep's folder never
 // rewrites that sweep's results.csv.
-std::string TableName(const Shard& shard) {
-  return shard.n == 1 ? "results.csv" : fmt::format("results.{}-of-{}.csv", shard.k, shard.n);
-}
+std::string TableName(const Shard& shard) { return ShardFileName(shard, "results", "csv"); }
 
 // A table of `points` (grid order), reading summaries from the first of `dirs` that has each run:
 // results.csv with the plots and the index, or (a shard's, `table_name` another name) that file
