@@ -3,8 +3,8 @@
 # targets (preset fuzz: clang, AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds
 # their corpora from the shipped files, and runs each for SECONDS_PER_TARGET, as many at once as
 # there are cores. Prints the executions per target; exits 1 when any target finds something (a
-# crash, a sanitizer report, a hang over 10 s, over 2 GB of memory, or an error message that does
-# not say where), with its input in build-fuzz/artifacts/. Corpora grow in
+# crash, a sanitizer report, a hang over 10 s, over 2 GB of memory in all or in one allocation, or
+# an error message that does not say where), with its input in build-fuzz/artifacts/. Corpora grow in
 # build-fuzz/corpus/<target>/ from run to run. Naming targets builds and runs only those.
 # docs/fuzzing.md says more.
 set -euo pipefail
@@ -18,8 +18,8 @@ wanted=("$@")
 tools/install_deps.sh
 tools/reset_stale_build.sh build-fuzz
 # AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, as in test.sh.
-# AUTONOMSIM_FUZZ_OPT=0 (set by CI): the targets and libraries at -O0, not the preset's -O1: the
-# build in about half the time, for fewer executions a second (CI's short pass).
+# AUTONOMSIM_FUZZ_OPT=0: the targets and libraries at -O0, not the preset's -O1: the build in about
+# half the time, for fewer executions a second (a short pass that mostly replays the seeds).
 opt="${AUTONOMSIM_FUZZ_OPT:-1}"
 [[ $opt =~ ^[0-3]$ ]] || { echo "tools/fuzz.sh: AUTONOMSIM_FUZZ_OPT must be 0-3" >&2; exit 2; }
 cmake --preset fuzz -DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}" \
@@ -47,14 +47,9 @@ seed_lines() {
   done <"$1"
 }
 
-# target|seeds|dictionary: seeds are a .seeds file (one a line) or shipped files.
-targets=(
-  "scenario_loader_fuzz|scenarios/*.yaml|$dict"
-  "track_loader_fuzz|scenarios/tracks/*.yaml|$dict"
-  "set_override_fuzz|sim/core/fuzz/set_override.seeds|$dict"
-  "vtl_codec_fuzz|world/fuzz/vtl_codec.seeds|"
-  "lockstep_decode_fuzz|sim/mqtt/fuzz/lockstep_decode.seeds|sim/mqtt/fuzz/lockstep_decode.dict"
-)
+# target|seeds|dictionary, one a line, from the autonomsim_fuzzer calls (cmake/autonomsim.cmake):
+# seeds are a .seeds file (one a line) or a glob of shipped files; CONFIG_KEYS is $dict.
+mapfile -t targets < <(grep -v '^$' "$build/fuzz_targets.txt" | sed "s#|CONFIG_KEYS\$#|$dict#")
 
 # the targets asked for, or all
 selected=()
@@ -80,7 +75,8 @@ fuzz_one() {
   else
     cp $seeds "$corpus/"  # a glob, unquoted on purpose
   fi
-  local args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+  local args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048
+              -print_final_stats=1
               -artifact_prefix="$artifacts/$target-")
   [[ -n $dictionary ]] && args+=(-dict="$dictionary")
   "$build/bin/$target" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?

@@ -65,6 +65,18 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
+// A scratch folder laid out like scenarios/: the shipped tracks and profiles, linked, so that a
+// scenario written into it finds them as a shipped scenario does.
+struct ScenarioFolder {
+  ScenarioFolder() {
+    for (const char* shipped : {"tracks", "platforms"}) {
+      std::filesystem::create_directory_symlink(SourceDir() / "scenarios" / shipped,
+                                                dir.path() / shipped);
+    }
+  }
+  ScratchDir dir;
+};
+
 // Whether `message` begins "<file>:<line>:" (sim/core/config.h's "file:line:column: key: what").
 inline bool NamesFileAndLine(std::string_view message, std::string_view file) {
   if (message.substr(0, file.size()) != file || message.size() < file.size() + 3 ||

@@ -3,7 +3,7 @@
 // only throw ConfigError (the CLI's exit code 2), and the message must name the file and a line
 // ("file:line:column: key: what") so that a user can find the mistake; the one exception is an
 // empty file, which has no line to name. tools/fuzz.sh runs it with the shipped scenarios as its
-// seed corpus and scenario_loader.dict (their keys).
+// seed corpus and the config keys as its dictionary.
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -12,26 +12,9 @@
 #include "sim/core/fuzz/fuzz_support.h"
 #include "sim/scenario/scenario.h"
 
-namespace autonomsim::sim {
-namespace {
-
-// A scratch folder laid out like scenarios/: the shipped tracks and profiles, linked.
-struct ScenarioFolder {
-  ScenarioFolder() {
-    for (const char* shipped : {"tracks", "platforms"}) {
-      std::filesystem::create_directory_symlink(fuzz::SourceDir() / "scenarios" / shipped,
-                                                dir.path() / shipped);
-    }
-  }
-  fuzz::ScratchDir dir;
-};
-
-}  // namespace
-}  // namespace autonomsim::sim
-
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace autonomsim::sim;
-  static const ScenarioFolder folder;
+  static const fuzz::ScenarioFolder folder;
   const std::filesystem::path file = folder.dir.Write("fuzz.yaml", data, size);
   fuzz::LoadSayingWhere([](const auto& f) { LoadScenario(f); }, file,
                         "a scenario error that names no file and line");
