@@ -30,6 +30,7 @@ struct Command {
 Command AddRunCommand(CLI::App& parent);
 Command AddCheckCommand(CLI::App& parent);
 Command AddTable1Command(CLI::App& parent);
+Command AddTransportCommand(CLI::App& parent);
 Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);

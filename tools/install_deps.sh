@@ -16,6 +16,7 @@ packages=(
   chromium  # the replay report's browser test loads it in headless chromium
   gnuplot-nox  # draws a sweep's plots (pngcairo)
   python3-paho-mqtt  # the real-time test's stand-in of the lab's vtl.py (tools/tests/vtl_standin.py)
+  cyclonedds-tools  # ddsperf: bench/dds_vs_cyclone.sh measures real Cyclone DDS against the model
   # the GL camera backend and 3D views: EGL and OpenGL ES headers (glvnd), and Mesa's EGL driver
   # with llvmpipe, which renders without a GPU or a display (EGL_PLATFORM_SURFACELESS_MESA)
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri

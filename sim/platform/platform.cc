@@ -10,11 +10,7 @@
 #include "world/validation.h"
 
 namespace autonomsim::sim {
-namespace {
-
-std::int64_t CeilDiv(std::int64_t a, std::int64_t b) { return a <= 0 ? 0 : (a + b - 1) / b; }
-
-}  // namespace
+namespace {}  // namespace
 
 double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies) {
   return static_cast<double>(copies) * static_cast<double>(bytes) / cpu.memcpy_bytes_per_s;
@@ -22,7 +18,7 @@ double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies) {
 
 double DdsSideCoreSeconds(const PlatformProfile& profile, const DdsSideCost& side,
                           std::int64_t bytes) {
-  const std::int64_t datagrams = CeilDiv(bytes, profile.dds.datagram_bytes);
+  const std::int64_t datagrams = CeilDiv(bytes, profile.dds.max_message_bytes);
   const std::int64_t fragments = CeilDiv(bytes, profile.dds.fragment_bytes);
   return ToSeconds(side.fixed) + CopyCoreSeconds(profile.cpu, bytes, side.copies) +
          static_cast<double>(datagrams) * ToSeconds(side.per_datagram) +
@@ -82,6 +78,12 @@ double Cpu::busy_cores() const {
   double busy = 0.0;
   for (const Job& job : jobs_) busy += job.rate;
   return busy;
+}
+
+double Cpu::demand() const {
+  double demand = 0.0;
+  for (const Job& job : jobs_) demand += job.max_parallelism;
+  return demand;
 }
 
 double Cpu::share(JobId id) const {

@@ -25,6 +25,9 @@ namespace autonomsim::sim {
 
 // ---- Transport costs (pure functions of the profile and the message size) ----
 
+// a / b rounded up, for a >= 0 and b > 0 (0 for a <= 0): datagrams and fragments of a sample.
+inline std::int64_t CeilDiv(std::int64_t a, std::int64_t b) { return a <= 0 ? 0 : (a + b - 1) / b; }
+
 // Core-seconds of `copies` memcpy passes over `bytes`.
 double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies = 1);
 // Core-seconds of one side of a DDS transfer (DdsSideCost's formula).
@@ -72,6 +75,8 @@ class Cpu {
 
   int cores() const { return cores_; }
   double busy_cores() const;  // sum of the running jobs' shares now
+  // The cores the running jobs would use if they had them (the sum of their parallelism).
+  double demand() const;
   std::size_t running() const { return jobs_.size(); }
   // The cores job `id` gets now (0 if it is not running); for tests and traces.
   double share(JobId id) const;

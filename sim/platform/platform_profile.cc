@@ -43,6 +43,7 @@ void CpuProfile::Validate() const {
   Require(cores >= 1, "cores must be >= 1, got " + std::to_string(cores));
   Require(memcpy_bytes_per_s > 0.0,
           "memcpy_bytes_per_s must be > 0, got " + Num(memcpy_bytes_per_s));
+  RequireNonNegative(sched_slice, "sched_slice_s");
 }
 
 void FpgaProfile::Validate() const {
@@ -58,11 +59,24 @@ void DdsSideCost::Validate() const {
 }
 
 void DdsProfile::Validate() const {
-  Require(fragment_bytes > 0, "fragment_bytes must be > 0, got " + std::to_string(fragment_bytes));
-  Require(datagram_bytes >= fragment_bytes, "datagram_bytes must be >= fragment_bytes (" +
-                                                std::to_string(fragment_bytes) + "), got " +
-                                                std::to_string(datagram_bytes));
+  const auto positive = [](int value, const char* key) {
+    Require(value > 0, std::string(key) + " must be > 0, got " + std::to_string(value));
+  };
+  positive(fragment_bytes, "fragment_bytes");
+  positive(max_message_bytes, "max_message_bytes");
+  positive(receive_buffer_bytes, "receive_buffer_bytes");
+  positive(host_rmem_max_bytes, "host_rmem_max_bytes");
+  positive(whc_high_bytes, "whc_high_bytes");
+  positive(max_queued_rexmit_bytes, "max_queued_rexmit_bytes");
+  Require(socket_overhead_bytes >= 0,
+          "socket_overhead_bytes must be >= 0, got " + std::to_string(socket_overhead_bytes));
+  Require(whc_low_bytes >= 0 && whc_low_bytes <= whc_high_bytes,
+          "whc_low_bytes must be between 0 and whc_high_bytes (" + std::to_string(whc_high_bytes) +
+              "), got " + std::to_string(whc_low_bytes));
   RequireNonNegative(latency, "latency_s");
+  Require(heartbeat_interval > Duration{0}, "heartbeat_interval_s must be > 0");
+  RequireNonNegative(nack_delay, "nack_delay_s");
+  if (max_blocking) RequireNonNegative(*max_blocking, "max_blocking_s");
 }
 
 void MempoolConfig::Validate() const {

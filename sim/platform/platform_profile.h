@@ -70,11 +70,17 @@ struct ComponentCost {
 struct CpuProfile {
   int cores{1};
   double memcpy_bytes_per_s{1e9};  // one core copying a large buffer (used by every "copy")
+  // The OS scheduler's time slice when more threads want to run than there are cores: such a
+  // thread runs one slice, then waits while the others have theirs, and one woken then waits
+  // half a slice on average. Only the DDS receive thread is scheduled so (sim/platform/dds_link.h;
+  // every other job shares the cores as a fluid); 0: that thread too.
+  Duration sched_slice{0};
 
   template <class V>
   void Describe(V& v) {
     v("cores", cores);
     v("memcpy_bytes_per_s", memcpy_bytes_per_s);
+    v("sched_slice_s", sched_slice);
   }
   void Validate() const;
 };
@@ -92,7 +98,7 @@ struct FpgaProfile {
 };
 
 // CPU cost of one side of a DDS transfer of a B-byte sample:
-//   fixed + copies * B / memcpy + ceil(B / datagram_bytes) * per_datagram
+//   fixed + copies * B / memcpy + ceil(B / max_message_bytes) * per_datagram
 //         + ceil(B / fragment_bytes) * per_fragment
 struct DdsSideCost {
   Duration fixed{0};
@@ -110,25 +116,58 @@ struct DdsSideCost {
   void Validate() const;
 };
 
-// DDS over loopback UDP. `write` is paid by the publishing job (publish is synchronous), `receive`
-// by the subscriber's DDS receive thread for every sample that arrives (taken or not), `take` by
-// the subscriber's job (deserialization into its message).
+// Whether a DDS topic repairs lost datagrams (reliable: heartbeats, NACKs, retransmission, a
+// writer that can block) or loses the sample (best_effort).
+enum class Reliability { kReliable, kBestEffort };
+// A DDS writer's history: keep_last (the topic's depth) or keep_all (unbounded; the WHC's
+// high-water mark then throttles the writer).
+enum class History { kKeepLast, kKeepAll };
+
+// DDS over loopback UDP (Cyclone DDS). `write` is paid by the publishing job (publish is
+// synchronous), `receive` by the subscriber's DDS receive thread for every datagram that arrives,
+// `take` by the subscriber's job (deserialization into its message). The rest are Cyclone's
+// settings and the host's socket accounting, which decide how a large sample crosses
+// (sim/platform/dds_link.h).
 struct DdsProfile {
-  int datagram_bytes{14720};
-  int fragment_bytes{1344};
+  int max_message_bytes{14720};  // a datagram's payload at most (Cyclone MaxMessageSize)
+  int fragment_bytes{1344};      // Cyclone FragmentSize
   DdsSideCost write;
   DdsSideCost receive;
   DdsSideCost take;
-  Duration latency{0};  // wire time on top of the receive processing
+  Duration latency{0};                // wire time on top of the receive processing
+  int receive_buffer_bytes{1048576};  // SO_RCVBUF Cyclone requests
+  int host_rmem_max_bytes{212992};    // the host kernel's net.core.rmem_max
+  int socket_overhead_bytes{0};       // kernel bookkeeping per datagram (truesize)
+  Duration heartbeat_interval{std::chrono::milliseconds(100)};
+  Duration nack_delay{std::chrono::milliseconds(100)};
+  int whc_high_bytes{500000};
+  int whc_low_bytes{1000};
+  int max_queued_rexmit_bytes{512000};
+  // A reliable write's max_blocking_time; unset: infinite, as rmw_cyclonedds gives every reliable
+  // ROS 2 publisher (rmw_node.cpp:1843-1850, galactic).
+  std::optional<Duration> max_blocking;
+  Reliability reliability{Reliability::kReliable};  // a topic's unless it says otherwise
+  History history{History::kKeepLast};              // a topic's unless it says otherwise
 
   template <class V>
   void Describe(V& v) {
-    v("datagram_bytes", datagram_bytes);
+    v("max_message_bytes", max_message_bytes);
     v("fragment_bytes", fragment_bytes);
     v("write", write);
     v("receive", receive);
     v("take", take);
     v("latency_s", latency);
+    v("receive_buffer_bytes", receive_buffer_bytes);
+    v("host_rmem_max_bytes", host_rmem_max_bytes);
+    v("socket_overhead_bytes", socket_overhead_bytes);
+    v("heartbeat_interval_s", heartbeat_interval);
+    v("nack_delay_s", nack_delay);
+    v("whc_high_bytes", whc_high_bytes);
+    v("whc_low_bytes", whc_low_bytes);
+    v("max_queued_rexmit_bytes", max_queued_rexmit_bytes);
+    v("max_blocking_s", max_blocking);
+    v("reliability", reliability);
+    v("history", history);
   }
   void Validate() const;
 };
@@ -235,6 +274,16 @@ template <>
 struct NameTable<sim::Target> {
   static constexpr std::array<std::pair<sim::Target, std::string_view>, 2> kEntries{
       {{sim::Target::kSw, "sw"}, {sim::Target::kHw, "hw"}}};
+};
+template <>
+struct NameTable<sim::History> {
+  static constexpr std::array<std::pair<sim::History, std::string_view>, 2> kEntries{
+      {{sim::History::kKeepLast, "keep_last"}, {sim::History::kKeepAll, "keep_all"}}};
+};
+template <>
+struct NameTable<sim::Reliability> {
+  static constexpr std::array<std::pair<sim::Reliability, std::string_view>, 2> kEntries{
+      {{sim::Reliability::kReliable, "reliable"}, {sim::Reliability::kBestEffort, "best_effort"}}};
 };
 template <>
 struct NameTable<sim::Transport> {

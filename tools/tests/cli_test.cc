@@ -222,3 +222,39 @@ TEST(CliTest, ANegativeSeedOrAFolderAsScenarioIsUnusableInput) {
 
 }  // namespace
 }  // namespace autonomsim
+
+namespace autonomsim::cli {
+namespace {
+
+// `autonomsim transport` (issue 32): the DDS link alone. A 0.9 MB image at 30 Hz on the x86
+// profile fits the receive buffer (2 MiB): every sample offered after the warm-up arrives, nothing
+// is dropped; --json carries the keys bench/dds_vs_cyclone.sh reads.
+TEST(CliTest, TransportPrintsTheDeliveredRateAsJson) {
+  const Result r = testing::Cli(
+      "transport --bytes 921600 --rate-hz 30 --seconds 3 --warmup 1 "
+      "--profile scenarios/platforms/x86_loopback.yaml --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  for (const char* key :
+       {"delivered_hz", "latency_p50_ms", "latency_p95_ms", "dropped_datagrams", "repairs"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_DOUBLE_EQ(j["delivered_hz"].get<double>(), 30.0);
+  EXPECT_EQ(j["dropped_datagrams"].get<int>(), 0);
+  EXPECT_EQ(j["datagrams_per_sample"].get<int>(), 69);  // 686 fragments of 1 344 B, 10 a datagram
+}
+
+TEST(CliTest, TransportRefusesWhatItCannotRun) {
+  const Result rate = testing::Cli("transport --bytes 1000 --rate-hz 0");
+  EXPECT_EQ(rate.exit_code, 2);
+  EXPECT_THAT(rate.output, ::testing::HasSubstr("--rate-hz must be > 0"));
+  const Result key = testing::Cli("transport --bytes 1000 --rate-hz 30 --set dds.fragment_bytes=0");
+  EXPECT_EQ(key.exit_code, 2);
+  EXPECT_THAT(key.output, ::testing::HasSubstr("fragment_bytes must be > 0"));
+  const Result missing = testing::Cli("transport --rate-hz 30");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_THAT(missing.output, ::testing::HasSubstr("--bytes"));
+}
+
+}  // namespace
+}  // namespace autonomsim::cli

@@ -141,7 +141,7 @@ PlatformProfile SimpleProfile() {
   PlatformProfile p;
   p.name = "simple";
   p.cpu.memcpy_bytes_per_s = 1e9;  // 1 ns per byte and copy
-  p.dds.datagram_bytes = 1000;
+  p.dds.max_message_bytes = 1000;
   p.dds.fragment_bytes = 100;
   p.dds.write = {.fixed = std::chrono::microseconds(10),
                  .copies = 2,
