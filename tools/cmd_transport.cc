@@ -2,9 +2,8 @@
 // (sim/platform/transport_run.h), what bench/dds_vs_cyclone.sh sets beside Cyclone DDS's ddsperf.
 #include <fmt/format.h>
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "sim/core/config.h"
 #include "sim/platform/transport_run.h"
@@ -36,24 +35,27 @@ void PrintText(const sim::TransportRunResult& r, const sim::TransportRunOptions&
                const std::string& profile_name) {
   const sim::DdsLinkParams& p = r.params;
   const sim::DdsLinkStats& s = r.stats;
-  fmt::print("transport: {} B at {:g} Hz for {:g} s ({:g} s warm-up not measured), profile {}, "
-             "{} cores, {} busy {}\n",
-             o.bytes, o.rate_hz, ToSeconds(o.duration), ToSeconds(o.warmup), profile_name,
-             r.cores, o.background_cores, o.background_cores == 1 ? "loop" : "loops");
-  fmt::print("  dds: {} {}, {} datagrams of up to {} fragments of {} B; socket buffer 2 x "
-             "min({}, {}) = {} B, {} B per datagram of overhead\n",
-             ToName(p.reliability), p.keep_all ? "keep_all" : fmt::format("keep_last {}", p.depth),
-             p.DatagramsFor(o.bytes), p.FragmentsPerDatagram(), p.fragment_bytes,
-             p.receive_buffer_bytes, p.host_rmem_max_bytes, p.SocketCapacityBytes(),
-             p.socket_overhead_bytes);
-  fmt::print("  delivered {:.1f} Hz; latency p50 {:.1f} ms, p95 {:.1f} ms (write call to "
-             "delivery); {} of {} ticks found the last write still running\n",
-             r.delivered_hz, r.latency_p50_ms, r.latency_p95_ms,
-             r.offered - s.samples_written - s.write_timeouts, r.offered);
-  fmt::print("  datagrams dropped {}, repairs (NACKs) {}, datagrams sent again {}; samples "
-             "written {}, delivered {}, lost {}; writes that timed out {}\n",
-             s.datagrams_dropped, s.nacks, s.datagrams_retransmitted, s.samples_written,
-             s.samples_delivered, s.samples_lost, s.write_timeouts);
+  fmt::print(
+      "transport: {} B at {:g} Hz for {:g} s ({:g} s warm-up not measured), profile {}, "
+      "{} cores, {} busy {}\n",
+      o.bytes, o.rate_hz, ToSeconds(o.duration), ToSeconds(o.warmup), profile_name, r.cores,
+      o.background_cores, o.background_cores == 1 ? "loop" : "loops");
+  fmt::print(
+      "  dds: {} {}, {} datagrams of up to {} fragments of {} B; socket buffer 2 x "
+      "min({}, {}) = {} B, {} B per datagram of overhead\n",
+      ToName(p.reliability), p.keep_all ? "keep_all" : fmt::format("keep_last {}", p.depth),
+      p.DatagramsFor(o.bytes), p.FragmentsPerDatagram(), p.fragment_bytes, p.receive_buffer_bytes,
+      p.host_rmem_max_bytes, p.SocketCapacityBytes(), p.socket_overhead_bytes);
+  fmt::print(
+      "  delivered {:.1f} Hz; latency p50 {:.1f} ms, p95 {:.1f} ms (write call to "
+      "delivery); {} of {} ticks found the last write still running\n",
+      r.delivered_hz, r.latency_p50_ms, r.latency_p95_ms,
+      r.offered - s.samples_written - s.write_timeouts, r.offered);
+  fmt::print(
+      "  datagrams dropped {}, repairs (NACKs) {}, datagrams sent again {}; samples "
+      "written {}, delivered {}, lost {}; writes that timed out {}\n",
+      s.datagrams_dropped, s.nacks, s.datagrams_retransmitted, s.samples_written,
+      s.samples_delivered, s.samples_lost, s.write_timeouts);
 }
 
 }  // namespace
@@ -107,8 +109,10 @@ Command AddTransportCommand(CLI::App& parent) {
   return {cmd, [o] {
             if (!std::isfinite(o->seconds) || !std::isfinite(o->warmup_s) ||
                 std::abs(o->seconds) > kMaxTimeSeconds || std::abs(o->warmup_s) > kMaxTimeSeconds) {
-              fmt::print(stderr, "error: --seconds and --warmup must be finite times, got {} and "
-                                 "{}\n", o->seconds, o->warmup_s);
+              fmt::print(stderr,
+                         "error: --seconds and --warmup must be finite times, got {} and "
+                         "{}\n",
+                         o->seconds, o->warmup_s);
               return kExitUnusableInput;
             }
             sim::TransportRunOptions options{.bytes = o->bytes,

@@ -28,7 +28,8 @@ std::int64_t DdsLinkParams::DatagramsFor(std::int64_t sample_bytes) const {
       1, CeilDiv(CeilDiv(sample_bytes, fragment_bytes), FragmentsPerDatagram()));
 }
 
-DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const DdsTopicQos& topic, int depth) {
+DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const DdsTopicQos& topic,
+                               int depth) {
   const DdsProfile& dds = profile.dds;
   DdsLinkParams p;
   p.max_message_bytes = topic.max_message_bytes.value_or(dds.max_message_bytes);
@@ -134,9 +135,9 @@ void DdsSocket::TakeBatch() {
     work += Seconds(p.receive.per_datagram);
     if (d.index >= 0) {
       const double fragments = static_cast<double>(CeilDiv(d.bytes, p.fragment_bytes));
-      work += fragments * Seconds(p.receive.per_fragment) +
-              static_cast<double>(p.receive.copies) * static_cast<double>(d.bytes) /
-                  p.memcpy_bytes_per_s;
+      work += fragments * Seconds(p.receive.per_fragment) + static_cast<double>(p.receive.copies) *
+                                                                static_cast<double>(d.bytes) /
+                                                                p.memcpy_bytes_per_s;
       if (d.index == 0) work += Seconds(p.receive.fixed);
     }
     batch_.push_back(d);
@@ -169,8 +170,9 @@ DdsLink::DdsLink(Kernel& kernel, Cpu& cpu, DdsLinkParams params, int writer_owne
       delivered_(std::move(delivered)) {
   if (params_.fragment_bytes <= 0 || params_.max_message_bytes <= 0 || params_.depth < 1 ||
       params_.batch_datagrams < 1 || params_.heartbeat_interval <= Duration{0}) {
-    throw std::invalid_argument("DdsLink: fragment and message sizes, depth, batch and heartbeat "
-                                "interval must be > 0");
+    throw std::invalid_argument(
+        "DdsLink: fragment and message sizes, depth, batch and heartbeat "
+        "interval must be > 0");
   }
 }
 
@@ -256,9 +258,9 @@ std::int64_t DdsLink::DatagramBytes(std::int64_t sample_bytes, std::int64_t inde
 // side's last copy; the others are the serialization, paid up front).
 double DdsLink::SendCoreSeconds(std::int64_t datagram_bytes) const {
   const double fragments = static_cast<double>(CeilDiv(datagram_bytes, params_.fragment_bytes));
-  const double copy =
-      params_.write.copies > 0 ? static_cast<double>(datagram_bytes) / params_.memcpy_bytes_per_s
-                               : 0.0;
+  const double copy = params_.write.copies > 0
+                          ? static_cast<double>(datagram_bytes) / params_.memcpy_bytes_per_s
+                          : 0.0;
   return Seconds(params_.write.per_datagram) + fragments * Seconds(params_.write.per_fragment) +
          copy;
 }
@@ -453,8 +455,7 @@ void DdsLink::OnHeartbeat(std::int64_t first_seq, std::int64_t last_seq) {
   const std::vector<Missing> missing = MissingNow();
   if (missing.empty()) {
     kernel_.ScheduleIn(
-        params_.latency, [this, base = next_deliver_] { OnAckNack(base, {}); },
-        kPriorityPlatform);
+        params_.latency, [this, base = next_deliver_] { OnAckNack(base, {}); }, kPriorityPlatform);
     return;
   }
   const bool news = std::any_of(missing.begin(), missing.end(), [this](const Missing& m) {
@@ -485,7 +486,8 @@ void DdsLink::ScheduleNack(Time at) {
     kernel_.Cancel(nack_);
   }
   nack_at_ = at;
-  nack_ = kernel_.ScheduleAt(at, [this] { SendNack(); }, kPriorityPlatform);
+  nack_ = kernel_.ScheduleAt(
+      at, [this] { SendNack(); }, kPriorityPlatform);
 }
 
 void DdsLink::SendNack() {

@@ -33,11 +33,11 @@ namespace autonomsim::sim {
 // The numbers of one link: Cyclone DDS's settings, the host's socket accounting and the CPU costs
 // (DdsLinkParamsFor builds them from a profile and a topic's QoS).
 struct DdsLinkParams {
-  std::int64_t max_message_bytes{14720};  // one datagram's payload at most (MaxMessageSize)
-  std::int64_t fragment_bytes{1344};      // FragmentSize
+  std::int64_t max_message_bytes{14720};       // one datagram's payload at most (MaxMessageSize)
+  std::int64_t fragment_bytes{1344};           // FragmentSize
   std::int64_t receive_buffer_bytes{1048576};  // SO_RCVBUF requested (SocketReceiveBufferSize)
   std::int64_t host_rmem_max_bytes{212992};    // the kernel's cap on it (net.core.rmem_max)
-  std::int64_t socket_overhead_bytes{0};  // kernel bookkeeping charged per datagram (truesize)
+  std::int64_t socket_overhead_bytes{0};       // kernel bookkeeping charged per datagram (truesize)
   Duration heartbeat_interval{std::chrono::milliseconds(100)};  // HeartbeatInterval
   Duration nack_delay{std::chrono::milliseconds(100)};          // NackDelay
   std::int64_t whc_high_bytes{500000};                          // WhcHigh
@@ -50,7 +50,7 @@ struct DdsLinkParams {
   Reliability reliability{Reliability::kReliable};
   int depth{3};          // keep-last history of the writer
   bool keep_all{false};  // KEEP_ALL history: no depth, and the WHC marks throttle the writer
-  Duration latency{0};          // loopback: a datagram or an ACKNACK from send to the socket
+  Duration latency{0};   // loopback: a datagram or an ACKNACK from send to the socket
   std::int64_t control_bytes{64};  // a periodic heartbeat's datagram
   // Model resolution, not a Cyclone setting: datagrams sent or drained per CPU job.
   int batch_datagrams{8};
@@ -231,7 +231,7 @@ class DdsLink {
   // reader
   std::map<std::int64_t, RxSample> rx_;
   std::int64_t next_deliver_{0};
-  std::int64_t heard_last_seq_{-1};  // the newest sample a heartbeat announced
+  std::int64_t heard_last_seq_{-1};                // the newest sample a heartbeat announced
   std::set<std::pair<std::int64_t, int>> nacked_;  // (seq, datagram) asked for before
   Time last_nack_{0};
   EventId nack_;

@@ -32,8 +32,10 @@ void TransportRunOptions::Validate() const {
   require(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= 10000.0,
           "--rate-hz must be > 0 and <= 10000, got " + Num(rate_hz));
   require(warmup >= Duration{0} && duration > warmup && duration <= std::chrono::hours(1),
-          "--seconds must exceed the warm-up (" + Num(ToSeconds(warmup)) + " s) and be at most "
-          "3600, got " + Num(ToSeconds(duration)));
+          "--seconds must exceed the warm-up (" + Num(ToSeconds(warmup)) +
+              " s) and be at most "
+              "3600, got " +
+              Num(ToSeconds(duration)));
   require(background_cores >= 0 && background_cores <= 1024,
           "--background-load must be between 0 and 1024 cores, got " +
               std::to_string(background_cores));
@@ -52,8 +54,7 @@ TransportRunResult RunTransport(const PlatformProfile& profile,
   // a busy loop: one core's worth of demand, never done within the run
   const double forever_core_s = 2.0 * ToSeconds(options.duration) + 1.0;
   for (int i = 0; i < options.background_cores; ++i) cpu.Start(-1, forever_core_s, 1.0, {});
-  DdsSocket socket(kernel, cpu, -1, result.params.SocketCapacityBytes(),
-                   result.params.sched_slice);
+  DdsSocket socket(kernel, cpu, -1, result.params.SocketCapacityBytes(), result.params.sched_slice);
   std::vector<Time> written_at;  // by sequence number
   std::vector<Duration> latencies;
   const Time measure_from = kZeroTime + options.warmup;

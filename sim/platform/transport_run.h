@@ -13,7 +13,7 @@ namespace autonomsim::sim {
 
 struct TransportRunOptions {
   std::int64_t bytes{4915200};  // one sample
-  double rate_hz{30.0};         // writes offered (a tick that finds the last write running is skipped)
+  double rate_hz{30.0};  // writes offered (a tick that finds the last write running is skipped)
   Duration duration{std::chrono::seconds(10)};
   Duration warmup{std::chrono::seconds(1)};  // not measured
   int background_cores{0};  // busy loops beside the pair, each one core's worth of demand
@@ -24,7 +24,7 @@ struct TransportRunOptions {
 struct TransportRunResult {
   DdsLinkParams params;  // what the link ran with
   int cores{0};
-  double delivered_hz{0.0};  // samples delivered after the warm-up, per second
+  double delivered_hz{0.0};    // samples delivered after the warm-up, per second
   double latency_p50_ms{0.0};  // write call to delivery (0 when nothing was delivered)
   double latency_p95_ms{0.0};
   std::int64_t offered{0};    // ticks of the publisher, skipped ones included

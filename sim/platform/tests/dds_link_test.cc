@@ -43,8 +43,9 @@ struct Bench {
   explicit Bench(DdsLinkParams params)
       : cpu(kernel, 2, nullptr),
         socket(kernel, cpu, -1, params.SocketCapacityBytes()),
-        link(kernel, cpu, params, -1, socket,
-             [this](std::int64_t seq) { delivered.push_back({seq, kernel.Now()}); }) {}
+        link(kernel, cpu, params, -1, socket, [this](std::int64_t seq) {
+          delivered.push_back({seq, kernel.Now()});
+        }) {}
 
   // Writes `bytes` at `at`; the write call's return (time, accepted) lands in `returned`.
   void WriteAt(Time at, std::int64_t bytes) {
@@ -72,7 +73,7 @@ struct Bench {
 Time Ms(double ms) { return kZeroTime + microseconds(std::llround(ms * 1000.0)); }
 
 TEST(DdsLinkParams, CycloneDefaultsCutA4_9MbCloudInto366DatagramsOf10Fragments) {
-  const DdsLinkParams p;  // Cyclone's defaults (reference §10)
+  const DdsLinkParams p;                    // Cyclone's defaults (reference §10)
   EXPECT_EQ(p.FragmentsPerDatagram(), 10);  // 14 720 / 1 344
   EXPECT_EQ(p.DatagramsFor(4915200), 366);  // 3 658 fragments
   // SO_RCVBUF 1 MiB capped by a stock 212 992 B rmem_max, doubled by the kernel
@@ -196,8 +197,8 @@ TEST(DdsLink, AReliableKeepLastWriterDropsWhatFallsOutOfItsHistory) {
   DdsLinkParams p = HandParams(2000);
   p.depth = 1;
   Bench b(p);
-  b.WriteAt(kZeroTime, 5000);    // loses datagram 4 (as above)
-  b.WriteAt(Ms(50), 1000);       // replaces it in the history before the repair (205 ms)
+  b.WriteAt(kZeroTime, 5000);  // loses datagram 4 (as above)
+  b.WriteAt(Ms(50), 1000);     // replaces it in the history before the repair (205 ms)
   b.kernel.RunUntil(Ms(1000));
   ASSERT_EQ(b.delivered.size(), 1u);
   EXPECT_EQ(b.delivered[0].seq, 1);
