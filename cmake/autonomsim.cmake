@@ -18,28 +18,33 @@ function(autonomsim_test name)
                        ${ARG_PROPERTIES} DISCOVERY_TIMEOUT 60)
 endfunction()
 
-# autonomsim_fuzzer(NAME SOURCES src... LIBS lib... SEEDS seeds [DICT dict])
+# autonomsim_fuzzer(NAME SOURCES src... LIBS lib... SEEDS seeds [DICT dict] [TIMEOUT s])
 # A libFuzzer target (<module>/fuzz/). SEEDS: a glob of shipped files, one input each, or a *.seeds
 # file, one input per line; DICT: a libFuzzer dictionary, or CONFIG_KEYS for the config keys
-# tools/fuzz.sh gathers; both relative to the source tree.
+# tools/fuzz.sh gathers; both relative to the source tree. TIMEOUT: the seconds one input may take
+# in the fuzz build before it counts as a hang (default 10).
 # - AUTONOMSIM_FUZZ (preset fuzz, clang): the libFuzzer executable, a member of fuzz_targets;
-#   its line "NAME|SEEDS|DICT" goes to fuzz_targets.txt in the build folder, which tools/fuzz.sh
-#   reads to seed and run it.
+#   its line "NAME|SEEDS|DICT|TIMEOUT" goes to fuzz_targets.txt in the build folder, which
+#   tools/fuzz.sh reads to seed and run it.
 # - AUTONOMSIM_SANITIZE (preset asan, CI): the same code with tools/fuzz/replay_main.cc as its main
 #   instead of libFuzzer, and the ctest test FuzzReplay.NAME feeding it every seed once under the
 #   sanitizers.
 # - Otherwise nothing.
 # The target knows the source tree, for the shipped files it reads.
 function(autonomsim_fuzzer name)
-  cmake_parse_arguments(ARG "" "SEEDS;DICT" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "" "SEEDS;DICT;TIMEOUT" "SOURCES;LIBS" ${ARGN})
   if(NOT ARG_SEEDS)
     message(FATAL_ERROR "autonomsim_fuzzer(${name}): SEEDS is required")
+  endif()
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 10)
   endif()
   if(AUTONOMSIM_FUZZ)
     add_executable(${name} ${ARG_SOURCES})
     target_link_options(${name} PRIVATE -fsanitize=fuzzer)
     add_dependencies(fuzz_targets ${name})
-    set_property(GLOBAL APPEND PROPERTY AUTONOMSIM_FUZZ_TARGETS "${name}|${ARG_SEEDS}|${ARG_DICT}")
+    set_property(GLOBAL APPEND PROPERTY AUTONOMSIM_FUZZ_TARGETS
+                 "${name}|${ARG_SEEDS}|${ARG_DICT}|${ARG_TIMEOUT}")
   elseif(AUTONOMSIM_SANITIZE)
     add_executable(${name} ${ARG_SOURCES} ${PROJECT_SOURCE_DIR}/tools/fuzz/replay_main.cc)
     set(scratch ${CMAKE_BINARY_DIR}/fuzz-tmp)  # the file-reading targets' scratch folders
@@ -54,7 +59,7 @@ function(autonomsim_fuzzer name)
   target_compile_definitions(${name} PRIVATE AUTONOMSIM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 endfunction()
 
-# fuzz_targets.txt in the build folder: the fuzz build's targets, one "NAME|SEEDS|DICT" a line
+# fuzz_targets.txt in the build folder: the fuzz build's targets, one "NAME|SEEDS|DICT|TIMEOUT" a line
 # (autonomsim_fuzzer), for tools/fuzz.sh. Called once, after every module.
 function(autonomsim_write_fuzz_targets)
   if(NOT AUTONOMSIM_FUZZ)

@@ -3,8 +3,9 @@
 # targets (preset fuzz: clang, AddressSanitizer + UndefinedBehaviorSanitizer, build-fuzz/), seeds
 # their corpora from the shipped files, and runs each for SECONDS_PER_TARGET, as many at once as
 # there are cores. Prints the executions per target; exits 1 when any target finds something (a
-# crash, a sanitizer report, a hang over 10 s, over 2 GB of memory in all or in one allocation, or
-# an error message that does not say where), with its input in build-fuzz/artifacts/. Corpora grow in
+# crash, a sanitizer report, a hang: an input over the target's TIMEOUT, 10 s unless its
+# autonomsim_fuzzer call says; over 2 GB of memory in all or in one allocation; or an error
+# message that does not say where), with its input in build-fuzz/artifacts/. Corpora grow in
 # build-fuzz/corpus/<target>/ from run to run. Naming targets builds and runs only those.
 # docs/fuzzing.md says more.
 set -euo pipefail
@@ -47,9 +48,10 @@ seed_lines() {
   done <"$1"
 }
 
-# target|seeds|dictionary, one a line, from the autonomsim_fuzzer calls (cmake/autonomsim.cmake):
-# seeds are a .seeds file (one a line) or a glob of shipped files; CONFIG_KEYS is $dict.
-mapfile -t targets < <(grep -v '^$' "$build/fuzz_targets.txt" | sed "s#|CONFIG_KEYS\$#|$dict#")
+# target|seeds|dictionary|timeout, one a line, from the autonomsim_fuzzer calls
+# (cmake/autonomsim.cmake): seeds are a .seeds file (one a line) or a glob of shipped files;
+# CONFIG_KEYS is $dict; timeout is the seconds one input may take.
+mapfile -t targets < <(grep -v '^$' "$build/fuzz_targets.txt" | sed "s#|CONFIG_KEYS|#|$dict|#")
 
 # the targets asked for, or all
 selected=()
@@ -64,10 +66,10 @@ build_targets=()
 for entry in "${selected[@]}"; do build_targets+=("${entry%%|*}"); done
 cmake --build --preset fuzz -j "$(nproc)" --target "${build_targets[@]}"
 
-# fuzz_one TARGET SEEDS DICTIONARY: seeds the target's corpus and fuzzes it; its exit status goes
-# to $build/logs/TARGET.status, its output to $build/logs/TARGET.log.
+# fuzz_one TARGET SEEDS DICTIONARY TIMEOUT: seeds the target's corpus and fuzzes it; its exit
+# status goes to $build/logs/TARGET.status, its output to $build/logs/TARGET.log.
 fuzz_one() {
-  local target=$1 seeds=$2 dictionary=$3
+  local target=$1 seeds=$2 dictionary=$3 timeout=$4
   local corpus=$build/corpus/$target log=$build/logs/$target.log status=0
   mkdir -p "$corpus"
   if [[ $seeds == *.seeds ]]; then
@@ -75,7 +77,7 @@ fuzz_one() {
   else
     cp $seeds "$corpus/"  # a glob, unquoted on purpose
   fi
-  local args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048
+  local args=(-max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=2048 -malloc_limit_mb=2048
               -print_final_stats=1
               -artifact_prefix="$artifacts/$target-")
   [[ -n $dictionary ]] && args+=(-dict="$dictionary")
@@ -87,12 +89,12 @@ fuzz_one() {
 # folder), then are reported in the order above.
 running=0
 for entry in "${selected[@]}"; do
-  IFS='|' read -r target seeds dictionary <<<"$entry"
+  IFS='|' read -r target seeds dictionary timeout <<<"$entry"
   if ((running >= $(nproc))); then
     wait -n
     running=$((running - 1))
   fi
-  fuzz_one "$target" "$seeds" "$dictionary" &
+  fuzz_one "$target" "$seeds" "$dictionary" "$timeout" &
   running=$((running + 1))
 done
 wait
