@@ -414,20 +414,28 @@ void DdsLink::OnData(const DdsSocket::Datagram& d) {
     rx.datagrams = params_.DatagramsFor(d.sample_bytes);
     rx.got.assign(static_cast<std::size_t>(rx.datagrams), false);
     rx.missing = rx.datagrams;
+    // a best-effort reader's defragmenter holds a few samples; the oldest gives way
+    while (params_.reliability == Reliability::kBestEffort &&
+           static_cast<std::int64_t>(rx_.size()) > params_.defrag_unreliable_max_samples) {
+      GiveUpBefore(rx_.begin()->first + 1);
+    }
   }
+  if (d.seq < next_deliver_) return;
   rx.highest_index = std::max(rx.highest_index, d.index);
   const auto index = static_cast<std::size_t>(d.index);
   if (index >= rx.got.size() || rx.got[index]) return;
   rx.got[index] = true;
   --rx.missing;
   if (rx.missing > 0) return;
-  if (params_.reliability == Reliability::kBestEffort && d.seq > next_deliver_) {
-    // best effort: every older sample not delivered yet is lost; this one goes now
-    rx_.erase(rx_.begin(), rx_.find(d.seq));
-    stats_.samples_lost += d.seq - next_deliver_;
-    next_deliver_ = d.seq;
-  }
+  if (params_.reliability == Reliability::kBestEffort) GiveUpBefore(d.seq);  // this one goes now
   DeliverInOrder();
+}
+
+void DdsLink::GiveUpBefore(std::int64_t seq) {
+  if (seq <= next_deliver_) return;
+  rx_.erase(rx_.begin(), rx_.lower_bound(seq));
+  stats_.samples_lost += seq - next_deliver_;
+  next_deliver_ = seq;
 }
 
 void DdsLink::DeliverInOrder() {

@@ -45,6 +45,8 @@ struct DdsLinkParams {
   std::int64_t max_queued_rexmit_bytes{512000};                 // MaxQueuedRexmitBytes
   // fragments one NACKFRAG can list (Cyclone's NN_FRAGMENT_NUMBER_SET_MAX_BITS)
   std::int64_t nackfrag_max_fragments{256};
+  // incomplete samples a best-effort reader keeps (Internal/DefragUnreliableMaxSamples)
+  std::int64_t defrag_unreliable_max_samples{4};
   // reliability QoS max_blocking_time; none: infinite (rmw_cyclonedds' reliable publishers)
   std::optional<Duration> max_blocking;
   Reliability reliability{Reliability::kReliable};
@@ -207,6 +209,7 @@ class DdsLink {
   void OnHeartbeat(std::int64_t first_seq, std::int64_t last_seq);
   void OnHeartbeatFrag(std::int64_t seq);
   void DeliverInOrder();
+  void GiveUpBefore(std::int64_t seq);  // best effort: what is older and not delivered is lost
   void SendNack();
   void ScheduleNack(Time at);
   std::vector<Missing> MissingNow() const;
