@@ -139,6 +139,20 @@ TEST(DdsLink, BestEffortLosesASampleWithADroppedDatagram) {
   EXPECT_EQ(s.datagrams_retransmitted, 0);
 }
 
+// Best effort keeps at most four incomplete samples (Cyclone's DefragUnreliableMaxSamples): six
+// samples that each lose their last datagram (written every 50 ms, the buffer as above) leave the
+// reader holding the last four, and the first two counted lost when the fifth and sixth began.
+TEST(DdsLink, BestEffortGivesUpTheOldestOfMoreThanFourIncompleteSamples) {
+  DdsLinkParams p = HandParams(2000);
+  p.reliability = Reliability::kBestEffort;
+  Bench b(p);
+  for (int i = 0; i < 6; ++i) b.WriteAt(Ms(50.0 * i), 5000);
+  b.kernel.RunUntil(Ms(1000));
+  EXPECT_EQ(b.link.stats().datagrams_dropped, 6);
+  EXPECT_TRUE(b.delivered.empty());
+  EXPECT_EQ(b.link.stats().samples_lost, 2);
+}
+
 // A KEEP_ALL writer with a high-water mark of 3000 bytes: after the first 5000-byte sample the
 // WHC is above it, so the second write (at 6 ms) blocks until the first is acknowledged. The
 // heartbeat rides in datagram 4, which the receive thread finishes at 13.5 ms: the ACK empties the
