@@ -14,7 +14,9 @@
 #
 # Needs root (unshare -n), ddsperf (tools/install_deps.sh installs cyclonedds-tools) and a release
 # build (build/bin). Not a CI test: it needs a network namespace, takes about 15 minutes, and its
-# figures are only as steady as the machine. Writes its raw outputs under build/dds_vs_cyclone/.
+# figures are only as steady as the machine. Writes its raw outputs under build/dds_vs_cyclone/;
+# with DDS_BENCH_REUSE=1 it reads ddsperf's from there instead of running it again (a changed
+# model against the last measurements: seconds, and no root needed).
 # docs/model.md#dds-against-cyclone-dds has the table and how to read it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,9 +29,11 @@ out=build/dds_vs_cyclone
 for tool in ddsperf unshare ip build/bin/autonomsim build/bin/bench_loopback; do
   command -v "$tool" >/dev/null || { echo "dds_vs_cyclone: $tool not found" >&2; exit 2; }
 done
-[[ $(id -u) == 0 ]] || { echo "dds_vs_cyclone: needs root for unshare -n" >&2; exit 2; }
+reuse="${DDS_BENCH_REUSE:-0}"
+[[ $reuse == 1 || $(id -u) == 0 ]] || { echo "dds_vs_cyclone: needs root for unshare -n" >&2; exit 2; }
 mkdir -p "$out"
 
+[[ $reuse == 1 ]] && echo "== ddsperf's rates from the logs in $out (DDS_BENCH_REUSE=1)"
 echo "== this machine ($(nproc) cores, $(uname -r)) against $profile"
 build/bin/bench_loopback --benchmark_format=json --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true >"$out/loopback.json" 2>/dev/null
@@ -62,7 +66,9 @@ cyclone_xml() {
 EOF
 }
 
-# one ddsperf run: delivered samples per second after the first 2 s, from the subscriber's lines
+# one ddsperf run: delivered samples per second from 2 s on, from the subscriber's running total
+# (its per-second lines: "[pid] T size B total N lost L delta D ..."; a second without data may
+# print no line, so totals, not deltas)
 ddsperf_run() {  # bytes xml_file log
   unshare -n bash -c "ip link set lo up
     export CYCLONEDDS_URI=file://$PWD/$2
@@ -70,8 +76,11 @@ ddsperf_run() {  # bytes xml_file log
     sleep 0.5
     ddsperf -D $seconds pub ${rate_hz}Hz size $1 >/dev/null 2>&1
     wait" || true
-  awk '$4 == "size" && $2 + 0 >= 2 && $2 + 0 <= '"$seconds"' { n++; sum += $10 }
-       END { if (n) printf "%.2f\n", sum / n; else print "0" }' "$3"
+  ddsperf_rate "$3"
+}
+ddsperf_rate() {  # log
+  awk '$3 == "size" { t = $2 + 0; if (t < 2) { t0 = t; n0 = $6 } else if (t <= '"$seconds"') { t1 = t; n1 = $6 } }
+       END { if (t1 > t0) printf "%.2f\n", (n1 - n0) / (t1 - t0); else print "0" }' "$1"
 }
 
 busy_pids=()
@@ -93,9 +102,15 @@ for load in quiet busy; do
     cyclone_xml "${general[$config]}" "${internal[$config]}" >"$xml"
     for bytes in 921600 1000000 2000000 4915200; do
       rates=()
-      [[ $load == busy ]] && start_busy
+      [[ $load == busy && $reuse != 1 ]] && start_busy
       for run in $(seq "$runs"); do
-        rates+=("$(ddsperf_run "$bytes" "$xml" "$out/$load-$config-$bytes-$run.log")")
+        log="$out/$load-$config-$bytes-$run.log"
+        if [[ $reuse == 1 ]]; then
+          [[ -f $log ]] || { echo "dds_vs_cyclone: no $log to reuse" >&2; exit 2; }
+          rates+=("$(ddsperf_rate "$log")")
+        else
+          rates+=("$(ddsperf_run "$bytes" "$xml" "$log")")
+        fi
       done
       stop_busy
       background=0; [[ $load == busy ]] && background=$(nproc)

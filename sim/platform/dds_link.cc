@@ -73,19 +73,9 @@ bool DdsSocket::Arrive(const Datagram& d) {
   used_ += d.charge;
   buffer_.push_back(d);
   if (!draining_) {
-    draining_ = true;  // woken: it runs now, or once a core is free for it
-    if (Contended()) {
-      wakeup_ = kernel_.ScheduleIn(
-          sched_slice_ / 2,
-          [this] {
-            slice_start_ = kernel_.Now();
-            TakeBatch();
-          },
-          kPriorityPlatform);
-    } else {
-      slice_start_ = kernel_.Now();
-      TakeBatch();
-    }
+    draining_ = true;  // woken: it runs at once, and its first slice begins
+    slice_start_ = kernel_.Now();
+    TakeBatch();
   }
   return true;
 }

@@ -100,8 +100,9 @@ class DdsSocket {
  public:
   // `owner`: whose CPU the receive thread's work counts as (a metrics node index, or -1).
   // `sched_slice` (CpuProfile::sched_slice): while the other jobs want every core, the receive
-  // thread runs in time slices: woken, it waits half a slice for a core; having run a slice, it
-  // waits slice x (demand / cores - 1) while the others run theirs (its fair share, in turns).
+  // thread runs in time slices: woken (it slept: the scheduler's credit) it runs at once, and
+  // having run a slice it waits slice x ((demand + 1) / cores - 1) while the others run theirs
+  // (its fair share, in turns).
   DdsSocket(Kernel& kernel, Cpu& cpu, int owner, std::int64_t capacity_bytes,
             Duration sched_slice = Duration{0});
   DdsSocket(const DdsSocket&) = delete;

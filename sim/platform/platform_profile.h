@@ -71,9 +71,9 @@ struct CpuProfile {
   int cores{1};
   double memcpy_bytes_per_s{1e9};  // one core copying a large buffer (used by every "copy")
   // The OS scheduler's time slice when more threads want to run than there are cores: such a
-  // thread runs one slice, then waits while the others have theirs, and one woken then waits
-  // half a slice on average. Only the DDS receive thread is scheduled so (sim/platform/dds_link.h;
-  // every other job shares the cores as a fluid); 0: that thread too.
+  // thread runs one slice, then waits while the others have theirs (one woken after sleeping runs
+  // at once). Only the DDS receive thread is scheduled so (sim/platform/dds_link.h; every other
+  // job shares the cores as a fluid); 0: that thread too.
   Duration sched_slice{0};
 
   template <class V>

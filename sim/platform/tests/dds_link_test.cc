@@ -225,29 +225,30 @@ TEST(DdsLink, AReliableKeepLastWriterDropsWhatFallsOutOfItsHistory) {
 namespace autonomsim::sim {
 namespace {
 
-// One core, which the writer alone keeps busy while it sends, and a buffer of three datagrams.
-// Without time slices the receive thread shares the core from 1 ms and the buffer never holds
-// more than three. With 6 ms slices, woken while the writer wants the core it waits half a slice
-// and starts at 4 ms with datagrams 0-2 waiting; 3 arrives as it takes 0, and 4 (at 6 ms) finds
-// 1-3 there and is dropped.
-TEST(DdsLink, AReceiveThreadWokenOnABusyCpuWaitsForItsTurnAndTheBufferOverflows) {
+// Woken by a datagram, the receive thread runs at once even on a busy CPU (a thread that slept
+// has the scheduler's credit). One core, which the writer alone keeps busy while it sends, and a
+// buffer of three datagrams: from 1 ms the two share the core. The receive thread takes datagram
+// 0 over 1-6 ms and 1 over 6-10 ms (half the core until the writer ends at 9 ms), then 2, 3, 4 at
+// 2.5 ms each: whole at 17.5 ms. Its 6 ms slice never runs out while the writer still wants the
+// core, so slices change nothing here.
+TEST(DdsLink, AReceiveThreadWokenOnABusyCpuRunsAtOnce) {
   for (const int slice_ms : {0, 6}) {
     Kernel kernel;
     Cpu cpu(kernel, 1, nullptr);
     DdsLinkParams p = HandParams(3000);
     DdsSocket socket(kernel, cpu, -1, p.SocketCapacityBytes(), milliseconds(slice_ms));
-    DdsLink link(kernel, cpu, p, -1, socket, {});
+    Time delivered{0};
+    DdsLink link(kernel, cpu, p, -1, socket, [&](std::int64_t) { delivered = kernel.Now(); });
     link.Write(5000, {});
     kernel.RunUntil(kZeroTime + milliseconds(1000));
-    EXPECT_EQ(link.stats().datagrams_dropped, slice_ms == 0 ? 0 : 1) << slice_ms << " ms";
-    EXPECT_EQ(link.stats().samples_delivered, 1) << slice_ms << " ms";
+    EXPECT_EQ(link.stats().datagrams_dropped, 0) << slice_ms << " ms";
+    EXPECT_EQ(delivered, Ms(17.5)) << slice_ms << " ms";
   }
 }
 
-// Two busy loops and the writer want both cores: woken, the receive thread waits half a slice,
-// and after each 2 ms slice it is off the core for (3 + 1) / 2 - 1 = 1 slice. A 40-datagram
-// sample into a buffer that holds it all loses nothing, but arrives later than when the thread
-// shares the cores as a fluid.
+// Two busy loops and the writer want both cores: after each 2 ms slice the receive thread is off
+// the core for (3 + 1) / 2 - 1 = 1 slice. A 40-datagram sample into a buffer that holds it all
+// loses nothing, but arrives later than when the thread shares the cores as a fluid.
 TEST(DdsLink, OnAContendedCpuTheReceiveThreadDrainsInTurns) {
   Duration arrival[2];
   for (const int slice_ms : {0, 2}) {
