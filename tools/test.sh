@@ -11,8 +11,11 @@ tools/install_deps.sh
 tools/reset_stale_build.sh build build-asan
 # AUTONOMSIM_DEBUG_LINES_ONLY=1 (set by CI): line tables instead of full debug info, see CMakeLists.txt.
 configure_args=(-DAUTONOMSIM_DEBUG_LINES_ONLY="${AUTONOMSIM_DEBUG_LINES_ONLY:-0}")
+# AUTONOMSIM_BUILD_BENCH=0 (set by CI): the release build without the benchmarks (bench/), which
+# no test runs; a developer's build and the README's commands build them.
+release_args=("${configure_args[@]}" -DAUTONOMSIM_BUILD_BENCH="${AUTONOMSIM_BUILD_BENCH:-1}")
 
-cmake --preset release "${configure_args[@]}" >/dev/null
+cmake --preset release "${release_args[@]}" >/dev/null
 stage "release build"
 cmake --build --preset release -j "$jobs"
 # One test more than cores: the real-time tests (label realtime, started first) spend a minute
