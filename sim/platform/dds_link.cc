@@ -66,7 +66,7 @@ DdsSocket::DdsSocket(Kernel& kernel, Cpu& cpu, int owner, std::int64_t capacity_
   if (capacity_bytes <= 0) throw std::invalid_argument("DdsSocket: capacity must be > 0");
 }
 
-DdsSocket::~DdsSocket() { kernel_.Cancel(wakeup_); }
+DdsSocket::~DdsSocket() { kernel_.Cancel(turn_); }
 
 bool DdsSocket::Arrive(const Datagram& d) {
   if (used_ + d.charge > capacity_) return false;
@@ -96,7 +96,7 @@ void DdsSocket::Drain() {
     // its turn comes back after the others' (demand + itself) / cores - 1 slices
     const double turns = (cpu_.demand() + 1.0) / static_cast<double>(cpu_.cores()) - 1.0;
     const Duration off = FromSeconds(ToSeconds(sched_slice_) * std::max(0.0, turns));
-    wakeup_ = kernel_.ScheduleIn(
+    turn_ = kernel_.ScheduleIn(
         off,
         [this] {
           slice_start_ = kernel_.Now();
@@ -293,6 +293,12 @@ void DdsLink::Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, b
                               .heartbeat = heartbeat,
                               .first_seq = WhcFirstSeq(),
                               .last_seq = last_sent_seq_};
+  Send(d);
+}
+
+// A datagram reaches the reader's socket `latency` after it leaves; the kernel drops it there
+// when it does not fit.
+void DdsLink::Send(const DdsSocket::Datagram& d) {
   kernel_.ScheduleIn(
       params_.latency,
       [this, d] {
@@ -318,12 +324,7 @@ void DdsLink::SendHeartbeat() {
                               .first_seq = whc_.front().seq,
                               .last_seq = last_sent_seq_};
   ++stats_.datagrams_sent;
-  kernel_.ScheduleIn(
-      params_.latency,
-      [this, d] {
-        if (!socket_.Arrive(d)) ++stats_.datagrams_dropped;
-      },
-      kPriorityPlatform);
+  Send(d);
 }
 
 // Periodic heartbeats while the WHC holds unacknowledged samples: a write arms one for

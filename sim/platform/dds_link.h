@@ -142,8 +142,8 @@ class DdsSocket {
   std::int64_t used_{0};
   Time slice_start_{0};  // when the thread's current turn on a core began
   std::deque<Datagram> buffer_;
-  bool draining_{false};  // the receive thread is awake (running, or waiting for a core)
-  EventId wakeup_;
+  bool draining_{false};         // the receive thread is awake (running, or waiting for a core)
+  EventId turn_;                 // the receive thread's next turn on a core, while it waits for one
   std::vector<Datagram> batch_;  // being processed by the receive thread
 };
 
@@ -199,6 +199,7 @@ class DdsLink {
   void SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t from, Written written);
   void Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, bool heartbeat);
   void SendHeartbeat();
+  void Send(const DdsSocket::Datagram& d);
   std::int64_t WhcFirstSeq() const;
   void ScheduleHeartbeat();
   void OnAckNack(std::int64_t base, const std::vector<Missing>& missing);
