@@ -28,7 +28,33 @@ std::int64_t DdsLinkParams::DatagramsFor(std::int64_t sample_bytes) const {
       1, CeilDiv(CeilDiv(sample_bytes, fragment_bytes), FragmentsPerDatagram()));
 }
 
-DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const DdsTopicQos& topic,
+std::int64_t DdsLinkParams::DatagramBytes(std::int64_t sample_bytes, std::int64_t index) const {
+  const std::int64_t per = FragmentsPerDatagram() * fragment_bytes;
+  return std::max<std::int64_t>(0, std::min(per, sample_bytes - index * per));
+}
+
+double DdsLinkParams::WriteUpFrontCoreSeconds(std::int64_t sample_bytes) const {
+  return Seconds(write.fixed) + static_cast<double>(std::max(0, write.copies - 1)) *
+                                    static_cast<double>(sample_bytes) / memcpy_bytes_per_s;
+}
+
+double DdsLinkParams::SendCoreSeconds(std::int64_t datagram_bytes) const {
+  const double fragments = static_cast<double>(CeilDiv(datagram_bytes, fragment_bytes));
+  const double copy =
+      write.copies > 0 ? static_cast<double>(datagram_bytes) / memcpy_bytes_per_s : 0.0;
+  return Seconds(write.per_datagram) + fragments * Seconds(write.per_fragment) + copy;
+}
+
+double DdsLinkParams::SampleCoreSeconds(const DdsSideCost& side, std::int64_t sample_bytes) const {
+  // the terms in DdsSideCoreSeconds' order (sim/platform/platform.cc), for the same sum
+  const double datagrams = static_cast<double>(DatagramsFor(sample_bytes));
+  const double fragments = static_cast<double>(CeilDiv(sample_bytes, fragment_bytes));
+  return Seconds(side.fixed) +
+         static_cast<double>(side.copies) * static_cast<double>(sample_bytes) / memcpy_bytes_per_s +
+         datagrams * Seconds(side.per_datagram) + fragments * Seconds(side.per_fragment);
+}
+
+DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const TopicTransportConfig& topic,
                                int depth) {
   const DdsProfile& dds = profile.dds;
   DdsLinkParams p;
@@ -120,6 +146,12 @@ void DdsSocket::TakeBatch() {
   while (!buffer_.empty() &&
          static_cast<int>(batch_.size()) < buffer_.front().link->params().batch_datagrams) {
     const Datagram& d = buffer_.front();
+    // a batch is one sample's datagrams, or one control datagram
+    if (!batch_.empty() &&
+        (d.link != batch_.front().link || d.reader != batch_.front().reader ||
+         d.seq != batch_.front().seq || d.index < 0 || batch_.front().index < 0)) {
+      break;
+    }
     const DdsLinkParams& p = d.link->params();
     used_ -= d.charge;
     work += Seconds(p.receive.per_datagram);
@@ -133,15 +165,23 @@ void DdsSocket::TakeBatch() {
     batch_.push_back(d);
     buffer_.pop_front();
   }
-  cpu_.Start(owner_, work, 1.0, [this] {
+  // a whole sample in one batch: its cost as DdsCost prices it
+  const Datagram& first = batch_.front();
+  const DdsLinkParams& fp = first.link->params();
+  if (first.index == 0 && batch_.back().index + 1 == static_cast<int>(batch_.size()) &&
+      static_cast<std::int64_t>(batch_.size()) == fp.DatagramsFor(first.sample_bytes)) {
+    work = fp.SampleCoreSeconds(fp.receive, first.sample_bytes);
+  }
+  cpu_.Start(owner_, work, 1.0, [this, start = kernel_.Now(), work] {
     const std::vector<Datagram> done = std::move(batch_);
     batch_.clear();
+    if (batch_done_) batch_done_(start, work);
     for (const Datagram& d : done) {
       if (d.index >= 0) d.link->OnData(d);
       if (d.heartbeat) {
-        d.link->OnHeartbeat(d.first_seq, d.last_seq);
+        d.link->OnHeartbeat(d.reader, d.first_seq, d.last_seq);
       } else if (d.index >= 0 && d.link->params().reliability == Reliability::kReliable) {
-        d.link->OnHeartbeatFrag(d.seq);
+        d.link->OnHeartbeatFrag(d.reader, d.seq);
       }
     }
     Drain();
@@ -152,24 +192,25 @@ void DdsSocket::TakeBatch() {
 
 DdsLink::DdsLink(Kernel& kernel, Cpu& cpu, DdsLinkParams params, int writer_owner,
                  DdsSocket& socket, Delivered delivered)
-    : kernel_(kernel),
-      cpu_(cpu),
-      params_(std::move(params)),
-      writer_owner_(writer_owner),
-      socket_(socket),
-      delivered_(std::move(delivered)) {
+    : kernel_(kernel), cpu_(cpu), params_(std::move(params)), writer_owner_(writer_owner) {
   if (params_.fragment_bytes <= 0 || params_.max_message_bytes <= 0 || params_.depth < 1 ||
       params_.batch_datagrams < 1 || params_.heartbeat_interval <= Duration{0}) {
     throw std::invalid_argument(
         "DdsLink: fragment and message sizes, depth, batch and heartbeat "
         "interval must be > 0");
   }
+  AddReader(socket, std::move(delivered));
 }
 
 DdsLink::~DdsLink() {
   kernel_.Cancel(heartbeat_);
-  kernel_.Cancel(nack_);
+  for (Reader& r : readers_) kernel_.Cancel(r.nack);
   for (PendingWrite& w : writes_) kernel_.Cancel(w.timeout);
+}
+
+void DdsLink::AddReader(DdsSocket& socket, Delivered delivered) {
+  if (next_seq_ > 0) throw std::logic_error("DdsLink::AddReader: after the first write");
+  readers_.push_back(Reader{.socket = &socket, .delivered = std::move(delivered)});
 }
 
 std::int64_t DdsLink::Write(std::int64_t bytes, Written written) {
@@ -229,41 +270,30 @@ void DdsLink::SendSample(PendingWrite w) {
       whc_.pop_front();
     }
   }
-  // serialization (and the write path's fixed cost) before the first datagram
-  const double up_front =
-      Seconds(params_.write.fixed) + static_cast<double>(std::max(0, params_.write.copies - 1)) *
-                                         static_cast<double>(w.bytes) / params_.memcpy_bytes_per_s;
-  cpu_.Start(writer_owner_, up_front, 1.0,
+  if (params_.DatagramsFor(w.bytes) <= params_.batch_datagrams) {
+    // one CPU job for the whole write: the sample's cost as DdsCost prices it
+    SendBatches(w.seq, w.bytes, 0, std::move(w.written),
+                params_.SampleCoreSeconds(params_.write, w.bytes));
+    return;
+  }
+  cpu_.Start(writer_owner_, params_.WriteUpFrontCoreSeconds(w.bytes), 1.0,
              [this, seq = w.seq, bytes = w.bytes, written = std::move(w.written)]() mutable {
                SendBatches(seq, bytes, 0, std::move(written));
              });
 }
 
-std::int64_t DdsLink::DatagramBytes(std::int64_t sample_bytes, std::int64_t index) const {
-  const std::int64_t per = params_.FragmentsPerDatagram() * params_.fragment_bytes;
-  return std::max<std::int64_t>(0, std::min(per, sample_bytes - index * per));
-}
-
-// One sendmsg: the datagram's own cost, its fragments' and the copy into the kernel (the write
-// side's last copy; the others are the serialization, paid up front).
-double DdsLink::SendCoreSeconds(std::int64_t datagram_bytes) const {
-  const double fragments = static_cast<double>(CeilDiv(datagram_bytes, params_.fragment_bytes));
-  const double copy = params_.write.copies > 0
-                          ? static_cast<double>(datagram_bytes) / params_.memcpy_bytes_per_s
-                          : 0.0;
-  return Seconds(params_.write.per_datagram) + fragments * Seconds(params_.write.per_fragment) +
-         copy;
-}
-
 // Sends the sample's datagrams from `from` on, a batch per CPU job; each batch reaches the
 // reader's socket `latency` after its job ends. After the last, a reliable writer piggybacks a
 // heartbeat, and the write call returns.
-void DdsLink::SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t from,
-                          Written written) {
+void DdsLink::SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t from, Written written,
+                          std::optional<double> whole_write_core_s) {
   const std::int64_t total = params_.DatagramsFor(bytes);
   const std::int64_t to = std::min(total, from + params_.batch_datagrams);
   double work = 0.0;
-  for (std::int64_t i = from; i < to; ++i) work += SendCoreSeconds(DatagramBytes(bytes, i));
+  for (std::int64_t i = from; i < to; ++i) {
+    work += params_.SendCoreSeconds(params_.DatagramBytes(bytes, i));
+  }
+  if (whole_write_core_s) work = *whole_write_core_s;
   cpu_.Start(writer_owner_, work, 1.0,
              [this, seq, bytes, from, to, total, written = std::move(written)]() mutable {
                const bool reliable = params_.reliability == Reliability::kReliable;
@@ -282,8 +312,9 @@ void DdsLink::SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t fro
              });
 }
 
-void DdsLink::Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, bool heartbeat) {
-  const std::int64_t bytes = DatagramBytes(sample_bytes, index);
+void DdsLink::Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, bool heartbeat,
+                       int reader) {
+  const std::int64_t bytes = params_.DatagramBytes(sample_bytes, index);
   const DdsSocket::Datagram d{.link = this,
                               .seq = seq,
                               .index = index,
@@ -293,18 +324,17 @@ void DdsLink::Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, b
                               .heartbeat = heartbeat,
                               .first_seq = WhcFirstSeq(),
                               .last_seq = last_sent_seq_};
-  Send(d);
+  Send(d, reader);
 }
 
-// A datagram reaches the reader's socket `latency` after it leaves; the kernel drops it there
-// when it does not fit.
-void DdsLink::Send(const DdsSocket::Datagram& d) {
-  kernel_.ScheduleIn(
-      params_.latency,
-      [this, d] {
-        if (!socket_.Arrive(d)) ++stats_.datagrams_dropped;
-      },
-      kPriorityPlatform);
+// Over loopback a datagram reaches the reader's socket within the sendmsg call (the kernel
+// queues it there in the sender's context); the kernel drops it when it does not fit.
+void DdsLink::Send(DdsSocket::Datagram d, int reader) {
+  for (int r = 0; r < static_cast<int>(readers_.size()); ++r) {
+    if (reader >= 0 && r != reader) continue;
+    d.reader = r;
+    if (!readers_[static_cast<std::size_t>(r)].socket->Arrive(d)) ++stats_.datagrams_dropped;
+  }
 }
 
 std::int64_t DdsLink::WhcFirstSeq() const {
@@ -324,7 +354,7 @@ void DdsLink::SendHeartbeat() {
                               .first_seq = whc_.front().seq,
                               .last_seq = last_sent_seq_};
   ++stats_.datagrams_sent;
-  Send(d);
+  Send(d, -1);
 }
 
 // Periodic heartbeats while the WHC holds unacknowledged samples: a write arms one for
@@ -342,15 +372,20 @@ void DdsLink::ScheduleHeartbeat() {
       kPriorityPlatform);
 }
 
-// An ACKNACK: every sample below `base` is acknowledged; `missing` lists what to send again.
-void DdsLink::OnAckNack(std::int64_t base, const std::vector<Missing>& missing) {
-  while (!whc_.empty() && whc_.front().seq < base) {
+// A reader's ACKNACK: every sample below `base` is acknowledged; `missing` lists what to send it
+// again. A sample leaves the WHC when every reader acknowledged it.
+void DdsLink::OnAckNack(int reader, std::int64_t base, const std::vector<Missing>& missing) {
+  Reader& from = readers_[static_cast<std::size_t>(reader)];
+  from.acked = std::max(from.acked, base);
+  std::int64_t all_acked = from.acked;
+  for (const Reader& r : readers_) all_acked = std::min(all_acked, r.acked);
+  while (!whc_.empty() && whc_.front().seq < all_acked) {
     whc_bytes_ -= whc_.front().bytes;
     sample_bytes_.erase(whc_.front().seq);
     whc_.pop_front();
   }
   if (whc_.empty() && kernel_.Cancel(heartbeat_)) heartbeat_ = EventId{};
-  if (!missing.empty()) Retransmit(missing);
+  if (!missing.empty()) Retransmit(reader, missing);
   if (writing_ && !writes_.empty() && writes_.front().blocked &&
       whc_bytes_ <= params_.whc_low_bytes) {
     NextWrite();
@@ -359,15 +394,15 @@ void DdsLink::OnAckNack(std::int64_t base, const std::vector<Missing>& missing) 
 
 // Sends again what a NACK lists and the WHC still holds, up to max_queued_rexmit_bytes, as one
 // CPU job of the writer's side (Cyclone's event thread, not the writing thread).
-void DdsLink::Retransmit(const std::vector<Missing>& missing) {
+void DdsLink::Retransmit(int reader, const std::vector<Missing>& missing) {
   std::vector<std::pair<std::int64_t, int>> again;  // (seq, datagram)
   std::int64_t queued = 0;
   double work = 0.0;
   const auto add = [&](std::int64_t seq, std::int64_t bytes, std::int64_t index) {
-    const std::int64_t b = DatagramBytes(bytes, index);
+    const std::int64_t b = params_.DatagramBytes(bytes, index);
     if (queued > 0 && queued + b > params_.max_queued_rexmit_bytes) return false;
     queued += b;
-    work += SendCoreSeconds(b);
+    work += params_.SendCoreSeconds(b);
     again.emplace_back(seq, static_cast<int>(index));
     return true;
   };
@@ -385,12 +420,12 @@ void DdsLink::Retransmit(const std::vector<Missing>& missing) {
     if (!room) break;
   }
   if (again.empty()) return;
-  cpu_.Start(writer_owner_, work, 1.0, [this, again = std::move(again)] {
+  cpu_.Start(writer_owner_, work, 1.0, [this, reader, again = std::move(again)] {
     for (std::size_t i = 0; i < again.size(); ++i) {
       const auto it = sample_bytes_.find(again[i].first);
       if (it == sample_bytes_.end()) continue;
       // the last datagram of the retransmission carries a HEARTBEAT
-      Transmit(again[i].first, again[i].second, it->second, i + 1 == again.size());
+      Transmit(again[i].first, again[i].second, it->second, i + 1 == again.size(), reader);
       ++stats_.datagrams_retransmitted;
     }
   });
@@ -399,43 +434,52 @@ void DdsLink::Retransmit(const std::vector<Missing>& missing) {
 // ---- DdsLink: the reader ----
 
 void DdsLink::OnData(const DdsSocket::Datagram& d) {
-  if (d.seq < next_deliver_) return;  // delivered or given up already
-  RxSample& rx = rx_[d.seq];
+  Reader& r = readers_[static_cast<std::size_t>(d.reader)];
+  if (d.seq < r.next_deliver) return;  // delivered or given up already
+  RxSample& rx = r.rx[d.seq];
   if (rx.got.empty()) {
     rx.datagrams = params_.DatagramsFor(d.sample_bytes);
     rx.got.assign(static_cast<std::size_t>(rx.datagrams), false);
     rx.missing = rx.datagrams;
     // a best-effort reader's defragmenter holds a few samples; the oldest gives way
     while (params_.reliability == Reliability::kBestEffort &&
-           static_cast<std::int64_t>(rx_.size()) > params_.defrag_unreliable_max_samples) {
-      GiveUpBefore(rx_.begin()->first + 1);
+           static_cast<std::int64_t>(r.rx.size()) > params_.defrag_unreliable_max_samples) {
+      GiveUpBefore(r, r.rx.begin()->first + 1);
     }
   }
-  if (d.seq < next_deliver_) return;
+  if (d.seq < r.next_deliver) return;
   rx.highest_index = std::max(rx.highest_index, d.index);
   const auto index = static_cast<std::size_t>(d.index);
   if (index >= rx.got.size() || rx.got[index]) return;
   rx.got[index] = true;
   --rx.missing;
   if (rx.missing > 0) return;
-  if (params_.reliability == Reliability::kBestEffort) GiveUpBefore(d.seq);  // this one goes now
-  DeliverInOrder();
+  if (params_.reliability == Reliability::kBestEffort) GiveUpBefore(r, d.seq);  // this one goes now
+  DeliverInOrder(r);
 }
 
-void DdsLink::GiveUpBefore(std::int64_t seq) {
-  if (seq <= next_deliver_) return;
-  rx_.erase(rx_.begin(), rx_.lower_bound(seq));
-  stats_.samples_lost += seq - next_deliver_;
-  next_deliver_ = seq;
+void DdsLink::GiveUpBefore(Reader& r, std::int64_t seq) {
+  if (seq <= r.next_deliver) return;
+  r.rx.erase(r.rx.begin(), r.rx.lower_bound(seq));
+  stats_.samples_lost += seq - r.next_deliver;
+  r.next_deliver = seq;
 }
 
-void DdsLink::DeliverInOrder() {
-  for (auto it = rx_.find(next_deliver_); it != rx_.end() && it->second.missing == 0;
-       it = rx_.find(next_deliver_)) {
-    rx_.erase(it);
+void DdsLink::DeliverInOrder(Reader& r) {
+  for (auto it = r.rx.find(r.next_deliver); it != r.rx.end() && it->second.missing == 0;
+       it = r.rx.find(r.next_deliver)) {
+    r.rx.erase(it);
     ++stats_.samples_delivered;
-    if (delivered_) delivered_(next_deliver_);
-    ++next_deliver_;
+    // the subscriber's executor wakes up `latency` after the receive thread delivered the sample
+    if (r.delivered) {
+      kernel_.ScheduleIn(
+          params_.latency,
+          [this, reader = &r - readers_.data(), seq = r.next_deliver] {
+            readers_[static_cast<std::size_t>(reader)].delivered(seq);
+          },
+          kPriorityPlatform);
+    }
+    ++r.next_deliver;
   }
 }
 
@@ -443,62 +487,69 @@ void DdsLink::DeliverInOrder() {
 // `first_seq` are gone from the writer, lost if the reader does not have them. With everything up
 // to `last_seq` here, an ACK goes back. Otherwise a NACK: at once if it asks for something not
 // asked for before, else NackDelay after the last NACK.
-void DdsLink::OnHeartbeat(std::int64_t first_seq, std::int64_t last_seq) {
-  rx_.erase(rx_.begin(), rx_.lower_bound(first_seq));
-  if (next_deliver_ < first_seq) {
-    stats_.samples_lost += first_seq - next_deliver_;
-    next_deliver_ = first_seq;
-    DeliverInOrder();
+void DdsLink::OnHeartbeat(int reader, std::int64_t first_seq, std::int64_t last_seq) {
+  Reader& r = readers_[static_cast<std::size_t>(reader)];
+  r.rx.erase(r.rx.begin(), r.rx.lower_bound(first_seq));
+  if (r.next_deliver < first_seq) {
+    stats_.samples_lost += first_seq - r.next_deliver;
+    r.next_deliver = first_seq;
+    DeliverInOrder(r);
   }
-  heard_last_seq_ = std::max(heard_last_seq_, last_seq);
-  const std::vector<Missing> missing = MissingNow();
+  r.heard_last_seq = std::max(r.heard_last_seq, last_seq);
+  const std::vector<Missing> missing = MissingNow(r);
   if (missing.empty()) {
     kernel_.ScheduleIn(
-        params_.latency, [this, base = next_deliver_] { OnAckNack(base, {}); }, kPriorityPlatform);
+        params_.latency, [this, reader, base = r.next_deliver] { OnAckNack(reader, base, {}); },
+        kPriorityPlatform);
     return;
   }
-  const bool news = std::any_of(missing.begin(), missing.end(), [this](const Missing& m) {
-    return !nacked_.contains({m.seq, m.index});
+  const bool news = std::any_of(missing.begin(), missing.end(), [&r](const Missing& m) {
+    return !r.nacked.contains({m.seq, m.index});
   });
-  ScheduleNack(news ? kernel_.Now() : last_nack_ + params_.nack_delay);
+  ScheduleNack(reader, news ? kernel_.Now() : r.last_nack + params_.nack_delay);
 }
 
 // A HEARTBEAT_FRAG (handle_HeartbeatFrag): a gap in the sample being sent is NACKed NackDelay
 // later ("don't rush it"), unless a NACK is due before.
-void DdsLink::OnHeartbeatFrag(std::int64_t seq) {
-  const auto it = rx_.find(seq);
-  if (it == rx_.end()) return;
+void DdsLink::OnHeartbeatFrag(int reader, std::int64_t seq) {
+  const Reader& r = readers_[static_cast<std::size_t>(reader)];
+  const auto it = r.rx.find(seq);
+  if (it == r.rx.end()) return;
   const RxSample& rx = it->second;
   for (int i = 0; i < rx.highest_index; ++i) {
     if (!rx.got[static_cast<std::size_t>(i)]) {
-      ScheduleNack(kernel_.Now() + params_.nack_delay);
+      ScheduleNack(reader, kernel_.Now() + params_.nack_delay);
       return;
     }
   }
 }
 
 // A NACK at `at` (not before now), or earlier if one is due earlier already.
-void DdsLink::ScheduleNack(Time at) {
+void DdsLink::ScheduleNack(int reader, Time at) {
+  Reader& r = readers_[static_cast<std::size_t>(reader)];
   at = std::max(at, kernel_.Now());
-  if (nack_.valid()) {
-    if (nack_at_ <= at) return;
-    kernel_.Cancel(nack_);
+  if (r.nack.valid()) {
+    if (r.nack_at <= at) return;
+    kernel_.Cancel(r.nack);
   }
-  nack_at_ = at;
-  nack_ = kernel_.ScheduleAt(
-      at, [this] { SendNack(); }, kPriorityPlatform);
+  r.nack_at = at;
+  r.nack = kernel_.ScheduleAt(
+      at, [this, reader] { SendNack(reader); }, kPriorityPlatform);
 }
 
-void DdsLink::SendNack() {
-  nack_ = EventId{};
-  std::vector<Missing> missing = NackList(MissingNow());
+void DdsLink::SendNack(int reader) {
+  Reader& r = readers_[static_cast<std::size_t>(reader)];
+  r.nack = EventId{};
+  std::vector<Missing> missing = NackList(MissingNow(r));
   if (missing.empty()) return;
-  for (const Missing& m : missing) nacked_.insert({m.seq, m.index});
-  last_nack_ = kernel_.Now();
+  for (const Missing& m : missing) r.nacked.insert({m.seq, m.index});
+  r.last_nack = kernel_.Now();
   ++stats_.nacks;
   kernel_.ScheduleIn(
       params_.latency,
-      [this, base = next_deliver_, missing = std::move(missing)] { OnAckNack(base, missing); },
+      [this, reader, base = r.next_deliver, missing = std::move(missing)] {
+        OnAckNack(reader, base, missing);
+      },
       kPriorityPlatform);
 }
 
@@ -527,18 +578,18 @@ std::vector<DdsLink::Missing> DdsLink::NackList(const std::vector<Missing>& miss
 
 // What the reader knows it lacks: whole samples a heartbeat announced that it has nothing of, and
 // the datagrams of the samples it has part of, up to the last one announced.
-std::vector<DdsLink::Missing> DdsLink::MissingNow() const {
+std::vector<DdsLink::Missing> DdsLink::MissingNow(const Reader& r) const {
   std::vector<Missing> missing;
-  const std::int64_t last = std::max(heard_last_seq_, rx_.empty() ? -1 : rx_.rbegin()->first);
-  for (std::int64_t seq = next_deliver_; seq <= last; ++seq) {
-    const auto it = rx_.find(seq);
-    if (it == rx_.end()) {
-      if (seq <= heard_last_seq_) missing.push_back({seq, -1});
+  const std::int64_t last = std::max(r.heard_last_seq, r.rx.empty() ? -1 : r.rx.rbegin()->first);
+  for (std::int64_t seq = r.next_deliver; seq <= last; ++seq) {
+    const auto it = r.rx.find(seq);
+    if (it == r.rx.end()) {
+      if (seq <= r.heard_last_seq) missing.push_back({seq, -1});
       continue;
     }
     const RxSample& rx = it->second;
     const std::size_t known =
-        seq <= heard_last_seq_ ? rx.got.size() : static_cast<std::size_t>(rx.highest_index);
+        seq <= r.heard_last_seq ? rx.got.size() : static_cast<std::size_t>(rx.highest_index);
     for (std::size_t i = 0; i < known; ++i) {
       if (!rx.got[i]) missing.push_back({seq, static_cast<int>(i)});
     }

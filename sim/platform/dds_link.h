@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "sim/core/kernel.h"
+#include "sim/platform/dds_stats.h"
 #include "sim/platform/platform.h"
 #include "sim/platform/platform_profile.h"
 
@@ -66,31 +67,22 @@ struct DdsLinkParams {
   std::int64_t FragmentsPerDatagram() const;
   std::int64_t SocketCapacityBytes() const;
   std::int64_t DatagramsFor(std::int64_t sample_bytes) const;
+  // The payload of a sample's datagram `index` (the last one carries the rest).
+  std::int64_t DatagramBytes(std::int64_t sample_bytes, std::int64_t index) const;
+  // The writer's CPU for a sample of several batches: serialization and the write path's fixed
+  // cost before the first datagram; then one sendmsg each (the datagram's own cost, its
+  // fragments' and the copy into the kernel, the write side's last copy).
+  double WriteUpFrontCoreSeconds(std::int64_t sample_bytes) const;
+  double SendCoreSeconds(std::int64_t datagram_bytes) const;
+  // One side's CPU for a whole sample in one job (a sample that fits one batch, written or
+  // received whole): the same sum as DdsCost's, so that a small sample costs what it always did.
+  double SampleCoreSeconds(const DdsSideCost& side, std::int64_t sample_bytes) const;
 };
 
-// One topic's DDS settings where they differ from the profile's dds section.
-struct DdsTopicQos {
-  std::optional<Reliability> reliability;
-  std::optional<History> history;
-  std::optional<int> receive_buffer_bytes;
-  std::optional<int> fragment_bytes;
-  std::optional<int> max_message_bytes;
-};
-
-// A profile's dds section with a topic's settings (each unset one is the profile's) and its
-// keep-last history depth.
-DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const DdsTopicQos& topic, int depth);
-
-struct DdsLinkStats {
-  std::int64_t samples_written{0};    // accepted by a write
-  std::int64_t write_timeouts{0};     // writes that blocked for max_blocking and failed
-  std::int64_t samples_delivered{0};  // complete, handed to the reader in order
-  std::int64_t samples_lost{0};       // never delivered: best effort, or gone from the WHC
-  std::int64_t datagrams_sent{0};     // first transmissions (data, and periodic heartbeats)
-  std::int64_t datagrams_retransmitted{0};
-  std::int64_t datagrams_dropped{0};  // found the socket buffer full
-  std::int64_t nacks{0};              // repair rounds: NACKs the reader sent
-};
+// A profile's dds section with a topic's own settings (TopicTransportConfig: each unset one is the
+// profile's) and its keep-last history depth.
+DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const TopicTransportConfig& topic,
+                               int depth);
 
 class DdsLink;
 
@@ -111,11 +103,15 @@ class DdsSocket {
 
   std::int64_t used_bytes() const { return used_; }
   std::int64_t capacity_bytes() const { return capacity_; }
+  // `done(start, core_s)` runs each time the receive thread has processed a batch: when the
+  // batch began and the CPU it took (its owner's metrics).
+  void OnBatchDone(std::function<void(Time, double)> done) { batch_done_ = std::move(done); }
 
  private:
   friend class DdsLink;
   struct Datagram {
     DdsLink* link;
+    int reader{0};  // which of the link's readers it goes to
     std::int64_t seq;
     int index;  // the datagram's place in its sample; -1 for a periodic heartbeat
     std::int64_t bytes;
@@ -145,6 +141,7 @@ class DdsSocket {
   bool draining_{false};         // the receive thread is awake (running, or waiting for a core)
   EventId turn_;                 // the receive thread's next turn on a core, while it waits for one
   std::vector<Datagram> batch_;  // being processed by the receive thread
+  std::function<void(Time, double)> batch_done_;
 };
 
 class DdsLink {
@@ -152,10 +149,16 @@ class DdsLink {
   using Written = std::function<void(bool accepted)>;
   using Delivered = std::function<void(std::int64_t seq)>;
 
-  // A writer whose CPU work counts as `writer_owner`'s, and its reader on `socket`: `delivered`
-  // runs with each sample's sequence number when the reader has it whole, in order.
+  // A writer whose CPU work counts as `writer_owner`'s, and its first reader on `socket`:
+  // `delivered` runs with each sample's sequence number when the reader has it whole, in order,
+  // `latency` after its receive thread had it (the subscriber's executor waking up).
   DdsLink(Kernel& kernel, Cpu& cpu, DdsLinkParams params, int writer_owner, DdsSocket& socket,
           Delivered delivered);
+  // Another reader of the same writer (before the first write). A sample's datagrams are sent
+  // once and reach every reader's socket (as a multicast send, or several unicast sends paid
+  // once: the lab's Cyclone network configuration is unknown, docs/model.md#dds-transport); each
+  // reader repairs on its own, and the WHC keeps a sample until every reader acknowledged it.
+  void AddReader(DdsSocket& socket, Delivered delivered);
   DdsLink(const DdsLink&) = delete;
   DdsLink& operator=(const DdsLink&) = delete;
   ~DdsLink();
@@ -166,6 +169,7 @@ class DdsLink {
   std::int64_t Write(std::int64_t bytes, Written written);
 
   const DdsLinkStats& stats() const { return stats_; }
+  std::int64_t next_seq() const { return next_seq_; }  // what the next Write returns
   const DdsLinkParams& params() const { return params_; }
   std::int64_t whc_bytes() const { return whc_bytes_; }
 
@@ -196,33 +200,48 @@ class DdsLink {
   // writer
   void NextWrite();
   void SendSample(PendingWrite w);
-  void SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t from, Written written);
-  void Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, bool heartbeat);
+  // `whole_write_core_s`: a sample sent in one batch costs this, the write's whole CPU
+  void SendBatches(std::int64_t seq, std::int64_t bytes, std::int64_t from, Written written,
+                   std::optional<double> whole_write_core_s = std::nullopt);
+  // One reader's side: its socket, what it has of each sample, and its repair state.
+  struct Reader {
+    DdsSocket* socket;
+    Delivered delivered;
+    std::map<std::int64_t, RxSample> rx;
+    std::int64_t next_deliver{0};
+    std::int64_t heard_last_seq{-1};                // the newest sample a heartbeat announced
+    std::set<std::pair<std::int64_t, int>> nacked;  // (seq, datagram) asked for before
+    Time last_nack{0};
+    EventId nack;
+    Time nack_at{0};        // when nack fires
+    std::int64_t acked{0};  // every sample below it acknowledged
+  };
+
+  // writer; `reader` -1: to every reader
+  void Transmit(std::int64_t seq, int index, std::int64_t sample_bytes, bool heartbeat,
+                int reader = -1);
   void SendHeartbeat();
-  void Send(const DdsSocket::Datagram& d);
+  void Send(DdsSocket::Datagram d, int reader);
   std::int64_t WhcFirstSeq() const;
   void ScheduleHeartbeat();
-  void OnAckNack(std::int64_t base, const std::vector<Missing>& missing);
-  void Retransmit(const std::vector<Missing>& missing);
-  std::int64_t DatagramBytes(std::int64_t sample_bytes, std::int64_t index) const;
-  double SendCoreSeconds(std::int64_t datagram_bytes) const;
+  void OnAckNack(int reader, std::int64_t base, const std::vector<Missing>& missing);
+  void Retransmit(int reader, const std::vector<Missing>& missing);
   // reader
   void OnData(const DdsSocket::Datagram& d);
-  void OnHeartbeat(std::int64_t first_seq, std::int64_t last_seq);
-  void OnHeartbeatFrag(std::int64_t seq);
-  void DeliverInOrder();
-  void GiveUpBefore(std::int64_t seq);  // best effort: what is older and not delivered is lost
-  void SendNack();
-  void ScheduleNack(Time at);
-  std::vector<Missing> MissingNow() const;
+  void OnHeartbeat(int reader, std::int64_t first_seq, std::int64_t last_seq);
+  void OnHeartbeatFrag(int reader, std::int64_t seq);
+  void DeliverInOrder(Reader& r);
+  // best effort: what is older and not delivered is lost
+  void GiveUpBefore(Reader& r, std::int64_t seq);
+  void SendNack(int reader);
+  void ScheduleNack(int reader, Time at);
+  std::vector<Missing> MissingNow(const Reader& r) const;
   std::vector<Missing> NackList(const std::vector<Missing>& missing) const;
 
   Kernel& kernel_;
   Cpu& cpu_;
   DdsLinkParams params_;
   int writer_owner_;
-  DdsSocket& socket_;
-  Delivered delivered_;
   DdsLinkStats stats_;
   // writer
   std::int64_t next_seq_{0};
@@ -233,14 +252,7 @@ class DdsLink {
   std::int64_t last_sent_seq_{-1};  // the newest sample whose datagrams are all sent
   std::map<std::int64_t, std::int64_t> sample_bytes_;  // of the samples the WHC holds
   EventId heartbeat_;
-  // reader
-  std::map<std::int64_t, RxSample> rx_;
-  std::int64_t next_deliver_{0};
-  std::int64_t heard_last_seq_{-1};                // the newest sample a heartbeat announced
-  std::set<std::pair<std::int64_t, int>> nacked_;  // (seq, datagram) asked for before
-  Time last_nack_{0};
-  EventId nack_;
-  Time nack_at_{0};  // when nack_ fires
+  std::vector<Reader> readers_;
 };
 
 }  // namespace autonomsim::sim

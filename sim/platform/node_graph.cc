@@ -73,6 +73,12 @@ int NodeGraph::AddTopicImpl(TopicSpec spec) {
     if (t.spec.name == spec.name) throw ConfigError("topic '" + spec.name + "' added twice");
   }
   Topic topic{.spec = spec};
+  if (spec.transport == Transport::kDds) {
+    const auto it = transport_config_.find(spec.name);
+    topic.dds = DdsLinkParamsFor(
+        platform_.profile(), it != transport_config_.end() ? it->second : TopicTransportConfig{},
+        spec.depth);
+  }
   if (spec.transport == Transport::kZeroCopy) {
     if (!spec.type.fixed_size) {
       throw ConfigError("topic '" + spec.name +
@@ -151,7 +157,13 @@ int NodeGraph::AddPublisherImpl(int node, int topic) {
     throw std::out_of_range("NodeGraph::AddPublisher: no such node or topic");
   }
   publishers_.push_back(Publisher{.node = node, .topic = topic});
-  return static_cast<int>(publishers_.size()) - 1;
+  const int index = static_cast<int>(publishers_.size()) - 1;
+  Topic& t = topics_[static_cast<std::size_t>(topic)];
+  t.publishers.push_back(index);
+  if (t.spec.transport == Transport::kDds) {
+    for (int s : t.subscriptions) AddDdsReader(index, s);
+  }
+  return index;
 }
 
 void NodeGraph::AddSubscriptionImpl(
@@ -178,6 +190,44 @@ void NodeGraph::AddSubscriptionImpl(
   const int index = static_cast<int>(subscriptions_.size()) - 1;
   t.subscriptions.push_back(index);
   n.subscriptions.push_back(index);
+  if (t.spec.transport == Transport::kDds) {
+    for (int p : t.publishers) AddDdsReader(p, index);
+  }
+}
+
+void NodeGraph::AddDdsReader(int publisher, int subscription) {
+  Publisher& pub = publishers_[static_cast<std::size_t>(publisher)];
+  const Topic& topic = topics_[static_cast<std::size_t>(pub.topic)];
+  DdsSocket& socket =
+      SocketFor(subscriptions_[static_cast<std::size_t>(subscription)].node, topic.dds);
+  const std::size_t reader = pub.dds ? pub.dds->subscriptions.size() : 0;
+  DdsLink::Delivered delivered = [this, publisher, reader](std::int64_t seq) {
+    DdsDelivered(publisher, reader, seq);
+  };
+  if (!pub.dds) {
+    pub.dds = std::make_unique<DdsWriter>();
+    pub.dds->link = std::make_unique<DdsLink>(kernel_, platform_.cpu(), topic.dds, Owner(pub.node),
+                                              socket, std::move(delivered));
+  } else {
+    pub.dds->link->AddReader(socket, std::move(delivered));
+  }
+  pub.dds->subscriptions.push_back(subscription);
+  pub.dds->in_flight.emplace_back();
+}
+
+DdsSocket& NodeGraph::SocketFor(int node, const DdsLinkParams& params) {
+  const std::int64_t capacity = params.SocketCapacityBytes();
+  std::unique_ptr<DdsSocket>& socket = nodes_[static_cast<std::size_t>(node)].sockets[capacity];
+  if (socket) return *socket;
+  socket = std::make_unique<DdsSocket>(kernel_, platform_.cpu(), Owner(node), capacity,
+                                       params.sched_slice);
+  socket->OnBatchDone([this, node](Time start, double core_s) {
+    if (!metrics_) return;
+    const int owner = Owner(node);
+    metrics_->ReceiveDone(owner, kernel_.Now(), core_s);
+    metrics_->Span(TraceLane::kReceive, owner, "dds receive", start, kernel_.Now());
+  });
+  return *socket;
 }
 
 void NodeGraph::AddTimer(NodeId node, Time first, Duration period,
@@ -292,6 +342,21 @@ std::size_t NodeGraph::queued(NodeId node) const {
     n += subscriptions_[static_cast<std::size_t>(s)].queue.size();
   }
   return n;
+}
+
+std::optional<DdsLinkStats> NodeGraph::dds_stats(const std::string& topic) const {
+  for (const Topic& t : topics_) {
+    if (t.spec.name != topic) continue;
+    if (t.spec.transport != Transport::kDds) return std::nullopt;
+    DdsLinkStats sum;
+    for (int p : t.publishers) {
+      if (const auto& writer = publishers_[static_cast<std::size_t>(p)].dds) {
+        sum += writer->link->stats();
+      }
+    }
+    return sum;
+  }
+  return std::nullopt;
 }
 
 int NodeGraph::loans_held(int publisher) const {
@@ -416,7 +481,12 @@ std::int64_t NodeGraph::LoanOutputs(const Node& n, Job* job) {
       p.message->chunk = std::make_shared<ChunkLease>(platform_.chunk_pools(), *topic.pool);
     }
     out_bytes += p.message->bytes;
-    job->publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
+    if (topic.spec.transport == Transport::kDds) {
+      if (pub.dds)
+        job->write_core_s += topic.dds.SampleCoreSeconds(topic.dds.write, p.message->bytes);
+    } else {
+      job->publish_core_s += CostOf(topic, p.message->bytes, true).publish_core_s;
+    }
   }
   return out_bytes;
 }
@@ -462,10 +532,47 @@ void NodeGraph::RunCompute(int node) {
 void NodeGraph::RunPublish(int node) {
   const Job& job = *nodes_[static_cast<std::size_t>(node)].job;
   if (job.publish_core_s > 0.0) {
-    platform_.cpu().Start(Owner(node), job.publish_core_s, 1.0, [this, node] { FinishJob(node); });
+    platform_.cpu().Start(Owner(node), job.publish_core_s, 1.0,
+                          [this, node] { NextDdsWrite(node); });
   } else {
-    FinishJob(node);
+    NextDdsWrite(node);
   }
+}
+
+// The job's DDS outputs, one write call after another as the node's thread makes them; the job
+// finishes when the last returns. A write that blocked for max_blocking and failed sends nothing.
+void NodeGraph::NextDdsWrite(int node) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
+  Job& job = *n.job;
+  const std::vector<Outbox::Pending>& pending = job.out.pending_;
+  while (!n.crashed && job.write_output < pending.size()) {
+    const Outbox::Pending& p = pending[job.write_output++];
+    DdsWriter* writer = publishers_[static_cast<std::size_t>(p.publisher)].dds.get();
+    if (p.dropped || writer == nullptr) continue;
+    const std::int64_t seq = writer->link->next_seq();
+    for (auto& queue : writer->in_flight) queue.emplace_back(seq, p.message);
+    writer->link->Write(p.message->bytes, [this, node, writer, seq](bool accepted) {
+      if (!accepted) {
+        for (auto& queue : writer->in_flight) {
+          std::erase_if(queue, [seq](const auto& sample) { return sample.first == seq; });
+        }
+      }
+      NextDdsWrite(node);
+    });
+    return;
+  }
+  FinishJob(node);
+}
+
+// A reader has the writer's sample `seq` whole: the older ones it still waits for are lost.
+void NodeGraph::DdsDelivered(int publisher, std::size_t reader, std::int64_t seq) {
+  DdsWriter& writer = *publishers_[static_cast<std::size_t>(publisher)].dds;
+  auto& queue = writer.in_flight[reader];
+  while (!queue.empty() && queue.front().first < seq) queue.pop_front();
+  if (queue.empty() || queue.front().first != seq) return;
+  std::shared_ptr<const detail::EnvelopeBase> message = std::move(queue.front().second);
+  queue.pop_front();
+  Enqueue(writer.subscriptions[reader], std::move(message));
 }
 
 void NodeGraph::FinishJob(int node) {
@@ -489,59 +596,24 @@ void NodeGraph::FinishJob(int node) {
   if (n.crashed) return;
   if (metrics_) {
     metrics_->JobDone(n.metrics_index, job.start, now,
-                      job.take_core_s + job.compute_core_s + job.publish_core_s, !job.own_cost);
+                      job.take_core_s + job.compute_core_s + job.publish_core_s + job.write_core_s,
+                      !job.own_cost);
     metrics_->Span(TraceLane::kExecutor, n.metrics_index, n.name, job.start, now);
   }
   job.input.reset();  // the taken sample (and its chunk) is released here
   Kick(node);
 }
 
+// Zero-copy: the sample reaches every subscription after the transport's latency. (A DDS sample
+// went into its links as the job wrote it: NextDdsWrite.)
 void NodeGraph::Distribute(const Topic& topic,
                            std::shared_ptr<const detail::EnvelopeBase> message) {
+  if (topic.spec.transport != Transport::kZeroCopy) return;
   for (int s : topic.subscriptions) {
-    const Subscription& sub = subscriptions_[static_cast<std::size_t>(s)];
-    if (topic.spec.transport == Transport::kZeroCopy) {
-      kernel_.ScheduleIn(
-          platform_.profile().zero_copy.latency, [this, s, message] { Enqueue(s, message); },
-          kPriorityPlatform);
-    } else {
-      // DDS: every sample is received (and paid for) by the subscriber's receive thread.
-      Node& subscriber = nodes_[static_cast<std::size_t>(sub.node)];
-      if (subscriber.crashed) continue;
-      const double core_s = DdsCost(platform_.profile(), message->bytes).receive_core_s;
-      subscriber.receive_queue.push_back(ReceiveItem{s, message, core_s});
-      if (!subscriber.receiving) StartReceive(sub.node);
-    }
-  }
-}
-
-void NodeGraph::StartReceive(int node) {
-  Node& n = nodes_[static_cast<std::size_t>(node)];
-  if (n.receive_queue.empty()) {
-    n.receiving = false;
-    return;
-  }
-  n.receiving = true;
-  n.receive_start = kernel_.Now();
-  const double core_s = n.receive_queue.front().core_s;
-  platform_.cpu().Start(Owner(node), core_s, 1.0, [this, node] {
-    Node& receiver = nodes_[static_cast<std::size_t>(node)];
-    ReceiveItem item = std::move(receiver.receive_queue.front());
-    receiver.receive_queue.pop_front();
-    if (metrics_) {
-      metrics_->ReceiveDone(receiver.metrics_index, kernel_.Now(), item.core_s);
-      metrics_->Span(TraceLane::kReceive, receiver.metrics_index,
-                     topics_[static_cast<std::size_t>(
-                                 subscriptions_[static_cast<std::size_t>(item.subscription)].topic)]
-                         .spec.name,
-                     receiver.receive_start, kernel_.Now());
-    }
     kernel_.ScheduleIn(
-        platform_.profile().dds.latency,
-        [this, s = item.subscription, message = std::move(item.message)] { Enqueue(s, message); },
+        platform_.profile().zero_copy.latency, [this, s, message] { Enqueue(s, message); },
         kPriorityPlatform);
-    StartReceive(node);
-  });
+  }
 }
 
 void NodeGraph::Enqueue(int subscription, std::shared_ptr<const detail::EnvelopeBase> message) {
@@ -595,6 +667,12 @@ Board::Board(Kernel& kernel, std::string name, const PlatformConfig& config,
       platform_(kernel, WithConfigOverrides(std::move(profile), config), &metrics_),
       graph_(platform_, &metrics_, rng, name_ + "/") {
   graph_.ApplyConfig(config_);
+}
+
+BoardReport Board::Report(Time end) const {
+  BoardReport out{name_, BuildReport(metrics_, end)};
+  for (TopicReport& topic : out.report.topics) topic.dds = graph_.dds_stats(topic.name);
+  return out;
 }
 
 void Board::Finish(Time first) {

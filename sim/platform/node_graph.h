@@ -27,6 +27,7 @@
 
 #include "sim/core/kernel.h"
 #include "sim/core/random.h"
+#include "sim/platform/dds_link.h"
 #include "sim/platform/node_metrics.h"
 #include "sim/platform/platform.h"
 #include "sim/platform/platform_profile.h"
@@ -212,6 +213,9 @@ class NodeGraph {
   // Messages waiting in the node's subscriptions.
   std::size_t queued(NodeId node) const;
   int loans_held(int publisher) const;
+  // A DDS topic's links summed (every publisher to every subscription), over the whole run;
+  // nothing for a zero-copy topic or an unknown name.
+  std::optional<DdsLinkStats> dds_stats(const std::string& topic) const;
   Platform& platform() { return platform_; }
 
  private:
@@ -238,12 +242,23 @@ class NodeGraph {
     TopicSpec spec;
     int metrics_index{-1};
     std::vector<int> subscriptions;
+    std::vector<int> publishers;
     std::optional<int> pool;  // zero-copy chunk pool
+    DdsLinkParams dds;        // DDS: the profile's settings with the topic's own
+  };
+  // A DDS publisher's writer and its readers (the topic's subscriptions): the link, and per
+  // reader the samples on their way by sequence number until they are delivered or lost.
+  struct DdsWriter {
+    std::unique_ptr<DdsLink> link;
+    std::vector<int> subscriptions;  // by reader
+    std::vector<std::deque<std::pair<std::int64_t, std::shared_ptr<const detail::EnvelopeBase>>>>
+        in_flight;  // by reader
   };
   struct Publisher {
     int node;
     int topic;
     int loans_held{0};
+    std::unique_ptr<DdsWriter> dds;  // DDS, once the topic has a subscription
   };
   struct Job {
     explicit Job(const NodeGraph* graph) : out(graph) {}
@@ -254,13 +269,10 @@ class NodeGraph {
     double compute_core_s{0.0};  // software work, or the delegate's CPU for hardware
     Duration fabric{0};          // hardware only
     double max_parallelism{1.0};
-    double publish_core_s{0.0};
-    bool own_cost{false};  // a subscription's own cost, not the node's
-  };
-  struct ReceiveItem {
-    int subscription;
-    std::shared_ptr<const detail::EnvelopeBase> message;
-    double core_s;
+    double publish_core_s{0.0};   // zero-copy publishes; DDS writes are the links' CPU jobs
+    double write_core_s{0.0};     // the DDS writes' first transmissions (the job's nominal cost)
+    bool own_cost{false};         // a subscription's own cost, not the node's
+    std::size_t write_output{0};  // the DDS writes, one after another as on the node's thread
   };
   struct Node {
     std::string name;
@@ -275,9 +287,9 @@ class NodeGraph {
     std::vector<int> subscriptions;
     std::vector<int> timers;
     std::optional<Job> job;  // the running job
-    std::deque<ReceiveItem> receive_queue;
-    bool receiving{false};
-    Time receive_start{0};
+    // DDS: the receive sockets of its subscriptions, by capacity (a topic that asks for its own
+    // receive buffer gets a socket of its own, as a reader in a participant of its own would)
+    std::map<std::int64_t, std::unique_ptr<DdsSocket>> sockets;
     // HoldJob: the running job waits beyond its work until ReleaseJob or hold_timeout
     bool held{false};
     EventId hold_timeout;
@@ -316,7 +328,10 @@ class NodeGraph {
   void RunPublish(int node);
   void FinishJob(int node);
   void Distribute(const Topic& topic, std::shared_ptr<const detail::EnvelopeBase> message);
-  void StartReceive(int node);
+  void AddDdsReader(int publisher, int subscription);
+  DdsSocket& SocketFor(int node, const DdsLinkParams& params);
+  void NextDdsWrite(int node);
+  void DdsDelivered(int publisher, std::size_t reader, std::int64_t seq);
   void Enqueue(int subscription, std::shared_ptr<const detail::EnvelopeBase> message);
   double Jitter(Node& node, double jitter);
   int Owner(int node) const { return nodes_[static_cast<std::size_t>(node)].metrics_index; }
@@ -429,7 +444,8 @@ class Board {
   Platform& platform() { return platform_; }
   const RunMetrics& metrics() const { return metrics_; }
   const PlatformProfile& profile() const { return platform_.profile(); }
-  BoardReport Report(Time end) const { return {name_, BuildReport(metrics_, end)}; }
+  // The metrics' report, its DDS topics with their links' counts.
+  BoardReport Report(Time end) const;
 
  private:
   std::string name_;

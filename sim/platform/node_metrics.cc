@@ -303,6 +303,17 @@ nlohmann::json ReportJson(const MetricsReport& report) {
                         {"max", OptionalSeries(t.latency_max_ms_per_bin)}}},
                       {"drops", t.drops},
                       {"loan_failures", t.loan_failures}});
+    if (t.dds) {
+      const DdsLinkStats& d = *t.dds;
+      topics.back()["dds"] = {{"samples_written", d.samples_written},
+                              {"write_timeouts", d.write_timeouts},
+                              {"samples_delivered", d.samples_delivered},
+                              {"samples_lost", d.samples_lost},
+                              {"datagrams_sent", d.datagrams_sent},
+                              {"datagrams_retransmitted", d.datagrams_retransmitted},
+                              {"datagrams_dropped", d.datagrams_dropped},
+                              {"nacks", d.nacks}};
+    }
   }
   return {{"cores", report.cores},
           {"window_s", report.window_s},

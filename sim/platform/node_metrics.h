@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/platform/dds_stats.h"
 #include "sim/platform/duration_histogram.h"
 #include "world/time.h"
 
@@ -157,6 +158,9 @@ struct TopicReport {
   // Latency over time, per load bin from t = 0 (the whole run, as cpu_load_percent): mean and
   // max of the messages published in the bin; empty where none was.
   std::vector<std::optional<double>> latency_mean_ms_per_bin, latency_max_ms_per_bin;
+  // DDS: what its links counted over the whole run, every publisher to every subscription
+  // (NodeGraph::dds_stats; Board::Report fills it in)
+  std::optional<DdsLinkStats> dds;
 };
 
 struct MetricsReport {
@@ -195,7 +199,9 @@ std::string NodesCsv(const std::vector<BoardReport>& boards);
 // min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
 // arrivals, timer_ticks, drops, loan_failures, timer_overruns}], topics: [{name, transport, bytes,
 // depth, published, rate_hz, latency_ms: {...}, latency_per_bin_ms: {mean: [...], max: [...]} (null
-// for a bin without messages), drops, loan_failures}]}.
+// for a bin without messages), drops, loan_failures, dds (DDS topics, whole run): {samples_written,
+// write_timeouts, samples_delivered, samples_lost, datagrams_sent, datagrams_retransmitted,
+// datagrams_dropped, nacks}}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

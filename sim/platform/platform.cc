@@ -267,6 +267,7 @@ double DrawCostSeconds(const CostDistributionConfig& d, Rng& rng) {
 
 PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config) {
   if (config.cores) profile.cpu.cores = *config.cores;
+  if (config.host_rmem_max_bytes) profile.dds.host_rmem_max_bytes = *config.host_rmem_max_bytes;
   return profile;
 }
 

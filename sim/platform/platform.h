@@ -48,7 +48,8 @@ TransportCost ZeroCopyCost(const PlatformProfile& profile, std::int64_t bytes, b
 // One draw of a cost_override distribution (seconds, >= 0; a normal draw below 0 counts as 0).
 double DrawCostSeconds(const CostDistributionConfig& distribution, Rng& rng);
 
-// The profile a board runs on: `profile` with the config's what-if overrides (cores).
+// The profile a board runs on: `profile` with the config's what-if overrides (cores,
+// host_rmem_max_bytes).
 PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config);
 
 // ---- CPU: N cores, processor sharing ----

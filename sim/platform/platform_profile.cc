@@ -149,6 +149,18 @@ void NodeMappingConfig::Validate() const {
 
 void TopicTransportConfig::Validate() const {
   if (depth) Require(*depth >= 1, "depth must be >= 1, got " + std::to_string(*depth));
+  const auto positive = [](const std::optional<int>& value, const char* key) {
+    if (value)
+      Require(*value > 0, std::string(key) + " must be > 0, got " + std::to_string(*value));
+  };
+  positive(receive_buffer_bytes, "receive_buffer_bytes");
+  positive(fragment_bytes, "fragment_bytes");
+  positive(max_message_bytes, "max_message_bytes");
+  const bool dds_only =
+      reliability || history || receive_buffer_bytes || fragment_bytes || max_message_bytes;
+  Require(!dds_only || transport == Transport::kDds,
+          "reliability, history, receive_buffer_bytes, fragment_bytes and max_message_bytes are "
+          "DDS settings: they need transport: dds");
 }
 
 void CostDistributionConfig::Validate() const {
@@ -189,6 +201,9 @@ void CostDistributionConfig::Validate() const {
 void PlatformConfig::Validate() const {
   Require(!profile.empty(), "profile must name a platform profile file");
   Require(!cores || *cores >= 1, "cores must be >= 1, got " + std::to_string(cores.value_or(0)));
+  Require(
+      !host_rmem_max_bytes || *host_rmem_max_bytes > 0,
+      "host_rmem_max_bytes must be > 0, got " + std::to_string(host_rmem_max_bytes.value_or(0)));
   for (const auto& [node, scale] : cost_scale) {
     Require(std::isfinite(scale) && scale > 0.0,
             "cost_scale." + node + " must be finite and > 0, got " + Num(scale));

@@ -311,15 +311,27 @@ struct NodeMappingConfig {
 };
 
 // How one topic is carried: "dds" (loopback sockets) or "zero_copy" (Iceoryx), and its QoS
-// history depth (keep-last).
+// history depth (keep-last). A DDS topic's own Cyclone settings, each unset one the profile's
+// dds section's (the same names as `autonomsim transport --set dds.KEY`): its reliability and
+// history QoS, the receive buffer its subscribers' sockets request, and how a sample is cut.
 struct TopicTransportConfig {
   Transport transport{Transport::kZeroCopy};
   std::optional<int> depth;
+  std::optional<Reliability> reliability;
+  std::optional<History> history;
+  std::optional<int> receive_buffer_bytes;
+  std::optional<int> fragment_bytes;
+  std::optional<int> max_message_bytes;
 
   template <class V>
   void Describe(V& v) {
     v("transport", transport);
     v("depth", depth);
+    v("reliability", reliability);
+    v("history", history);
+    v("receive_buffer_bytes", receive_buffer_bytes);
+    v("fragment_bytes", fragment_bytes);
+    v("max_message_bytes", max_message_bytes);
   }
   void Validate() const;
 };
@@ -359,7 +371,10 @@ struct PlatformConfig {
   // profile's (software: core-seconds of work; hardware: fabric compute time, memory transfers
   // still added), from the seeded stream "<board>/platform/<node>/cost_override"; cost_scale
   // applies on top. Neither touches a subscription's own cost or the transports.
+  // host_rmem_max_bytes: the host kernel's net.core.rmem_max (a sysctl) instead of the profile's
+  // dds.host_rmem_max_bytes: the cap on every DDS socket's receive buffer.
   std::optional<int> cores;
+  std::optional<int> host_rmem_max_bytes;
   std::map<std::string, double> cost_scale;
   std::map<std::string, CostDistributionConfig> cost_override;
   bool background_loads{true};                 // add the profile's background loads
@@ -373,6 +388,7 @@ struct PlatformConfig {
     v("mapping", mapping);
     v("transport", transport);
     v("cores", cores);
+    v("host_rmem_max_bytes", host_rmem_max_bytes);
     v("cost_scale", cost_scale);
     v("cost_override", cost_override);
     v("background_loads", background_loads);

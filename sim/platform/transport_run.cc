@@ -46,7 +46,7 @@ TransportRunResult RunTransport(const PlatformProfile& profile,
                                 const TransportRunOptions& options) {
   options.Validate();
   TransportRunResult result;
-  result.params = DdsLinkParamsFor(profile, DdsTopicQos{}, options.depth);
+  result.params = DdsLinkParamsFor(profile, TopicTransportConfig{}, options.depth);
   result.cores = profile.cpu.cores;
 
   Kernel kernel;

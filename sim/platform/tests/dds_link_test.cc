@@ -119,6 +119,39 @@ TEST(DdsLink, ASampleThatOverflowsTheBufferOnceIsRepairedOnTheHeartbeatAndNackTi
   EXPECT_EQ(b.link.whc_bytes(), 0);
 }
 
+// One writer, two readers, each receive thread on a core of its own: the five datagrams are sent
+// once and reach both sockets. Reader A's buffer holds them all (delivered at 13.5 ms, as above);
+// reader B's holds two, loses the last datagram and is repaired alone, as above (111 ms): the
+// periodic heartbeat goes to both, the retransmission only to B. The WHC keeps the sample until
+// B, the last, acknowledges it.
+TEST(DdsLink, TwoReadersGetOneSendAndEachRepairsOnItsOwn) {
+  DdsLinkParams params = HandParams(10000);
+  Kernel kernel;
+  Cpu cpu(kernel, 3, nullptr);
+  DdsSocket a(kernel, cpu, -1, 10000);
+  DdsSocket b(kernel, cpu, -1, 2000);
+  std::vector<Time> at_a;
+  std::vector<Time> at_b;
+  DdsLink link(kernel, cpu, params, -1, a, [&](std::int64_t) { at_a.push_back(kernel.Now()); });
+  link.AddReader(b, [&](std::int64_t) { at_b.push_back(kernel.Now()); });
+  link.Write(5000, {});
+  kernel.RunUntil(Ms(50));
+  EXPECT_EQ(link.whc_bytes(), 5000);  // A acknowledged, B did not
+  kernel.RunUntil(Ms(1000));
+  ASSERT_EQ(at_a.size(), 1u);
+  ASSERT_EQ(at_b.size(), 1u);
+  EXPECT_EQ(at_a[0], Ms(13.5));
+  EXPECT_EQ(at_b[0], Ms(111));
+  const DdsLinkStats& s = link.stats();
+  EXPECT_EQ(s.datagrams_sent, 5 + 1);  // the sample once, one periodic heartbeat
+  EXPECT_EQ(s.datagrams_dropped, 1);
+  EXPECT_EQ(s.nacks, 1);
+  EXPECT_EQ(s.datagrams_retransmitted, 1);
+  EXPECT_EQ(s.samples_delivered, 2);
+  EXPECT_EQ(link.whc_bytes(), 0);
+  EXPECT_THROW(link.AddReader(b, {}), std::logic_error);  // readers come before the first write
+}
+
 // Best effort, the same overflow: the first sample is never whole; a one-datagram sample written
 // at 50 ms arrives at 51 ms into an empty buffer and is delivered at 53.5 ms, and the first counts
 // as lost. Nothing is repaired.

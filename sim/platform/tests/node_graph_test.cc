@@ -556,5 +556,107 @@ TEST(NodeGraph, ABackgroundLoadIsLeftOutWhereItsNodesRun) {
   EXPECT_TRUE(rig.graph.HasNode("drivers"));
 }
 
+// ---- DDS topics: the datagram mechanism (sim/platform/dds_link.h) in the graph ----
+
+// Hand-picked DDS costs on four otherwise free cores (no contention): a write, a receive.
+PlatformProfile DdsCostProfile() {
+  PlatformProfile p = FreeTransportProfile(4);
+  p.dds.write = {.fixed = std::chrono::microseconds(10),
+                 .copies = 2,
+                 .per_datagram = std::chrono::microseconds(5),
+                 .per_fragment = std::chrono::microseconds(1)};
+  p.dds.receive = {.fixed = std::chrono::microseconds(20),
+                   .copies = 2,
+                   .per_datagram = std::chrono::microseconds(3),
+                   .per_fragment = std::chrono::microseconds(2)};
+  p.dds.latency = std::chrono::microseconds(50);
+  return p;
+}
+
+TEST(NodeGraph, ASmallDdsSampleIsWrittenOnceAndCostsEachReaderWhatDdsCostSays) {
+  // 1000 B (one datagram of one fragment) every 10 ms to two subscribers. One write serves both
+  // readers; each reader's receive thread pays the receive side. Hand-computed:
+  // write 10 + 2 x 1000 B / 1 GB/s + 5 + 1 = 18 us; receive 20 + 2 + 3 + 2 = 27 us; the
+  // subscriber's job starts 50 us (the executor's wake-up) after that.
+  const PlatformProfile profile = DdsCostProfile();
+  Rig rig(profile);
+  auto topic = rig.graph.AddTopic<int>(
+      {.name = "/fix", .type = {"Fix", 1000, false}, .transport = Transport::kDds});
+  AddSourceNode(rig.graph, NodeSpec{.name = "source"}, topic, kZeroTime, milliseconds(10),
+                [](Time) { return 7; });
+  std::vector<Time> taken_at;
+  for (const char* name : {"sink", "sink2"}) {
+    const NodeId sink = rig.graph.AddNode(NodeSpec{.name = name, .mapping = {.cost = "sink"}});
+    rig.graph.AddSubscription<int>(sink, topic, [&](const int& v, Time, Outbox&) {
+      EXPECT_EQ(v, 7);
+      taken_at.push_back(rig.kernel.Now());
+    });
+  }
+  rig.kernel.RunUntil(milliseconds(995));  // 100 samples, all through
+
+  const TransportCost cost = DdsCost(profile, 1000);
+  EXPECT_DOUBLE_EQ(cost.publish_core_s, 18e-6);
+  EXPECT_DOUBLE_EQ(cost.receive_core_s, 27e-6);
+  ASSERT_EQ(taken_at.size(), 200u);
+  const Time first = kZeroTime + FromSeconds(cost.publish_core_s) +
+                     FromSeconds(cost.receive_core_s) + std::chrono::microseconds(50);
+  EXPECT_LE(std::chrono::abs(taken_at[0] - first), std::chrono::nanoseconds(2));
+  EXPECT_EQ(taken_at[0], taken_at[1]);  // both readers at once
+  const auto& nodes = rig.metrics.nodes();
+  EXPECT_NEAR(nodes[0].cpu_core_s, 100 * cost.publish_core_s, 1e-9);  // once, not per reader
+  for (std::size_t i : {1u, 2u}) {
+    EXPECT_NEAR(nodes[i].receive_core_s, 100 * cost.receive_core_s, 1e-9) << nodes[i].name;
+  }
+  const std::optional<DdsLinkStats> stats = rig.graph.dds_stats("/fix");
+  ASSERT_TRUE(stats.has_value());
+  EXPECT_EQ(stats->samples_written, 100);
+  EXPECT_EQ(stats->datagrams_sent, 100);
+  EXPECT_EQ(stats->samples_delivered, 200);  // summed over the two readers
+  EXPECT_EQ(stats->datagrams_dropped, 0);
+  EXPECT_FALSE(rig.graph.dds_stats("/nope").has_value());
+}
+
+// The ZCU104 profile's point cloud over DDS at 30 fps: 366 datagrams per cloud against a socket
+// buffer of 2 x 212 992 B. Reliable: overflow, NACKs and repairs, fewer clouds than offered, all
+// counted in summary.json; best effort (the topic's own setting): every cloud lost.
+TEST(Board, APointCloudOverDdsOverflowsTheSocketAndTheSummaryCountsIt) {
+  auto run = [](std::optional<Reliability> reliability) {
+    PlatformConfig config;
+    config.profile = "platforms/zcu104.yaml";
+    config.background_loads = false;
+    config.transport["/points"] =
+        TopicTransportConfig{.transport = Transport::kDds, .reliability = reliability};
+    Kernel kernel;
+    RngStreams rng(1);
+    Board board(kernel, "car0", config, "scenarios", &rng, milliseconds(1000));
+    NodeGraph& graph = board.graph();
+    auto points = graph.AddTopic<int>({.name = "/points", .type = msg::PointCloud640()});
+    AddSourceNode(graph, NodeSpec{.name = "camera", .mapping = {.cost = "camera_publisher"}},
+                  points, kZeroTime, FromSeconds(1.0 / 30.0), [](Time) { return 0; });
+    AddSinkNode(graph, NodeSpec{.name = "probe", .mapping = {.cost = "fps_probe"}}, points,
+                SubscriptionOptions{.loaned = false});
+    board.Finish();
+    kernel.RunUntil(std::chrono::seconds(6));
+    return board.Report(std::chrono::seconds(6));
+  };
+  const BoardReport reliable = run(std::nullopt);  // the profile's: reliable
+  const NodeReport* probe = reliable.report.FindNode("probe");
+  ASSERT_NE(probe, nullptr);
+  EXPECT_GT(probe->rate_hz, 1.0);
+  EXPECT_LT(probe->rate_hz, 28.0);
+  const TopicReport* topic = reliable.report.FindTopic("/points");
+  ASSERT_TRUE(topic->dds.has_value());
+  EXPECT_GT(topic->dds->datagrams_dropped, 0);
+  EXPECT_GT(topic->dds->nacks, 0);
+  EXPECT_GT(topic->dds->datagrams_retransmitted, 0);
+  const nlohmann::json summary = ReportJson(reliable.report);
+  EXPECT_EQ(summary["topics"][0]["dds"]["datagrams_dropped"], topic->dds->datagrams_dropped);
+
+  const BoardReport best_effort = run(Reliability::kBestEffort);
+  EXPECT_EQ(best_effort.report.FindNode("probe")->jobs, 0u);
+  EXPECT_GT(best_effort.report.FindTopic("/points")->dds->samples_lost, 150);
+  EXPECT_EQ(best_effort.report.FindTopic("/points")->dds->nacks, 0);
+}
+
 }  // namespace
 }  // namespace autonomsim::sim

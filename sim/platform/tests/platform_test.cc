@@ -296,9 +296,25 @@ TEST(Profile, PlatformConfigValidates) {
   const PlatformConfig config = ReadConfig<PlatformConfig>(ok, ConfigSource{"s.yaml", {}});
   EXPECT_EQ(config.mapping.at("point_cloud").slot, 0);
   EXPECT_EQ(config.transport.at("/points").transport, Transport::kDds);
-  for (const char* bad : {"mapping: {a: {target: fpga}}", "mapping: {a: {target: hw}}",
-                          "mapping: {a: {target: sw, slot: 1}}",
-                          "transport: {/x: {transport: shm}}", "transport: {/x: {depth: 0}}"}) {
+  // a DDS topic's own Cyclone settings, under the names `autonomsim transport --set dds.KEY` uses
+  const PlatformConfig tuned = ReadConfig<PlatformConfig>(
+      YAML::Load("transport: {/points: {transport: dds, reliability: best_effort, history: "
+                 "keep_all, receive_buffer_bytes: 4194304, fragment_bytes: 65000, "
+                 "max_message_bytes: 65500}}"),
+      ConfigSource{"s.yaml", {}});
+  const TopicTransportConfig& points = tuned.transport.at("/points");
+  EXPECT_EQ(points.reliability, Reliability::kBestEffort);
+  EXPECT_EQ(points.history, History::kKeepAll);
+  EXPECT_EQ(points.receive_buffer_bytes, 4194304);
+  EXPECT_EQ(points.fragment_bytes, 65000);
+  EXPECT_EQ(points.max_message_bytes, 65500);
+  for (const char* bad :
+       {"mapping: {a: {target: fpga}}", "mapping: {a: {target: hw}}",
+        "mapping: {a: {target: sw, slot: 1}}", "transport: {/x: {transport: shm}}",
+        "transport: {/x: {depth: 0}}", "transport: {/x: {transport: dds, fragment_bytes: 0}}",
+        "transport: {/x: {transport: dds, reliability: sometimes}}",
+        // the DDS settings need a DDS topic
+        "transport: {/x: {transport: zero_copy, reliability: best_effort}}"}) {
     EXPECT_THROW(ReadConfig<PlatformConfig>(YAML::Load(bad), ConfigSource{"s.yaml", {}}),
                  ConfigError)
         << bad;

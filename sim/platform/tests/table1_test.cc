@@ -6,12 +6,12 @@
 // Rows 3-8 (zero-copy) are what the compute costs were fitted to: every cell, and every process
 // beside the sheet's range, must be in range.
 // Rows 1-2 (without Iceoryx) are the held-out check, computed from the DDS transport model whose
-// figures were set before these rows were run: neither their CPU nor their FPS and turnaround
-// come out in range (the model's node keeps up at 30 fps with a 29-33 ms turnaround and costs
-// 130-163 %; the paper measured 9-14 fps, 71-111 ms and 180-220 %: per frame the lab paid about
-// three times our DDS cost, reference §10's losses and repairs). Until this sheet's split, the
-// probe's fitted per-byte cost made their CPU look right. The gaps are recorded by the disabled
-// tests at the end, so that they stay visible instead of being tuned away.
+// figures were set before these rows were run (Cyclone's defaults, sim/platform/dds_link.h):
+// their point clouds overflow the reader's socket buffer and are repaired on Cyclone's 100 ms
+// cycles, so the probe gets fewer than the camera's 30 fps (reliable: 22 and 27 fps; best
+// effort: none). The paper measured 9-12 and 13-14 fps and 180-220 % CPU; the model's CPU stays
+// at 135-173 %. The gaps are recorded by the disabled tests at the end, so that they stay visible
+// instead of being tuned away.
 #include "sim/platform/table1.h"
 
 #include <gtest/gtest.h>
@@ -172,13 +172,20 @@ TEST_F(Table1, JsonHasTheAgreedShape) {
   for (const auto& row : j["rows"]) {
     std::set<std::string> keys;
     for (const auto& [key, unused] : row.items()) keys.insert(key);
-    EXPECT_EQ(keys, (std::set<std::string>{"component", "configuration", "cpu_percent",
-                                           "board_cpu_percent", "fps", "turnaround_ms", "paper",
-                                           "in_range", "processes"}));
+    std::set<std::string> expected = {
+        "component",     "configuration", "cpu_percent", "board_cpu_percent", "fps",
+        "turnaround_ms", "paper",         "in_range",    "processes"};
+    if (row.contains("alternative")) expected.insert("alternative");  // the held-out rows
+    EXPECT_EQ(keys, expected);
     EXPECT_EQ(row["paper"]["fps"].size(), 2u);
     EXPECT_TRUE(row["in_range"]["turnaround_ms"].is_boolean());
   }
   EXPECT_EQ(j["held_out"], nlohmann::json::array({0, 1}));
+  for (int i : {0, 1}) {
+    EXPECT_EQ(j["rows"][i]["alternative"]["reliability"], "best_effort");
+    EXPECT_TRUE(j["rows"][i]["alternative"].contains("fps"));
+  }
+  EXPECT_FALSE(j["rows"][2].contains("alternative"));
   EXPECT_TRUE(j["whole_unit"]["zero_copy"].contains("demand_percent"));
   EXPECT_EQ(j["whole_unit"]["zero_copy"]["sheet_percent"], nlohmann::json::array({310, 360}));
   EXPECT_EQ(j["rows"][2]["paper"]["cpu_percent"], nlohmann::json::array({90, 110}));
@@ -223,6 +230,31 @@ TEST_F(Table1, WholeUnitInSoftwareDemandsWhatTheSheetsProcessesSumToAndFallsBehi
   EXPECT_GT(lane->drops, 0u);  // keep-last queues overflow
   EXPECT_LT(lane->rate_hz, 25.0);
   EXPECT_GT(lane->turnaround_ms.p50, zc.report.FindNode("lane_detection")->turnaround_ms.p50);
+}
+
+// The held-out rows come from the DDS mechanism, not from a fitted cost: a 4.9 MB point cloud is
+// 366 datagrams against a 416 KiB socket buffer (2 x rmem_max 212 992 B), so it overflows and
+// waits for repair; a reliable topic delivers fewer than the camera's 30 fps, a best-effort one
+// loses every cloud (reference §10: ddsperf on one host, best effort: nothing arrives). The
+// turnaround of these rows is the period, as the paper's figure there is (reference §8).
+TEST_F(Table1, TheRowsWithoutIceoryxLoseFramesToTheSocketBufferAndItsRepair) {
+  for (int i : {0, 1}) {
+    const Table1Result& r = (*rows_)[static_cast<std::size_t>(i)];
+    ASSERT_TRUE(r.row.held_out);
+    EXPECT_GT(r.fps, 1.0) << r.row.configuration;
+    EXPECT_LT(r.fps, 29.0) << r.row.configuration;
+    EXPECT_DOUBLE_EQ(r.turnaround_ms, 1000.0 / r.fps);
+    ASSERT_TRUE(r.alternative.has_value());
+    EXPECT_EQ(r.alternative->reliability, Reliability::kBestEffort);
+    EXPECT_EQ(r.alternative->fps, 0.0) << r.row.configuration;
+  }
+  // the zero-copy rows keep the camera's rate, and their turnaround is the node's own
+  for (std::size_t i = 2; i < rows_->size(); ++i) {
+    const Table1Result& r = (*rows_)[i];
+    EXPECT_GE(r.fps, 29.0) << r.row.configuration;
+    EXPECT_LT(r.turnaround_ms, 1000.0 / 30.0) << r.row.configuration;
+    EXPECT_FALSE(r.alternative.has_value());
+  }
 }
 
 // The paper's held-out CPU, as the sheet's processes sum it. Not reached: see the top of this file.
