@@ -616,6 +616,43 @@ TEST(NodeGraph, ASmallDdsSampleIsWrittenOnceAndCostsEachReaderWhatDdsCostSays) {
   EXPECT_FALSE(rig.graph.dds_stats("/nope").has_value());
 }
 
+// A keep-all topic whose reader cannot take its 3000 B datagrams (a 2000 B socket): the first
+// sample stays unacknowledged in the WHC, above its 1500 B high-water mark, so the second write
+// blocks (max_blocking unset: for good) and with it the publisher's job: its timer ticks overrun
+// and it publishes nothing more. Keep-last, the same writer is never throttled.
+TEST(NodeGraph, AKeepAllWriteBlockedAtTheHighWaterMarkHoldsThePublishersJob) {
+  auto run = [](History history) {
+    PlatformProfile profile = DdsCostProfile();
+    profile.dds.whc_high_bytes = 1500;
+    profile.dds.whc_low_bytes = 500;
+    profile.dds.receive_buffer_bytes = 1000;  // doubled by the kernel: 2000 B
+    profile.dds.host_rmem_max_bytes = 1000;
+    auto rig = std::make_unique<Rig>(profile);
+    PlatformConfig config;
+    config.transport["/big"] =
+        TopicTransportConfig{.transport = Transport::kDds, .history = history};
+    rig->graph.ApplyConfig(config);
+    auto topic = rig->graph.AddTopic<int>({.name = "/big", .type = {"Big", 3000, false}});
+    const NodeId source = AddSourceNode(rig->graph, NodeSpec{.name = "source"}, topic, kZeroTime,
+                                        milliseconds(10), [](Time) { return 1; });
+    AddSinkNode(rig->graph, NodeSpec{.name = "sink"}, topic);
+    rig->kernel.RunUntil(milliseconds(500));
+    EXPECT_EQ(rig->graph.queued(source), 0u);
+    return std::make_pair(std::move(rig), source);
+  };
+  const auto [keep_all, source] = run(History::kKeepAll);
+  EXPECT_TRUE(keep_all->graph.busy(source));  // its second write still waits
+  const RunMetrics::NodeData& blocked = keep_all->metrics.nodes()[0];
+  EXPECT_EQ(blocked.jobs, 1u);
+  EXPECT_GT(blocked.timer_overruns, 40u);
+  EXPECT_EQ(keep_all->graph.dds_stats("/big")->samples_written, 1);
+  EXPECT_EQ(keep_all->metrics.nodes()[1].jobs, 0u);  // the sink never got it
+
+  const auto [keep_last, unused] = run(History::kKeepLast);
+  EXPECT_EQ(keep_last->metrics.nodes()[0].jobs, 50u);
+  EXPECT_EQ(keep_last->metrics.nodes()[0].timer_overruns, 0u);
+}
+
 // The ZCU104 profile's point cloud over DDS at 30 fps: 366 datagrams per cloud against a socket
 // buffer of 2 x 212 992 B. Reliable: overflow, NACKs and repairs, fewer clouds than offered, all
 // counted in summary.json; best effort (the topic's own setting): every cloud lost.
