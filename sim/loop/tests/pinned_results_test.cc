@@ -58,8 +58,9 @@ TEST_P(PinnedResults, TheShippedScenarioGivesItsPinnedResult) {
 // (sim/platform/dds_link.h in the graph). lab_two_cars and stack_obstacle, whose images and grids
 // are zero-copy, kept their trajectory.csv and events.jsonl byte for byte: their small DDS topics
 // cost what they did, except the global plan, now three datagrams where the old formula counted
-// two (Cyclone packs whole fragments), which moves the planner's and its readers' figures in
-// nodes.csv by microseconds. lab_two_cars_all_sw's point clouds now overflow obstacle detection's
+// two (Cyclone packs whole fragments), and Cyclone's control traffic (a periodic heartbeat where
+// an acknowledgement is late) costs the plan's readers a few microseconds: nodes.csv's figures of
+// the planner and its readers move in their last digits. lab_two_cars_all_sw's point clouds now overflow obstacle detection's
 // socket and wait for repair (its header gives the figures).
 INSTANTIATE_TEST_SUITE_P(
     Shipped, PinnedResults,
