@@ -96,6 +96,7 @@ CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
   }
   if (out.stopped != CruiseStop::kNone) {
     s.pid_fresh = true;
+    s.curvature_per_m = 0.0;  // the stop's zero twist: a neutral pulse, straight wheels
     out.publish = !s.stop_published;
     s.stop_published = true;
     return out;
@@ -113,8 +114,13 @@ CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
   }
   s.last_cycle = input.now;
   out.error_mps = error;
+  const bool zero_twist = std::abs(s.command->speed_mps) < params.min_speed_for_curvature_mps &&
+                          s.command->yaw_rate_rad_per_s == 0.0;
   out.curvature_per_m =
-      CommandCurvature(params, s.command->speed_mps, s.command->yaw_rate_rad_per_s);
+      zero_twist && params.hold_steering_on_zero_command
+          ? s.curvature_per_m  // no pulse: the servo stays
+          : CommandCurvature(params, s.command->speed_mps, s.command->yaw_rate_rad_per_s);
+  s.curvature_per_m = out.curvature_per_m;
   if (!s.pid_fresh && dt_s == 0.0) return out;  // control_toolbox answers a zero dt with 0
   s.pid_fresh = false;
 

@@ -17,10 +17,16 @@
 //   once (`publish`) and the following stopped cycles are silent until a normal cycle: the PWM
 //   generator holds the last command, so the car does the same, and the end-to-end latency on the
 //   command topic is measured only on commands derived from fresh input.
-// - The real node divides ω / v_cmd unguarded: v = 0 with ω ≠ 0 gives ±inf, which the FPGA's
-//   steering clamp turns into full lock in ω's direction, and 0/0 gives NaN (an undefined pulse).
-//   Here: |v_cmd| < min_speed_for_curvature_mps gives full lock (±max_curvature_per_m) in ω's
-//   direction when ω ≠ 0 and κ = 0 when ω = 0; otherwise κ = ω / v_cmd clamped to
+// - The real node divides ω / v_cmd unguarded (carcontroller.cpp:91): v = 0 with ω ≠ 0 gives
+//   ±inf, which the steering clamp turns into full lock in ω's direction. 0/0, the zero twist
+//   Nav2's controller server publishes when FollowPath is halted (a wait at an intersection;
+//   nav2_controller.cpp:370, 530-542, galactic), gives NaN: rt_carcontrol's float `angle` is NaN,
+//   passes both clamps (every comparison with NaN is false) and is written as (int)NaN, which on
+//   the A53 (AArch64's fcvtzs) is 0 (rt_carcontrol.cpp:44-57): a zero pulse width, no pulse, so
+//   the steering servo is not driven and stays where it was (assumed: what a hobby servo without
+//   pulses does; the car's servo is not named). Here: |v_cmd| < min_speed_for_curvature_mps
+//   gives full lock (±max_curvature_per_m) in ω's direction when ω ≠ 0, and when ω = 0 the last
+//   κ (hold_steering_on_zero_command) or κ = 0; otherwise κ = ω / v_cmd clamped to
 //   ±max_curvature_per_m (the same saturation the PWM mapping applies), so κ is always finite.
 #pragma once
 
@@ -51,6 +57,9 @@ struct CruiseControlParams {
   // Assumed: below this |v_cmd| the quotient ω / v is treated as the real car's ±inf (see above).
   // 1 mm/s is far below any speed the controllers command (0.05–0.25 m/s).
   double min_speed_for_curvature_mps{1e-3};
+  // The zero twist (v = 0, ω = 0) keeps the steering where it was (true: the lab's NaN pulse,
+  // above) or straightens it (false: κ = 0, what this model did before issue 33).
+  bool hold_steering_on_zero_command{true};
 
   template <class V>
   void Describe(V& v) {
@@ -65,6 +74,7 @@ struct CruiseControlParams {
     v("period_s", period);
     v("max_curvature_per_m", max_curvature_per_m);
     v("min_speed_for_curvature_mps", min_speed_for_curvature_mps);
+    v("hold_steering_on_zero_command", hold_steering_on_zero_command);
   }
   void Validate() const;
 };
@@ -110,6 +120,7 @@ struct CruiseControlState {
   bool pid_fresh{true};
   Time last_cycle{kZeroTime};    // the previous normal (PID) cycle
   double integral_error_m{0.0};  // ∫e dt, m (unbounded unless antiwindup)
+  double curvature_per_m{0.0};   // the steering's last output (a stop's is 0)
   double last_error_mps{0.0};
 };
 

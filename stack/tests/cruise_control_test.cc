@@ -55,7 +55,9 @@ TEST(CruiseControlParamsTest, DefaultsKeysAndValidation) {
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("p_gain", "i_gain_per_s", "d_gain_s", "i_clamp_min", "i_clamp_max",
                                 "antiwindup", "throttle_limit", "watchdog_timeout_s", "period_s",
-                                "max_curvature_per_m", "min_speed_for_curvature_mps"));
+                                "max_curvature_per_m", "min_speed_for_curvature_mps",
+                                "hold_steering_on_zero_command"));
+  EXPECT_TRUE(params.hold_steering_on_zero_command);
 
   params.i_clamp_min = 11.0;
   try {
@@ -233,11 +235,39 @@ TEST(CruiseControlTest, CurvatureIsYawRateOverSpeed) {
   // Saturation like the real steering clamp.
   EXPECT_EQ(CommandCurvature(params, 0.25, 1.0), 1.2);
   EXPECT_EQ(CommandCurvature(params, 0.25, -1.0), -1.2);
-  // v ≈ 0: the real car's ±inf is full lock in ω's direction, 0/0 is straight; never a NaN.
+  // v ≈ 0: the real car's ±inf is full lock in ω's direction; never a NaN (0/0: see below).
   EXPECT_EQ(CommandCurvature(params, 0.0, 0.1), 1.2);
   EXPECT_EQ(CommandCurvature(params, 0.0, -0.1), -1.2);
   EXPECT_EQ(CommandCurvature(params, 0.0, 0.0), 0.0);
   EXPECT_EQ(CommandCurvature(params, -0.0005, 0.1), 1.2);
+}
+
+// Nav2's zero twist when FollowPath is halted mid-curve (nav2_controller.cpp:370, 530-542): the
+// lab's carcontroller divides 0/0 (carcontroller.cpp:91), rt_carcontrol writes (int)NaN = 0 as
+// the pulse width (rt_carcontrol.cpp:44-57): no pulse, and the steering stays where it was while
+// the car brakes. With hold_steering_on_zero_command false it straightens (this model before).
+// A watchdog stop's explicit zeros are a neutral pulse: straight, in both.
+TEST(CruiseControlTest, TheZeroTwistLeavesTheSteeringWhereItWas) {
+  for (const bool hold : {true, false}) {
+    CruiseControlParams params;
+    params.hold_steering_on_zero_command = hold;
+    Cruise c{params};
+    c.Step(0.0, Cmd(0.0, 0.25, -0.3), 0.25);
+    EXPECT_NEAR(c.Step(0.033, Cmd(0.033, 0.25, -0.3), 0.25).curvature_per_m, -1.2, kTol);
+    const CruiseControlOutput halted = c.Step(0.066, Cmd(0.066, 0.0, 0.0), 0.25);
+    EXPECT_EQ(halted.stopped, CruiseStop::kNone);
+    EXPECT_LT(halted.throttle, 0.0 + kTol);  // it brakes
+    EXPECT_EQ(halted.curvature_per_m, hold ? -1.2 : 0.0) << hold;
+    EXPECT_EQ(c.Step(0.1, Cmd(0.1, 0.0, 0.0), 0.2).curvature_per_m, hold ? -1.2 : 0.0);
+    // the next real command steers again
+    EXPECT_NEAR(c.Step(0.133, Cmd(0.133, 0.25, 0.1), 0.2).curvature_per_m, 0.4, kTol);
+  }
+  // a watchdog stop sends explicit zeros: straight wheels, and a zero twist after it holds those
+  Cruise c;
+  c.Step(0.0, Cmd(0.0, 0.25, -0.3), 0.25);
+  c.Step(0.033, Cmd(0.033, 0.25, -0.3), 0.25);
+  EXPECT_EQ(c.Step(1.5, std::nullopt, 0.25).curvature_per_m, 0.0);  // the command is 1.5 s old
+  EXPECT_EQ(c.Step(1.533, Cmd(1.533, 0.0, 0.0), 0.0).curvature_per_m, 0.0);
 }
 
 TEST(CruiseControlTest, NegativeCommandReversesWithTheIntegralHeldAtZero) {

@@ -331,7 +331,13 @@ TEST(SimulationStackTest, TheCollisionModelDecidesWhetherTheCarStopsBeforeTheBox
          "cars[0].perception.lane_detection.hw_no_line=white_below_min",
          "cars[0].perception.lane_detection.hw_truncate_points=false",
          "cars[0].perception.lane_detection.hw_valid_overwrite=false",
-         "cars[0].perception.lane_detection.projection=ideal"}));
+         "cars[0].perception.lane_detection.projection=ideal",
+         // the gaps were measured with straight wheels on Nav2's zero twist. With the lab's held
+         // steering (issue 33, stack/cruise_control.h) the footprint run's car, 3 degrees off the
+         // box's axis after its stops, restarts at 24.9 s from a just-cleared local costmap and
+         // hits the box at 25.6 s; the shipped scenario, with its ultrasonic stop, stays clear
+         // under both presets (0.137 m and 0.419 m)
+         "cars[0].stack.cruise_control.hold_steering_on_zero_command=false"}));
   };
   const RunRecord lab = run("centre");
   const RunRecord safe = run("footprint");
