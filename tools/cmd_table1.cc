@@ -10,6 +10,7 @@
 
 #include "sim/core/config.h"
 #include "sim/platform/table1.h"
+#include "sim/scenario/scenario.h"
 #include "tools/cli_common.h"
 
 namespace autonomsim::cli {
@@ -29,7 +30,7 @@ int Table1Command(const std::string& profile_file, const std::optional<std::stri
   sim::PlatformProfile profile;
   sim::Table1Options options;
   try {
-    profile = sim::LoadPlatformProfile(profile_file, overrides);
+    profile = sim::LoadPlatformProfile(sim::ResolveShippedFile(profile_file), overrides);
     if (!(warmup_s >= 0.0) || !(duration_s > warmup_s)) {
       throw sim::ConfigError(
           fmt::format("--duration ({} s) must exceed --warmup ({} s) >= 0", duration_s, warmup_s));
@@ -93,7 +94,10 @@ Command AddTable1Command(CLI::App& parent) {
       "table1",
       "Reproduce the paper's Table I on the platform model (8 configurations) and run the whole "
       "unit in software; exit 0 only when every cell is in the paper's range");
-  table1->add_option("--profile", o->profile, "Platform profile (YAML)")
+  table1
+      ->add_option("--profile", o->profile,
+                   "Platform profile (YAML); from any folder a shipped one is found by its path in "
+                   "the checkout or under scenarios/ (platforms/x86_loopback.yaml)")
       ->type_name("FILE")
       ->capture_default_str();
   table1->add_option("--json", o->json, "Also write the results as JSON")->type_name("FILE");

@@ -7,6 +7,7 @@
 
 #include "sim/core/config.h"
 #include "sim/platform/transport_run.h"
+#include "sim/scenario/scenario.h"
 #include "tools/cli_common.h"
 #include "world/enum_names.h"
 #include "world/time.h"
@@ -95,7 +96,9 @@ Command AddTransportCommand(CLI::App& parent) {
                   "Busy loops beside the pair, each one core's worth of demand")
       ->type_name("CORES")
       ->capture_default_str();
-  cmd->add_option("--profile", o->profile, "Platform profile (YAML)")
+  cmd->add_option("--profile", o->profile,
+                  "Platform profile (YAML); from any folder a shipped one is found by its path in "
+                  "the checkout or under scenarios/ (platforms/x86_loopback.yaml)")
       ->type_name("FILE")
       ->capture_default_str();
   cmd->add_option("--set", o->overrides,
@@ -124,7 +127,7 @@ Command AddTransportCommand(CLI::App& parent) {
             sim::PlatformProfile profile;
             sim::TransportRunResult result;
             try {
-              profile = sim::LoadPlatformProfile(o->profile, o->overrides);
+              profile = sim::LoadPlatformProfile(sim::ResolveShippedFile(o->profile), o->overrides);
               result = sim::RunTransport(profile, options);
             } catch (const sim::ConfigError& e) {
               fmt::print(stderr, "error: {}\n", e.what());

@@ -134,6 +134,21 @@ std::filesystem::path ResolveScenarioFile(const std::filesystem::path& folder,
                     " among the shipped ones)");
 }
 
+}  // namespace
+
+std::filesystem::path ResolveShippedFile(const std::string& given) {
+  namespace fs = std::filesystem;
+  const fs::path path(given);
+  if (given.empty() || path.is_absolute() || fs::exists(path)) return path;
+  const fs::path shipped(AUTONOMSIM_SCENARIOS_DIR);
+  for (const fs::path& candidate : {shipped.parent_path() / path, shipped / path}) {
+    if (fs::exists(candidate)) return candidate;
+  }
+  return path;
+}
+
+namespace {
+
 // The track the scenario names (relative to its folder). An error of the track file's own (a
 // missing file, a bad key in it) is reported at the scenario's `track:` too: the track file's
 // name alone does not say which scenario line chose it.

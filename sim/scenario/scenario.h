@@ -293,4 +293,10 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides = {},
                             std::optional<std::uint64_t> seed = std::nullopt);
 
+// A file a command takes by name (`table1 --profile`, `transport --profile`): as given when it
+// exists (or is absolute); else the checkout's own (scenarios/platforms/zcu104.yaml from any
+// folder), or the shipped scenarios/ folder's (platforms/zcu104.yaml); else as given, for the
+// loader to report missing.
+std::filesystem::path ResolveShippedFile(const std::string& given);
+
 }  // namespace autonomsim::sim

@@ -256,5 +256,27 @@ TEST(CliTest, TransportRefusesWhatItCannotRun) {
   EXPECT_THAT(missing.output, ::testing::HasSubstr("--bytes"));
 }
 
+// Issue 34, item 10: `table1` and `transport` find their default profile from any folder, as a
+// scenario finds the shipped tracks and profiles (before: "scenarios/platforms/zcu104.yaml: no
+// such file" outside the checkout's root). A profile that exists nowhere is still refused.
+TEST(CliTest, Table1AndTransportFindTheShippedProfileFromAnyFolder) {
+  const std::filesystem::path elsewhere = testing::Scratch("CliTest.ShippedProfile");
+  const std::string bin = std::filesystem::absolute(testing::Bin()).string();
+  const std::string cd = "cd " + elsewhere.string() + " && " + bin;
+  const Result table1 = testing::Shell(cd + " table1 --duration 3 --warmup 1");
+  EXPECT_NE(table1.exit_code, 2) << table1.output;
+  EXPECT_THAT(table1.output, ::testing::HasSubstr("profile 'zcu104'"));
+  const Result transport =
+      testing::Shell(cd + " transport --bytes 1000 --rate-hz 10 --seconds 2 --json");
+  EXPECT_EQ(transport.exit_code, 0) << transport.output;
+  const Result shipped_name = testing::Shell(
+      cd +
+      " transport --bytes 1000 --rate-hz 10 --seconds 2 --profile platforms/x86_loopback.yaml");
+  EXPECT_EQ(shipped_name.exit_code, 0) << shipped_name.output;
+  const Result nowhere = testing::Shell(cd + " table1 --profile platforms/nope.yaml");
+  EXPECT_EQ(nowhere.exit_code, 2);
+  EXPECT_THAT(nowhere.output, ::testing::HasSubstr("platforms/nope.yaml"));
+}
+
 }  // namespace
 }  // namespace autonomsim::cli
