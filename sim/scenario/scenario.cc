@@ -247,6 +247,30 @@ void CheckPlatformSettingsApply(const Scenario& scenario, const ScenarioSite& si
   }
 }
 
+// No two cars start overlapping: they would "collide" in the first step (two cars 0.1 m apart ran
+// and failed "car 1 hit car 2 at t=0.002 s"). Reported at the later car's start, naming both.
+void CheckStartsApart(const LoadedScenario& loaded, const ScenarioSite& site) {
+  const auto box = [&loaded](std::size_t i) {
+    const vehicle::CarParams& v = loaded.scenario.cars[i].vehicle;
+    return world::OrientedBox{loaded.cars[i].start_pose, v.length_m, v.width_m};
+  };
+  for (std::size_t j = 1; j < loaded.cars.size(); ++j) {
+    for (std::size_t i = 0; i < j; ++i) {
+      if (world::Distance(box(i), box(j)) > 0.0) continue;
+      const CarConfig& a = loaded.scenario.cars[i];
+      const CarConfig& b = loaded.scenario.cars[j];
+      const world::Vec2 pa = loaded.cars[i].start_pose.position();
+      const world::Vec2 pb = loaded.cars[j].start_pose.position();
+      FailAt(site.root, site.source, {"cars", j, b.start ? "start" : "start_s_m"},
+             fmt::format("car {} starts overlapping car {} (at ({:.2f}, {:.2f}) and ({:.2f}, "
+                         "{:.2f}), {:.3f} m apart, {} m cars): move one of them along its route "
+                         "(start_s_m) or to another start",
+                         b.id, a.id, pb.x(), pb.y(), pa.x(), pa.y(), (pb - pa).norm(),
+                         Num(b.vehicle.length_m)));
+    }
+  }
+}
+
 // Every obstacle on the track's floor and smaller than it, before Box2D sees it (an obstacle at
 // 1e39 m aborted in Box2D's IsValid assertion; one 9 m off a 5 m floor was accepted).
 void CheckObstaclesOnFloor(const Scenario& scenario, double floor_size_m,
@@ -534,6 +558,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
     loaded.cars.push_back(ResolveCar(scenario, i, loaded.track, file.parent_path(), site));
   }
   CheckSizes(loaded, site);
+  CheckStartsApart(loaded, site);
   CheckObstaclesOnFloor(scenario, loaded.track.spec().size_m, site);
   CheckPlatformSettingsApply(scenario, site);
   CheckExpectations(loaded, car_ids, site);

@@ -146,6 +146,20 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "start_s_m: 2.0", "start_s_m: 99"),
                    {},
                    {"cars[1].start_s_m: start_s_m must be in [0, "}},
+        // issue 34, item 7: two cars on one start pose (before: "car 1 hit car 0" at
+        // t = 0.002 s); 0.4 m apart along the route, the 0.525 m cars still overlap
+        BrokenCase{"overlapping_starts",
+                   Replace(Replace(kValid, "route: inner_loop", "route: south_loop"),
+                           "start_s_m: 2.0", "start: real_car"),
+                   {},
+                   {F("overlapping_starts") + ":11:12: cars[1].start: car 1 starts overlapping "
+                                              "car 0 (at (0.96, -2.18) and (0.96, -2.18), 0.000 m "
+                                              "apart, 0.525 m cars)"}},
+        BrokenCase{"overlapping_along_the_route",
+                   Replace(Replace(kValid, "route: inner_loop", "route: south_loop"),
+                           "start: real_car", "start_s_m: 0.0"),
+                   {"cars[1].start_s_m=0.4"},
+                   {"cars[1].start_s_m: car 1 starts overlapping car 0", "0.400 m apart"}},
         BrokenCase{"route_and_lanes",
                    Replace(kValid, "route: inner_loop", "route: inner_loop\n    lanes: [inner]"),
                    {},
