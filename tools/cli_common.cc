@@ -157,6 +157,15 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
   if (folder) {
     folder->Complete(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds);
+    for (const sim::BoardReport& board : simulation.record().boards) {
+      const sim::TraceCoverage& t = board.report.trace;
+      if (!t.recorded || !t.cut_at_s) continue;
+      outcome.trace_cuts.push_back(fmt::format(
+          "{}'s part of trace.json stops at t = {:.1f} s of {:.0f} s: it holds its first {} events "
+          "(platform.trace_max_events); nodes.csv and summary.json cover the whole run. Raise "
+          "trace_max_events for more, or set platform.trace: false",
+          board.board, *t.cut_at_s, outcome.sim_seconds, t.max_events));
+    }
   }
   return outcome;
 }

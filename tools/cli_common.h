@@ -87,6 +87,8 @@ struct Outcome {
   double wall_seconds{0.0};
   double sim_seconds{0.0};
   std::vector<std::string> warnings;  // settings that do not go together (LoadedScenario)
+  // A board's trace.json that stops before the run's end (trace_max_events), one line each.
+  std::vector<std::string> trace_cuts;
   bool passed() const;
 };
 

@@ -54,6 +54,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
     return kExitUnusableInput;
   }
   PrintVerdicts(outcome);
+  for (const std::string& cut : outcome.trace_cuts) fmt::print(stderr, "warning: {}\n", cut);
   if (report) WriteOutcomeReport(&outcome);
   fmt::print("{:.1f} s simulated in {:.2f} s wall ({:.1f}x real time)\n", outcome.sim_seconds,
              outcome.wall_seconds,

@@ -156,6 +156,7 @@ int RunMetrics::TraceName(const std::string& name) {
 void RunMetrics::AddTrace(const TraceEvent& event) {
   if (!options_.trace) return;
   if (trace_.size() >= options_.trace_max_events) {
+    if (!trace_truncated_) trace_truncated_at_ = kZeroTime + std::chrono::nanoseconds(event.ts_ns);
     trace_truncated_ = true;
     return;
   }
@@ -193,6 +194,12 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
   report.window_s = end > from ? ToSeconds(end - from) : 0.0;
   report.cores = metrics.cores();
   report.load_bin = metrics.options().load_bin;
+  report.trace = {.recorded = metrics.options().trace,
+                  .events = metrics.trace_events().size(),
+                  .max_events = metrics.options().trace_max_events};
+  if (const std::optional<Time> cut = metrics.trace_truncated_at()) {
+    report.trace.cut_at_s = ToSeconds(*cut - kZeroTime);
+  }
   const double window = report.window_s > 0.0 ? report.window_s : 1.0;
   report.cpu_percent = 100.0 * metrics.busy_core_s() / window;
   const double bin_ns = static_cast<double>(report.load_bin.count());
@@ -322,7 +329,13 @@ nlohmann::json ReportJson(const MetricsReport& report) {
           {"load_bin_s", ToSeconds(report.load_bin)},
           {"cpu_load_percent", report.cpu_load_percent},
           {"nodes", nodes},
-          {"topics", topics}};
+          {"topics", topics},
+          {"trace",
+           {{"recorded", report.trace.recorded},
+            {"events", report.trace.events},
+            {"max_events", report.trace.max_events},
+            {"cut_at_s",
+             report.trace.cut_at_s ? nlohmann::json(*report.trace.cut_at_s) : nlohmann::json()}}}};
 }
 
 namespace detail {

@@ -105,6 +105,8 @@ class RunMetrics {
   const std::vector<TraceEvent>& trace_events() const { return trace_; }
   const std::vector<std::string>& trace_names() const { return trace_names_; }
   bool trace_truncated() const { return trace_truncated_; }
+  // The time of the first event the trace left out (trace_max_events reached); none if it kept all.
+  std::optional<Time> trace_truncated_at() const { return trace_truncated_at_; }
 
  private:
   bool Measured(Time t) const { return t >= options_.measure_from; }
@@ -122,6 +124,7 @@ class RunMetrics {
   std::vector<TraceEvent> trace_;
   std::vector<std::string> trace_names_;
   bool trace_truncated_{false};
+  std::optional<Time> trace_truncated_at_;
   double last_busy_{-1.0};
 };
 
@@ -163,6 +166,15 @@ struct TopicReport {
   std::optional<DdsLinkStats> dds;
 };
 
+// What the board's trace.json holds: whether it records one, how many events, and, when it reached
+// trace_max_events, from when on it holds nothing (the trace is cut there).
+struct TraceCoverage {
+  bool recorded{false};
+  std::size_t events{0};
+  std::size_t max_events{0};
+  std::optional<double> cut_at_s;  // the first event left out
+};
+
 struct MetricsReport {
   double window_s{0.0};
   int cores{1};
@@ -172,6 +184,7 @@ struct MetricsReport {
   std::vector<double> cpu_load_percent;  // per bin from t = 0
   std::vector<NodeReport> nodes;
   std::vector<TopicReport> topics;
+  TraceCoverage trace;
 
   const NodeReport* FindNode(const std::string& name) const;
   const TopicReport* FindTopic(const std::string& name) const;

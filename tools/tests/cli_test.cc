@@ -45,6 +45,32 @@ TEST(CliTest, HelpAnswers) {
   EXPECT_THAT(check.output, HasSubstr("--junit"));
 }
 
+// Issue 34, item 1: a trace cut at trace_max_events is no longer silent: `run` says so on stderr
+// (where it stops, of how long) and summary.json's platform.<board>.trace holds the same. Before,
+// the only sign was otherData.truncated inside trace.json (the default run's 31 MB: its first 46
+// s).
+TEST(CliTest, ARunWhoseTraceIsCutSaysWhereOnStderrAndInItsSummary) {
+  const fs::path out = Scratch() / "cut";
+  const Result r = Cli("run scenarios/stack_obstacle.yaml -q --out " + out.string() +
+                       " --set duration_s=5 --set 'expect=[]'"
+                       " --set cars[0].platform.trace_max_events=2000");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("warning: car1's part of trace.json stops at t = "));
+  EXPECT_THAT(r.output, HasSubstr("of 5 s: it holds its first 2000 events"));
+  const nlohmann::json trace =
+      nlohmann::json::parse(Read(out / "summary.json"))["platform"]["car1"]["trace"];
+  EXPECT_EQ(trace["events"], 2000);
+  EXPECT_EQ(trace["recorded"], true);
+  EXPECT_GT(trace["cut_at_s"].get<double>(), 0.0);
+  EXPECT_LT(trace["cut_at_s"].get<double>(), 5.0);
+  // a trace that holds the whole run says nothing
+  const Result whole =
+      Cli("run scenarios/stack_obstacle.yaml -q --out " + (Scratch() / "whole").string() +
+          " --set duration_s=2 --set 'expect=[]'");
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_THAT(whole.output, ::testing::Not(HasSubstr("trace.json stops")));
+}
+
 TEST(CliTest, RunWritesACompleteResultFolder) {
   const fs::path out = Scratch() / "run";
   const Result r = Cli("run scenarios/lab_two_cars_oracle.yaml -q --out " + out.string());
