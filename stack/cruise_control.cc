@@ -58,6 +58,19 @@ double CommandCurvature(const CruiseControlParams& params, double speed_mps,
   return std::clamp(yaw_rate_rad_per_s / speed_mps, -k_max, k_max);
 }
 
+namespace {
+
+// The steering of a normal cycle: κ from the latest command, except that the zero twist (0/0: no
+// pulse) leaves it where it was when hold_steering_on_zero_command.
+double SteeringCurvature(const CruiseControlParams& params, const CruiseControlState& s) {
+  const bool zero_twist = std::abs(s.command->speed_mps) < params.min_speed_for_curvature_mps &&
+                          s.command->yaw_rate_rad_per_s == 0.0;
+  if (zero_twist && params.hold_steering_on_zero_command) return s.curvature_per_m;
+  return CommandCurvature(params, s.command->speed_mps, s.command->yaw_rate_rad_per_s);
+}
+
+}  // namespace
+
 CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
                                       const CruiseControlInput& input, CruiseControlState* state) {
   CruiseControlState& s = *state;
@@ -114,12 +127,7 @@ CruiseControlOutput StepCruiseControl(const CruiseControlParams& params,
   }
   s.last_cycle = input.now;
   out.error_mps = error;
-  const bool zero_twist = std::abs(s.command->speed_mps) < params.min_speed_for_curvature_mps &&
-                          s.command->yaw_rate_rad_per_s == 0.0;
-  out.curvature_per_m =
-      zero_twist && params.hold_steering_on_zero_command
-          ? s.curvature_per_m  // no pulse: the servo stays
-          : CommandCurvature(params, s.command->speed_mps, s.command->yaw_rate_rad_per_s);
+  out.curvature_per_m = SteeringCurvature(params, s);
   s.curvature_per_m = out.curvature_per_m;
   if (!s.pid_fresh && dt_s == 0.0) return out;  // control_toolbox answers a zero dt with 0
   s.pid_fresh = false;

@@ -21,6 +21,11 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitExpectationFailed = 1;
 inline constexpr int kExitUnusableInput = 2;
 
+// `--profile`'s help, for the commands that take a platform profile (sim::ResolveShippedFile).
+inline constexpr const char* kProfileHelp =
+    "Platform profile (YAML); from any folder a shipped one is found by its path in the checkout "
+    "or under scenarios/ (platforms/x86_loopback.yaml)";
+
 // A subcommand: its CLI11 app, and what to do when it was the one given.
 struct Command {
   CLI::App* app{nullptr};

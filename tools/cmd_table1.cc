@@ -94,10 +94,7 @@ Command AddTable1Command(CLI::App& parent) {
       "table1",
       "Reproduce the paper's Table I on the platform model (8 configurations) and run the whole "
       "unit in software; exit 0 only when every cell is in the paper's range");
-  table1
-      ->add_option("--profile", o->profile,
-                   "Platform profile (YAML); from any folder a shipped one is found by its path in "
-                   "the checkout or under scenarios/ (platforms/x86_loopback.yaml)")
+  table1->add_option("--profile", o->profile, kProfileHelp)
       ->type_name("FILE")
       ->capture_default_str();
   table1->add_option("--json", o->json, "Also write the results as JSON")->type_name("FILE");

@@ -96,11 +96,7 @@ Command AddTransportCommand(CLI::App& parent) {
                   "Busy loops beside the pair, each one core's worth of demand")
       ->type_name("CORES")
       ->capture_default_str();
-  cmd->add_option("--profile", o->profile,
-                  "Platform profile (YAML); from any folder a shipped one is found by its path in "
-                  "the checkout or under scenarios/ (platforms/x86_loopback.yaml)")
-      ->type_name("FILE")
-      ->capture_default_str();
+  cmd->add_option("--profile", o->profile, kProfileHelp)->type_name("FILE")->capture_default_str();
   cmd->add_option("--set", o->overrides,
                   "Override a profile field, e.g. --set dds.receive_buffer_bytes=4194304 or "
                   "dds.fragment_bytes=65000, dds.reliability=best_effort, dds.history=keep_all "
