@@ -204,8 +204,8 @@ Command AddSweepCommand(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   sweep
       ->add_option("--out", o->out,
-                   "Sweep folder (shared by its shards and resumed runs); an existing folder that "
-                   "this program did not write is refused unless empty (see --force)")
+                   "Sweep folder, required (shared by its shards and resumed runs); an existing "
+                   "folder that this program did not write is refused unless empty (see --force)")
       ->type_name("DIR");
   sweep->add_flag("--force", o->force,
                   "Write into --out even if this program did not write it (never a device)");

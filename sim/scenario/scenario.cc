@@ -540,6 +540,13 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   // before any --set: a file that is not a mapping is the file's error, not the override's
   if (!root.IsMap())
     detail::Fail(root, "", source, "expected a mapping, got " + detail::Describe(root));
+  // a study file (sim/study) given where a scenario goes: say what it is, not "unknown key"
+  if (root["scenario"] && !root["cars"]) {
+    detail::Fail(root["scenario"], "scenario", source,
+                 "this is a study file (a `scenario:` to vary), not a scenario: run it with "
+                 "`autonomsim sweep " +
+                     file.string() + "`");
+  }
   BreakAliases(root);
   for (const std::string& assignment : overrides) ApplyOverride(root, assignment, &source);
   if (seed) ApplyOverride(root, "seed=" + std::to_string(*seed), &source);

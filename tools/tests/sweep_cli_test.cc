@@ -94,6 +94,7 @@ TEST(SweepCliTest, HelpAnswers) {
   EXPECT_EQ(sweep.exit_code, 0);
   EXPECT_THAT(sweep.output, HasSubstr("--vary"));
   EXPECT_THAT(sweep.output, HasSubstr("--shard"));
+  EXPECT_THAT(sweep.output, HasSubstr("Sweep folder, required"));  // issue 34: it did not say
   const Result merge = Cli("sweep merge --help");
   EXPECT_EQ(merge.exit_code, 0);
   EXPECT_THAT(merge.output, HasSubstr("DIR"));

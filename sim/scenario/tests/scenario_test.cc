@@ -192,6 +192,12 @@ INSTANTIATE_TEST_SUITE_P(
                    {F("obstacle_times") + ":16:41: obstacles[0].disappear_s: disappear_s must be "
                                           "after appear_s"}},
         BrokenCase{"no_cars", "name: empty\ncars: []\n", {}, {"cars must not be empty"}},
+        // issue 34: `run STUDY.yaml` said "unknown key 'scenario'"
+        BrokenCase{"a_study",
+                   "scenario: ../lab_two_cars.yaml\nrepeat: 3\n",
+                   {},
+                   {F("a_study") + ":1:11: scenario: this is a study file",
+                    "run it with `autonomsim sweep " + F("a_study") + "`"}},
         BrokenCase{"yaml_syntax",
                    Replace(kValid, "seed: 3", "seed: [3"),
                    {},
