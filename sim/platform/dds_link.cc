@@ -46,12 +46,9 @@ double DdsLinkParams::SendCoreSeconds(std::int64_t datagram_bytes) const {
 }
 
 double DdsLinkParams::SampleCoreSeconds(const DdsSideCost& side, std::int64_t sample_bytes) const {
-  // the terms in DdsSideCoreSeconds' order (sim/platform/platform.cc), for the same sum
-  const double datagrams = static_cast<double>(DatagramsFor(sample_bytes));
-  const double fragments = static_cast<double>(CeilDiv(sample_bytes, fragment_bytes));
-  return Seconds(side.fixed) +
-         static_cast<double>(side.copies) * static_cast<double>(sample_bytes) / memcpy_bytes_per_s +
-         datagrams * Seconds(side.per_datagram) + fragments * Seconds(side.per_fragment);
+  // DdsCost's sum, with the datagrams as Cyclone packs the fragments
+  return DdsSideCoreSeconds(side, memcpy_bytes_per_s, sample_bytes, DatagramsFor(sample_bytes),
+                            CeilDiv(sample_bytes, fragment_bytes));
 }
 
 DdsLinkParams DdsLinkParamsFor(const PlatformProfile& profile, const TopicTransportConfig& topic,

@@ -18,9 +18,15 @@ double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies) {
 
 double DdsSideCoreSeconds(const PlatformProfile& profile, const DdsSideCost& side,
                           std::int64_t bytes) {
-  const std::int64_t datagrams = CeilDiv(bytes, profile.dds.max_message_bytes);
-  const std::int64_t fragments = CeilDiv(bytes, profile.dds.fragment_bytes);
-  return ToSeconds(side.fixed) + CopyCoreSeconds(profile.cpu, bytes, side.copies) +
+  return DdsSideCoreSeconds(side, profile.cpu.memcpy_bytes_per_s, bytes,
+                            CeilDiv(bytes, profile.dds.max_message_bytes),
+                            CeilDiv(bytes, profile.dds.fragment_bytes));
+}
+
+double DdsSideCoreSeconds(const DdsSideCost& side, double memcpy_bytes_per_s, std::int64_t bytes,
+                          std::int64_t datagrams, std::int64_t fragments) {
+  return ToSeconds(side.fixed) +
+         static_cast<double>(side.copies) * static_cast<double>(bytes) / memcpy_bytes_per_s +
          static_cast<double>(datagrams) * ToSeconds(side.per_datagram) +
          static_cast<double>(fragments) * ToSeconds(side.per_fragment);
 }

@@ -30,9 +30,13 @@ inline std::int64_t CeilDiv(std::int64_t a, std::int64_t b) { return a <= 0 ? 0 
 
 // Core-seconds of `copies` memcpy passes over `bytes`.
 double CopyCoreSeconds(const CpuProfile& cpu, std::int64_t bytes, int copies = 1);
-// Core-seconds of one side of a DDS transfer (DdsSideCost's formula).
+// Core-seconds of one side of a DDS transfer (DdsSideCost's formula): its fixed cost, its copies
+// of the bytes, and its cost per datagram and per fragment. The first form counts the sample's
+// datagrams and fragments with the profile's sizes.
 double DdsSideCoreSeconds(const PlatformProfile& profile, const DdsSideCost& side,
                           std::int64_t bytes);
+double DdsSideCoreSeconds(const DdsSideCost& side, double memcpy_bytes_per_s, std::int64_t bytes,
+                          std::int64_t datagrams, std::int64_t fragments);
 
 // What sending one message costs, per transport.
 struct TransportCost {
