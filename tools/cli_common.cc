@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <thread>
 
@@ -97,8 +98,11 @@ double WallSecondsSince(std::chrono::steady_clock::time_point start) {
 Progress::Progress(double total_s, bool quiet)
     : total_s_(total_s), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1) {}
 
+Progress::Progress(std::string label, bool quiet)
+    : label_(std::move(label)), total_s_(0.0), quiet_(quiet), tty_(false) {}
+
 void Progress::Update(double sim_s) {
-  if (quiet_) return;
+  if (quiet_ || total_s_ <= 0.0) return;
   const int percent = static_cast<int>(100.0 * sim_s / total_s_);
   const double wall_s = WallSecondsSince(start_);
   const double rtf = wall_s > 0 ? sim_s / wall_s : 0.0;
@@ -108,8 +112,8 @@ void Progress::Update(double sim_s) {
     std::fflush(stderr);
   } else if (percent / 10 > last_decile_) {
     last_decile_ = percent / 10;
-    fmt::print(stderr, "  {:.1f} / {:.1f} s simulated ({}%), {:.1f}x real time\n", sim_s, total_s_,
-               percent, rtf);
+    fmt::print(stderr, "  {}{:.1f} / {:.1f} s simulated ({}%), {:.1f}x real time\n",
+               label_.empty() ? "" : label_ + ": ", sim_s, total_s_, percent, rtf);
   }
 }
 
@@ -171,7 +175,7 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
 }
 
 Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
-                const std::optional<fs::path>& out_dir, bool force) {
+                const std::optional<fs::path>& out_dir, bool force, Progress* progress) {
   // a scenario that could not run: its outcome carries the reason
   const auto cannot_run = [&](const std::exception& e) {
     Outcome outcome;
@@ -182,7 +186,9 @@ Outcome RunFile(const fs::path& file, const std::vector<std::string>& overrides,
   };
   try {
     if (out_dir) sim::CheckOutputFolder(out_dir->string(), force);  // before the run
-    return RunLoaded(sim::LoadScenario(file, overrides), out_dir, nullptr, force);
+    const sim::LoadedScenario loaded = sim::LoadScenario(file, overrides);
+    if (progress) progress->SetTotal(ToSeconds(loaded.scenario.duration));
+    return RunLoaded(loaded, out_dir, progress, force);
   } catch (const sim::ConfigError& e) {
     return cannot_run(e);
   } catch (const sim::MqttError& e) {  // v2i.link: mqtt, and the broker or tlserver failed us
@@ -207,6 +213,12 @@ void WriteOutcomeReport(Outcome* outcome) {
   }
 }
 
+std::optional<std::string> ReportLink(const Outcome& outcome, const sim::ExpectationResult& e) {
+  if (!outcome.report || !e.at_s) return std::nullopt;
+  return fmt::format("file://{}#t={:.3f}", fs::absolute(*outcome.report).string(),
+                     std::ceil(*e.at_s * 1e3) / 1e3);
+}
+
 void PrintReportPath(const Outcome& outcome) {
   if (!outcome.report) return;
   const auto first_failure =
@@ -215,9 +227,8 @@ void PrintReportPath(const Outcome& outcome) {
   if (first_failure == outcome.expectations.end()) {
     fmt::print("  report: {}\n", outcome.report->string());
   } else {
-    fmt::print("  report: {} (at the first failure: file://{}#t={:.2f})\n",
-               outcome.report->string(), fs::absolute(*outcome.report).string(),
-               *first_failure->at_s);
+    fmt::print("  report: {} (at the first failure: {})\n", outcome.report->string(),
+               *ReportLink(outcome, *first_failure));
   }
 }
 

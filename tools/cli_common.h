@@ -40,6 +40,7 @@ Command AddRenderCommand(CLI::App& parent);
 Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);
 Command AddReferenceCommand(CLI::App& parent);
+Command AddValidateCommand(CLI::App& parent);
 // The video command lives in the `autonomsim-video` helper (tools/autonomsim_video.cc);
 // `autonomsim video ...` runs it with the same arguments (AddVideoForwarder).
 Command AddVideoCommand(CLI::App& parent);
@@ -65,15 +66,20 @@ double WallSecondsSince(std::chrono::steady_clock::time_point start);
 // --jobs' default for the commands that run scenarios in parallel: every core (at least one).
 int DefaultJobs();
 
-// Progress on stderr: a line rewritten in place on a terminal, a line per 10% otherwise.
+// Progress on stderr: a line rewritten in place on a terminal, a line per 10% otherwise. A
+// labelled one (runs in parallel, as check's) always writes lines, each naming its run, and
+// learns the run's length when it starts (SetTotal).
 class Progress {
  public:
   Progress(double total_s, bool quiet);
+  Progress(std::string label, bool quiet);
+  void SetTotal(double total_s) { total_s_ = total_s; }
   void Update(double sim_s);
   void Done();
 
  private:
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::string label_;
   double total_s_;
   bool quiet_;
   bool tty_;
@@ -105,12 +111,17 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded,
                   bool force = false);
 // Loads, runs and judges one scenario file; unusable input becomes the outcome's input_error.
 Outcome RunFile(const std::filesystem::path& file, const std::vector<std::string>& overrides,
-                const std::optional<std::filesystem::path>& out_dir, bool force = false);
+                const std::optional<std::filesystem::path>& out_dir, bool force = false,
+                Progress* progress = nullptr);
 void PrintVerdicts(const Outcome& outcome);
 
 // Writes the replay report of the run folder of `outcome` (RUN_DIR/report.html) and records it
 // in the outcome; a report that cannot be written is a warning on stderr, not a failed run.
 void WriteOutcomeReport(Outcome* outcome);
+// The address that opens the outcome's replay report at a failure: at its time rounded up to the
+// millisecond (the report shows what happened at or before the instant it opens at); none without
+// a report or a time.
+std::optional<std::string> ReportLink(const Outcome& outcome, const sim::ExpectationResult& e);
 // "report: PATH", and for a failed run the address that opens it at the first failure.
 void PrintReportPath(const Outcome& outcome);
 

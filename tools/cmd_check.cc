@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 
 #include "sim/core/config.h"
@@ -16,18 +17,40 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// JUnit XML as CI servers read it (Jenkins, GitLab): one testsuite per scenario, carrying the
-// scenario's wall time and its identity as properties (with its result folder and replay report
-// when written); one testcase per expectation. A testcase
-// has no time of its own: the expectations are judged together after one run.
-std::string JunitXml(const std::vector<Outcome>& outcomes) {
+// A scenario file check was given, and its name (ExpandScenarioArgs).
+struct ScenarioArg {
+  fs::path file;
+  std::string name;
+};
+
+// A failure's text in JUnit: what stdout prints for it, the detail with its time and car, and the
+// replay report at that instant when one was written.
+std::string FailureText(const Outcome& o, const sim::ExpectationResult& e) {
+  std::string text;
+  if (e.at_s) text += fmt::format("at t = {:.3f} s", *e.at_s);
+  if (e.car) text += fmt::format("{}car {}", text.empty() ? "" : ", ", *e.car);
+  if (!text.empty()) text += ": ";
+  text += e.detail;
+  if (const std::optional<std::string> link = ReportLink(o, e)) text += "\nreport: " + *link;
+  return text;
+}
+
+// JUnit XML as CI servers read it (Jenkins, GitLab): one testsuite per scenario, named by its
+// file's path relative to the argument given to check (as its result folder is), carrying the
+// scenario's wall time and its identity as properties (its name, its result folder and replay
+// report when written); one testcase per expectation. A testcase has no time of its own: the
+// expectations are judged together after one run.
+std::string JunitXml(const std::vector<Outcome>& outcomes, const std::vector<ScenarioArg>& files) {
   int tests = 0, failures = 0, errors = 0;
   double seconds = 0.0;
   std::string suites;
-  for (const Outcome& o : outcomes) {
-    const std::string name = sim::XmlEscape(o.scenario_name);
-    std::string properties = fmt::format("      <property name=\"scenario_file\" value=\"{}\"/>\n",
-                                         sim::XmlEscape(o.file));
+  for (std::size_t i = 0; i < outcomes.size(); ++i) {
+    const Outcome& o = outcomes[i];
+    const std::string name = sim::XmlEscape(files[i].name);
+    std::string properties = fmt::format(
+        "      <property name=\"scenario_file\" value=\"{}\"/>\n"
+        "      <property name=\"scenario_name\" value=\"{}\"/>\n",
+        sim::XmlEscape(o.file), sim::XmlEscape(o.scenario_name));
     std::string cases;
     int suite_failures = 0;
     if (o.input_error) {
@@ -54,7 +77,7 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
         if (!e.passed) {
           ++suite_failures;
           cases += fmt::format("      <failure message=\"{}\">{}</failure>\n",
-                               sim::XmlEscape(e.detail), sim::XmlEscape(e.detail));
+                               sim::XmlEscape(e.detail), sim::XmlEscape(FailureText(o, e)));
         } else {
           cases += fmt::format("      <system-out>{}</system-out>\n", sim::XmlEscape(e.detail));
         }
@@ -80,10 +103,18 @@ std::string JunitXml(const std::vector<Outcome>& outcomes) {
          suites + "</testsuites>\n";
 }
 
-// SCENARIO|DIR... -> scenario files; a folder contributes the *.yaml files directly inside it,
-// except hidden ones (editor and tool droppings).
-std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
-  std::vector<fs::path> files;
+// SCENARIO|DIR... -> scenario files, each with its name: its path relative to the argument that
+// named it (a folder's *.yaml files directly inside it, except hidden ones: editor and tool
+// droppings; a file argument: its file name), without ".yaml". Its JUnit suite and its result
+// folder under --out carry that name, so two copies of one scenario under different file names
+// stay apart.
+std::vector<ScenarioArg> ExpandScenarioArgs(const std::vector<std::string>& args) {
+  std::vector<ScenarioArg> files;
+  const auto named = [](const fs::path& file, const fs::path& relative) {
+    fs::path name = relative;
+    if (name.extension() == ".yaml") name.replace_extension();
+    return ScenarioArg{file, name.generic_string()};
+  };
   for (const std::string& arg : args) {
     const fs::path path(arg);
     if (fs::is_directory(path)) {
@@ -96,65 +127,85 @@ std::vector<fs::path> ExpandScenarioArgs(const std::vector<std::string>& args) {
       }
       std::sort(found.begin(), found.end());
       if (found.empty()) throw sim::ConfigError(arg + ": no *.yaml scenario files in this folder");
-      files.insert(files.end(), found.begin(), found.end());
+      for (const fs::path& file : found)
+        files.push_back(named(file, file.lexically_relative(path)));
     } else {
-      files.push_back(path);
+      files.push_back(named(path, path.filename()));
     }
   }
   return files;
 }
 
-// Each scenario's result folder under `out`, named by its file name, checked as an output (before
-// anything runs); two scenarios of one file name would mix their results in one: ConfigError.
-void CheckResultFolders(const std::vector<fs::path>& files, const std::string& out, bool force) {
+// Two scenarios of one name would write one JUnit suite name twice and mix their results in one
+// folder under --out: ConfigError before anything runs (with --out or --junit). Each result folder
+// is checked as an output.
+void CheckNames(const std::vector<ScenarioArg>& files, const std::optional<std::string>& out,
+                bool force) {
   std::map<std::string, fs::path> by_name;
-  for (const fs::path& file : files) {
-    const auto [it, added] = by_name.emplace(file.stem().string(), file);
+  for (const ScenarioArg& file : files) {
+    const auto [it, added] = by_name.emplace(file.name, file.file);
     if (!added) {
-      throw sim::ConfigError(it->second.string() + " and " + file.string() + " would both write " +
-                             (fs::path(out) / file.stem()).string() +
-                             " (check names a result folder by its scenario's file name): check "
-                             "them with different --out folders, or copy one under another name");
+      throw sim::ConfigError(
+          it->second.string() + " and " + file.file.string() + " both have the name '" + file.name +
+          "' (check names a scenario's JUnit suite and result folder by its file's path relative "
+          "to the argument that named it): check them in separate calls, or copy one under "
+          "another name");
     }
   }
-  for (const fs::path& file : files) {
-    sim::CheckOutputFolder((fs::path(out) / file.stem()).string(), force);
+  if (!out) return;
+  for (const ScenarioArg& file : files) {
+    sim::CheckOutputFolder((fs::path(*out) / file.name).string(), force);
   }
 }
 
-int CheckCommand(const std::vector<std::string>& args, const std::optional<std::string>& junit,
-                 const std::optional<std::string>& out, const std::vector<std::string>& overrides,
-                 int jobs, bool force, bool report) {
+struct CheckOptions {
+  std::vector<std::string> args;
+  std::optional<std::string> junit;
+  std::optional<std::string> out;
+  std::vector<std::string> overrides;
+  int jobs = DefaultJobs();
+  bool force{false};
+  bool report{false};
+  bool quiet{false};
+};
+
+int CheckCommand(const CheckOptions& options) {
+  const auto& [args, junit, out, overrides, jobs, force, report, quiet] = options;
   InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
-  std::vector<fs::path> files;
+  std::vector<ScenarioArg> files;
   try {
     files = ExpandScenarioArgs(args);
+    if (out || junit) CheckNames(files, out, force);  // before anything runs
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
-  if (out) {  // every result folder is refused before anything runs
-    try {
-      CheckResultFolders(files, *out, force);
-    } catch (const sim::ConfigError& e) {
-      fmt::print(stderr, "error: {}\n", e.what());
-      return kExitUnusableInput;
-    }
-  }
   // Each scenario is an independent run: spread them over `jobs` threads; the verdicts do not
-  // depend on the order or the thread a run lands on.
+  // depend on the order or the thread a run lands on. Progress on stderr names the scenario on
+  // each line (runs in parallel share the stream).
   std::vector<Outcome> outcomes(files.size());
+  std::atomic<std::size_t> finished{0};
   sim::ParallelFor(files.size(), jobs, [&](std::size_t i) {
     if (InterruptRequested()) return;  // Ctrl-C: start nothing more
     std::optional<fs::path> dir;
-    if (out) dir = fs::path(*out) / files[i].stem();
+    if (out) dir = fs::path(*out) / files[i].name;
+    if (!quiet) {
+      fmt::print(stderr, "check: {} started ({} of {})\n", files[i].name, i + 1, files.size());
+    }
     try {
-      outcomes[i] = RunFile(files[i], overrides, dir, force);
+      Progress progress(files[i].name, quiet);
+      outcomes[i] = RunFile(files[i].file, overrides, dir, force, &progress);
       if (report) WriteOutcomeReport(&outcomes[i]);
     } catch (const std::exception& e) {
-      outcomes[i].file = files[i].string();
-      outcomes[i].scenario_name = files[i].stem().string();
+      outcomes[i].file = files[i].file.string();
+      outcomes[i].scenario_name = files[i].name;
       outcomes[i].input_error = std::string("run failed: ") + e.what();
+    }
+    if (!quiet) {
+      const Outcome& o = outcomes[i];
+      fmt::print(stderr, "check: {} {} in {:.1f} s ({} of {} done)\n", files[i].name,
+                 o.input_error ? "unusable" : (o.passed() ? "passed" : "FAILED"), o.wall_seconds,
+                 ++finished, files.size());
     }
   });
 
@@ -185,7 +236,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
              outcomes.size(), outcomes.size() - static_cast<std::size_t>(failed + unusable), failed,
              failed_expectations, unusable);
   if (junit) {
-    sim::WriteFileAtomically(*junit, JunitXml(outcomes));
+    sim::WriteFileAtomically(*junit, JunitXml(outcomes, files));
     fmt::print("JUnit XML: {}\n", *junit);
   }
   if (unusable > 0) return kExitUnusableInput;
@@ -195,16 +246,7 @@ int CheckCommand(const std::vector<std::string>& args, const std::optional<std::
 }  // namespace
 
 Command AddCheckCommand(CLI::App& parent) {
-  struct Options {
-    std::vector<std::string> args;
-    std::optional<std::string> junit;
-    std::optional<std::string> out;
-    std::vector<std::string> overrides;
-    int jobs = DefaultJobs();
-    bool force{false};
-    bool report{false};
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<CheckOptions>();
   CLI::App* check = parent.add_subcommand(
       "check", "Run scenarios and judge their expect: clauses (for CI): exit 0 when all hold");
   check
@@ -213,30 +255,34 @@ Command AddCheckCommand(CLI::App& parent) {
       ->required();
   check
       ->add_option("--junit", o->junit,
-                   "Also write the verdicts as JUnit XML: a testsuite per scenario (its wall time; "
-                   "properties scenario_file, seed, scenario_sha256, result_folder with --out, "
-                   "report with --report), a testcase per expectation")
+                   "Also write the verdicts as JUnit XML: a testsuite per scenario, named by its "
+                   "file's path relative to the argument that named it, without .yaml (its wall "
+                   "time; properties scenario_file, scenario_name, seed, scenario_sha256, "
+                   "result_folder with --out, report with --report), a testcase per expectation "
+                   "(a failure's text: its time, car and report link)")
       ->type_name("FILE");
   CLI::Option* out =
       check
-          ->add_option("--out", o->out,
-                       "Keep each run's result folder under DIR/<scenario> (each replaced only if "
-                       "this program wrote it, else refused: see --force)")
+          ->add_option(
+              "--out", o->out,
+              "Keep each run's result folder under DIR/<name> (<name>: the scenario file's "
+              "path relative to the argument that named it, without .yaml; each replaced "
+              "only if this program wrote it, else refused: see --force)")
           ->type_name("DIR");
   check->add_flag("--force", o->force,
-                  "Replace DIR/<scenario> even if this program did not write it (never a device)");
+                  "Replace DIR/<name> even if this program did not write it (never a device)");
   check
       ->add_flag("--report", o->report,
-                 "Also write each run's replay report, DIR/<scenario>/report.html (see "
+                 "Also write each run's replay report, DIR/<name>/report.html (see "
                  "`autonomsim report`); a failed scenario prints its path")
       ->needs(out);
   check->add_option("--jobs,-j", o->jobs, "Scenarios run in parallel (default: all cores)")
       ->check(CLI::PositiveNumber);
   AddSetOption(check, &o->overrides);
-  return {check, [o] {
-            return CheckCommand(o->args, o->junit, o->out, o->overrides, o->jobs, o->force,
-                                o->report);
-          }};
+  check->add_flag("--quiet,-q", o->quiet,
+                  "No progress on stderr (by default: a line when each scenario starts and ends, "
+                  "and one per 10 % of its simulated time)");
+  return {check, [o] { return CheckCommand(*o); }};
 }
 
 }  // namespace autonomsim::cli

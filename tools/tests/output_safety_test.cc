@@ -130,7 +130,7 @@ TEST(OutputSafety, CheckRefusesTwoScenariosThatWouldWriteOneResultFolder) {
       Cli("check " + (dir / "a" / "x.yaml").string() + " " + (dir / "b" / "x.yaml").string() +
           " --jobs 2 --out " + (dir / "out").string());
   EXPECT_EQ(both.exit_code, 2) << both.output;
-  EXPECT_THAT(both.output, HasSubstr("would both write"));
+  EXPECT_THAT(both.output, HasSubstr("both have the name 'x'"));
   EXPECT_THAT(both.output, Not(HasSubstr("pass ")));  // refused before anything ran
   EXPECT_FALSE(fs::exists(dir / "out"));
   // without --out nothing is written, so nothing can mix: both run

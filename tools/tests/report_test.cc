@@ -4,6 +4,7 @@
 // trajectory.csv has them.
 #include "sim/results/report.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -205,6 +206,25 @@ TEST_F(ReportTest, ACheckWithReportsNamesThemInItsOutputAndItsJunit) {
   EXPECT_THAT(r.output, HasSubstr("report: " + report.string()));
   EXPECT_THAT(r.output, HasSubstr(".html#t="));
   EXPECT_THAT(Read(junit), HasSubstr("<property name=\"report\" value=\"" + report.string()));
+  // Issue 34: the JUnit failure carries what stdout prints (time, car, report link), and the link
+  // opens the report at or after the failure, never before it (15.212 s was linked as 15.21).
+  const nlohmann::json failure =
+      nlohmann::json::parse(Read(out / "lab_two_cars_oracle" / "summary.json"))["expectations"][0];
+  const double at_s = failure["at_s"].get<double>();
+  const std::string xml = Read(junit);
+  EXPECT_THAT(xml, HasSubstr(fmt::format("<failure message=\"{}\">at t = {:.3f} s, car {}: ",
+                                         sim::XmlEscape(failure["detail"].get<std::string>()), at_s,
+                                         failure["car"].get<int>())));
+  const std::size_t link = xml.find("report: file://");
+  ASSERT_NE(link, std::string::npos) << xml;
+  const std::size_t t_at = xml.find("#t=", link);
+  ASSERT_NE(t_at, std::string::npos);
+  const double link_s = std::stod(xml.substr(t_at + 3));
+  EXPECT_GE(link_s, at_s);
+  EXPECT_LT(link_s, at_s + 0.0011);
+  const std::size_t printed = r.output.find(".html#t=");
+  ASSERT_NE(printed, std::string::npos);
+  EXPECT_GE(std::stod(r.output.substr(printed + 8)), at_s);
   const Result no_out = Cli("check scenarios/lab_two_cars_oracle.yaml --report");
   EXPECT_EQ(no_out.exit_code, 2);
   EXPECT_THAT(no_out.output, HasSubstr("--out"));
