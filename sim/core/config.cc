@@ -495,7 +495,31 @@ void BreakAliases(YAML::Node& root) {
   if (!fresh.is(root)) root.reset(fresh);
 }
 
-void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source) {
+namespace {
+
+// The last step of an override into a mapping: a null removes the key (there may be nothing to
+// remove), any other value replaces it and removes the key's alternatives.
+void SetMapKey(YAML::Node& map, const std::string& key, const YAML::Node& value,
+               const AlternativeKeys& alternatives) {
+  if (value.IsNull()) {
+    if (map.IsMap()) map.remove(key);
+    return;
+  }
+  if (map.IsMap()) {
+    for (const std::vector<std::string>& group : alternatives) {
+      if (std::find(group.begin(), group.end(), key) == group.end()) continue;
+      for (const std::string& other : group) {
+        if (other != key) map.remove(other);
+      }
+    }
+  }
+  map[key] = value;
+}
+
+}  // namespace
+
+void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source,
+                   const AlternativeKeys& alternatives) {
   const std::size_t equals = assignment.find('=');
   if (equals == std::string::npos || equals == 0) {
     throw ConfigError("--set " + assignment + ": expected key=value, e.g. cars[0].laps=3");
@@ -534,7 +558,9 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
                           "' has " + std::to_string(node.size()) + " entries)");
       }
       canonical = detail::JoinIndex(canonical, index);
-      if (last) {
+      if (last && value.IsNull()) {
+        node.remove(index);
+      } else if (last) {
         node[index] = value;
       } else {
         YAML::Node child = node[index];
@@ -547,7 +573,7 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource
       }
       canonical = detail::JoinPath(canonical, t);
       if (last) {
-        node[t] = value;
+        SetMapKey(node, t, value, alternatives);
       } else {
         YAML::Node child = node[t];
         node.reset(child);

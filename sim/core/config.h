@@ -44,12 +44,19 @@ struct ConfigSource {
 // syntax error, and a key repeated in a mapping.
 YAML::Node LoadYamlFile(const std::filesystem::path& file);
 
+// Keys of one mapping of which a file gives at most one (e.g. a car's `start` and `start_s_m`):
+// an override that sets one removes the others from its mapping.
+using AlternativeKeys = std::vector<std::vector<std::string>>;
+
 // Applies `--set path=value`: the path is dot-separated keys with [i] for list elements (e.g.
 // cars[0].oracle.speed_mps; anything else is refused, see ParseOverridePath); the value is parsed
 // as YAML (so 0.3, true, [1, 2] and {a: 1} all work). Missing map keys are created (the strict
-// reader then rejects those the schema does not know); list indices must exist. Records the path in
+// reader then rejects those the schema does not know); list indices must exist. A null value
+// (`null` or `~`) removes the key, or the list entry, so that its default applies (an optional
+// key is then unset). Setting one of `alternatives` removes the others. Records the path in
 // source.
-void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source);
+void ApplyOverride(YAML::Node& root, const std::string& assignment, ConfigSource* source,
+                   const AlternativeKeys& alternatives = {});
 // Gives every place an alias (*name) refers to its own copy of the anchored value, so that an
 // override or a preset of one place (cars[1].stack...) leaves the others (cars[0].stack, anchored
 // `&stack`) as the file wrote them. yaml-cpp shares an anchored node among its aliases, and

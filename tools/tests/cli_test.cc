@@ -193,6 +193,76 @@ TEST(CliTest, CheckExitsOneOnAFailedExpectationAndSaysWhich) {
   EXPECT_THAT(Read(junit), HasSubstr("<failure message="));
 }
 
+// Issue 34: check named a JUnit suite by the scenario's `name:`, so a copied scenario gave two
+// suites of one name (and result folders used the file name). Both now carry the file's path
+// relative to the argument that named it, and the progress on stderr names each run.
+TEST(CliTest, CheckNamesSuitesAndFoldersByTheScenarioFilesPath) {
+  const fs::path dir = Scratch();
+  fs::create_directories(dir / "copies");
+  fs::copy_file("scenarios/intersection_conflict.yaml", dir / "copies" / "first.yaml");
+  fs::copy_file("scenarios/intersection_conflict.yaml", dir / "copies" / "second.yaml");
+  const fs::path junit = dir / "check.xml";
+  const Result r =
+      Cli("check " + (dir / "copies").string() + " --set duration_s=5 --jobs 2 --out " +
+          (dir / "out").string() + " --junit " + junit.string());
+  ASSERT_EQ(r.exit_code, 1) << r.output;  // its laps cannot complete in 5 s
+  const std::string xml = Read(junit);
+  EXPECT_EQ(Count(xml, "<testsuite name=\"first\" "), 1) << xml;
+  EXPECT_EQ(Count(xml, "<testsuite name=\"second\" "), 1) << xml;
+  EXPECT_EQ(Count(xml, "<property name=\"scenario_name\" value=\"intersection_conflict\"/>"), 2);
+  EXPECT_TRUE(fs::exists(dir / "out" / "first" / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "second" / "summary.json"));
+  EXPECT_THAT(r.output, HasSubstr("check: first started"));
+  EXPECT_THAT(r.output, HasSubstr("check: second FAILED in"));
+  EXPECT_THAT(r.output, HasSubstr("  first: 3.0 / 5.0 s simulated (60%)"));
+  const Result quiet =
+      Cli("check " + (dir / "copies" / "first.yaml").string() + " --set duration_s=5 --quiet");
+  EXPECT_THAT(quiet.output, ::testing::Not(HasSubstr("check: first")));
+  EXPECT_THAT(quiet.output, ::testing::Not(HasSubstr("s simulated (")));
+}
+
+// Issue 34, deliver 1: validate loads, resolves and checks without running; --print shows every
+// default; a study resolves every run of its grid.
+TEST(CliTest, ValidateChecksWithoutRunningAndPrintsTheResolvedScenario) {
+  const fs::path dir = Scratch();
+  const Result ok = Cli("validate scenarios/lab_two_cars.yaml --set duration_s=100");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_THAT(ok.output, HasSubstr("OK    scenarios/lab_two_cars.yaml: scenario 'lab_two_cars', 2 "
+                                   "car(s), 100 s, seed 42, scenario_sha256 "));
+  // the warnings a run would print: its deadline past the shortened end, and the keys it sets
+  // against its stack preset
+  EXPECT_THAT(ok.output, HasSubstr("warning: scenarios/lab_two_cars.yaml:"));
+  EXPECT_THAT(ok.output, HasSubstr("is past the run's end (duration_s 100 s)"));
+  EXPECT_THAT(ok.output, HasSubstr("option(s) of stack.preset lab itself"));
+  EXPECT_THAT(ok.output, ::testing::Not(HasSubstr("simulated")));  // nothing ran
+
+  const Result printed = Cli("validate scenarios/lab_two_cars_oracle.yaml --print --seed 9");
+  ASSERT_EQ(printed.exit_code, 0) << printed.output;
+  const nlohmann::json resolved =
+      nlohmann::json::parse(printed.output.substr(printed.output.find('{')));
+  EXPECT_EQ(resolved["scenario"]["seed"].get<int>(), 9);
+  EXPECT_TRUE(resolved["scenario"]["cars"][0]["vehicle"].contains("mass_kg"));  // a default
+  EXPECT_TRUE(resolved["track"].contains("intersections"));
+
+  std::ofstream(dir / "broken.yaml") << "name: broken\nduration_s: 10\ncars:\n  - id: 0\n"
+                                        "    route: south_loop\n    speeed_mps: 1\n";
+  const Result broken =
+      Cli("validate scenarios/intersection_conflict.yaml " + (dir / "broken.yaml").string());
+  EXPECT_EQ(broken.exit_code, 2) << broken.output;
+  EXPECT_THAT(broken.output, HasSubstr("OK    scenarios/intersection_conflict.yaml"));
+  EXPECT_THAT(broken.output, HasSubstr((dir / "broken.yaml").string() + ":6:"));
+  EXPECT_THAT(broken.output, HasSubstr("2 file(s): 1 usable, 1 unusable"));
+
+  const Result study = Cli("validate scenarios/studies/v2i_latency.yaml");
+  EXPECT_EQ(study.exit_code, 0) << study.output;
+  EXPECT_THAT(study.output, HasSubstr("study of"));
+  EXPECT_THAT(study.output, HasSubstr("5 run(s) (1 varied key(s), 1 seed(s) each)"));
+  const Result bad_point =
+      Cli("validate scenarios/studies/v2i_latency.yaml --set v2i.latency_s=-1 --max-runs 4");
+  EXPECT_EQ(bad_point.exit_code, 2) << bad_point.output;
+  EXPECT_THAT(bad_point.output, HasSubstr("max-runs"));
+}
+
 // The suite carries what a CI page shows next to a failure: where the run's folder is and which
 // resolved scenario (seed, hash) gave it; the time is the scenario's, not split over its cases.
 TEST(CliTest, CheckJunitSuitesCarryTheRunsIdentityAndTime) {
