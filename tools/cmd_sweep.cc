@@ -65,6 +65,7 @@ struct SweepOptions {
   int jobs = DefaultJobs();
   std::string shard{"1/1"};
   bool no_plots{false};
+  bool trace{false};
   bool quiet{false};
   std::vector<std::string> merge_dirs;
   std::string merge_out;
@@ -92,6 +93,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     options.jobs = o.jobs;
     options.shard = sim::ParseShard(o.shard);
     options.plots = !o.no_plots;
+    options.trace = o.trace;
     // last: refused, or created and marked, once the rest of the command is known to be usable
     options.out_dir = sim::PrepareOutputFolder(o.out, o.force);
   } catch (const sim::ConfigError& e) {
@@ -217,6 +219,9 @@ Command AddSweepCommand(CLI::App& parent) {
                    "shards' folders with `sweep merge`")
       ->type_name("k/n");
   sweep->add_flag("--no-plots", o->no_plots, "Write results.csv only");
+  sweep->add_flag("--trace", o->trace,
+                  "Also write each run's trace.json (cars with a board; some 10 MB a run): "
+                  "without it a sweep's runs write none");
   sweep->add_flag("--quiet,-q", o->quiet, "No progress output");
 
   CLI::App* merge = sweep->add_subcommand(

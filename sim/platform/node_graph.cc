@@ -649,7 +649,9 @@ MetricsOptions BoardMetricsOptions(const PlatformConfig& config, Time measure_fr
   return {.measure_from = measure_from,
           .load_bin = config.load_bin,
           .trace = config.trace,
-          .trace_max_events = static_cast<std::size_t>(config.trace_max_events)};
+          .trace_max_events = static_cast<std::size_t>(config.trace_max_events),
+          .trace_receive = config.trace_receive_threads,
+          .trace_busy_period = config.trace_busy_period};
 }
 
 }  // namespace

@@ -67,6 +67,7 @@ void RunMetrics::AddCpu(int node, Time t0, Time t1, double cores) {
 
 void RunMetrics::AddBusy(Time t0, Time t1, double cores) {
   busy_core_s_ += cores * MeasuredSeconds(t0, t1);
+  if (options_.trace && options_.trace_busy_period.count() > 0) SampleBusy(t0, t1, cores);
   if (cores <= 0.0 || t1 <= t0) return;
   // Spread over the load bins (whole run, not only the window).
   const std::int64_t bin_ns = options_.load_bin.count();
@@ -82,9 +83,50 @@ void RunMetrics::AddBusy(Time t0, Time t1, double cores) {
 }
 
 void RunMetrics::BusyChanged(Time t, double cores) {
-  if (cores == last_busy_) return;
+  if (options_.trace_busy_period.count() > 0 || cores == last_busy_) return;
   last_busy_ = cores;
   AddTrace({'C', kPidCpu, 0, TraceName("busy cores"), t.count(), 0, cores});
+}
+
+void RunMetrics::SampleBusy(Time t0, Time t1, double cores) {
+  const std::int64_t period = options_.trace_busy_period.count();
+  std::int64_t at = t0.count();
+  const std::int64_t end = t1.count();
+  while (at < end) {
+    const std::int64_t index = at / period;
+    if (index != busy_period_) {
+      CloseBusyPeriod();
+      busy_period_ = index;
+    }
+    const std::int64_t period_end = (index + 1) * period;
+    if (at == index * period && end >= period_end) {
+      // whole periods at `cores` (an idle stretch, a long job): their mean is `cores`, written once
+      const std::int64_t whole = (end - at) / period;
+      WriteBusy(index, cores);
+      busy_period_ = index + whole;  // opens empty
+      at += whole * period;
+      continue;
+    }
+    const std::int64_t until = std::min(end, period_end);
+    busy_area_core_ns_ += cores * static_cast<double>(until - at);
+    at = until;
+  }
+}
+
+void RunMetrics::CloseBusyPeriod() {
+  if (busy_period_ < 0) return;
+  WriteBusy(busy_period_,
+            busy_area_core_ns_ / static_cast<double>(options_.trace_busy_period.count()));
+  busy_area_core_ns_ = 0.0;
+}
+
+void RunMetrics::WriteBusy(std::int64_t period_index, double mean_cores) {
+  // to 0.001 cores: finer is noise of the sum, and each digit is text in every event
+  const double cores = std::round(mean_cores * 1000.0) / 1000.0;
+  if (cores == last_busy_) return;
+  last_busy_ = cores;
+  AddTrace({'C', kPidCpu, 0, TraceName("busy cores"),
+            period_index * options_.trace_busy_period.count(), 0, cores});
 }
 
 void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s, bool timed) {
@@ -92,7 +134,11 @@ void RunMetrics::JobDone(int node, Time start, Time end, double nominal_core_s, 
   NodeData& n = nodes_.at(static_cast<std::size_t>(node));
   ++n.jobs;
   n.job_core_s += nominal_core_s;
-  if (timed) n.turnaround.Add(end - start);
+  if (timed) {
+    n.turnaround.Add(end - start);
+  } else {
+    ++n.callbacks;
+  }
 }
 
 void RunMetrics::ReceiveDone(int node, Time t, double core_s) {
@@ -141,6 +187,7 @@ void RunMetrics::Published(int /*node*/, int topic, Time t, Time stamp) {
 }
 
 void RunMetrics::Span(TraceLane lane, int id, const std::string& name, Time start, Time end) {
+  if (lane == TraceLane::kReceive && !options_.trace_receive) return;
   AddTrace({'X', PidOf(lane), id, TraceName(name), start.count(), (end - start).count(), 0.0});
 }
 
@@ -210,14 +257,15 @@ MetricsReport BuildReport(const RunMetrics& metrics, Time end) {
     NodeReport r;
     r.name = n.name;
     r.mapping = n.mapping;
-    r.jobs = n.jobs;
+    r.jobs = n.jobs - n.callbacks;
+    r.callbacks = n.callbacks;
     r.arrivals = n.arrivals;
     r.timer_ticks = n.timer_ticks;
     r.drops = n.drops;
     r.loan_failures = n.loan_failures;
     r.timer_overruns = n.timer_overruns;
     r.input_hz = static_cast<double>(n.arrivals + n.timer_ticks) / window;
-    r.rate_hz = static_cast<double>(n.jobs) / window;
+    r.rate_hz = static_cast<double>(r.jobs) / window;
     r.turnaround_ms = n.turnaround.ComputeStats();
     r.turnaround_histogram = n.turnaround.Counts(HistogramEdgesMs());
     r.cpu_percent = 100.0 * n.cpu_core_s / window;
@@ -256,14 +304,43 @@ std::string NodesCsv(const std::vector<BoardReport>& boards) {
   std::string csv =
       "board,node,mapping,jobs,input_hz,rate_hz,turnaround_min_ms,turnaround_p50_ms,"
       "turnaround_p95_ms,turnaround_max_ms,cpu_percent,demand_percent,arrivals,timer_ticks,"
-      "drops,loan_failures,timer_overruns\n";
+      "drops,loan_failures,timer_overruns,callbacks\n";
   for (const BoardReport& b : boards) {
     for (const NodeReport& n : b.report.nodes) {
-      csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", b.board, n.name,
+      csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", b.board, n.name,
                          n.mapping, n.jobs, n.input_hz, n.rate_hz, n.turnaround_ms.min,
                          n.turnaround_ms.p50, n.turnaround_ms.p95, n.turnaround_ms.max,
                          n.cpu_percent, n.demand_percent, n.arrivals, n.timer_ticks, n.drops,
-                         n.loan_failures, n.timer_overruns);
+                         n.loan_failures, n.timer_overruns, n.callbacks);
+    }
+  }
+  return csv;
+}
+
+std::string TopicsCsv(const std::vector<BoardReport>& boards) {
+  std::string csv =
+      "board,topic,transport,bytes,depth,published,rate_hz,latency_count,latency_min_ms,"
+      "latency_p50_ms,latency_p95_ms,latency_p99_ms,latency_max_ms,latency_mean_ms,drops,"
+      "loan_failures,dds_samples_written,dds_write_timeouts,dds_samples_delivered,"
+      "dds_samples_lost,dds_datagrams_sent,dds_datagrams_retransmitted,dds_datagrams_dropped,"
+      "dds_nacks\n";
+  for (const BoardReport& b : boards) {
+    for (const TopicReport& t : b.report.topics) {
+      csv += fmt::format("{},{},{},{},{},{},{},{},", b.board, t.name, t.transport, t.bytes, t.depth,
+                         t.published, t.rate_hz, t.latency_ms.count);
+      const Stats& l = t.latency_ms;
+      csv += l.count == 0
+                 ? std::string(",,,,,,")
+                 : fmt::format("{},{},{},{},{},{},", l.min, l.p50, l.p95, l.p99, l.max, l.mean);
+      csv += fmt::format("{},{},", t.drops, t.loan_failures);
+      if (t.dds) {
+        const DdsLinkStats& d = *t.dds;
+        csv += fmt::format("{},{},{},{},{},{},{},{}\n", d.samples_written, d.write_timeouts,
+                           d.samples_delivered, d.samples_lost, d.datagrams_sent,
+                           d.datagrams_retransmitted, d.datagrams_dropped, d.nacks);
+      } else {
+        csv += ",,,,,,,\n";
+      }
     }
   }
   return csv;
@@ -283,6 +360,7 @@ nlohmann::json ReportJson(const MetricsReport& report) {
     nodes.push_back({{"name", n.name},
                      {"mapping", n.mapping},
                      {"jobs", n.jobs},
+                     {"callbacks", n.callbacks},
                      {"input_hz", n.input_hz},
                      {"rate_hz", n.rate_hz},
                      {"turnaround_ms", StatsJson(n.turnaround_ms)},
@@ -339,36 +417,17 @@ nlohmann::json ReportJson(const MetricsReport& report) {
 }
 
 namespace detail {
-void AppendMicroseconds(std::int64_t ns, std::string* out) {
-  // Below 2^50 ns (13 days) a double's spacing at ns / 1e3 is under 1/4000, so its shortest
-  // round trip is the exact three-decimal value; beyond, fmt prints the double itself.
-  constexpr std::int64_t kExactBelow_ns = std::int64_t{1} << 50;
-  if (ns <= -kExactBelow_ns || ns >= kExactBelow_ns) {
-    fmt::format_to(std::back_inserter(*out), "{}", static_cast<double>(ns) / 1e3);
-    return;
-  }
-  if (ns < 0) {
-    *out += '-';
-    ns = -ns;
-  }
-  const fmt::format_int whole(ns / 1000);
-  out->append(whole.data(), whole.size());
-  const int fraction = static_cast<int>(ns % 1000);
-  if (fraction == 0) return;
-  char digits[4] = {'.', static_cast<char>('0' + fraction / 100),
-                    static_cast<char>('0' + fraction / 10 % 10),
-                    static_cast<char>('0' + fraction % 10)};
-  std::size_t length = 4;
-  while (digits[length - 1] == '0') --length;
-  out->append(digits, length);
+WholeMicroseconds ToWholeMicroseconds(std::int64_t start_ns, std::int64_t end_ns) {
+  const std::int64_t ts_us = start_ns / 1000;
+  return {ts_us, end_ns / 1000 - ts_us};
 }
 }  // namespace detail
 
 namespace {
 
-// A little more than one trace event's text takes (the default scenario's trace.json: 31 MB for
-// its two boards' 200 k events each, some 78 bytes an event): what TraceJson reserves per event.
-constexpr std::size_t kTypicalTraceEventBytes = 96;
+// A little more than one trace event's text takes (the default scenario's trace.json: 31.2 MB for
+// its two boards' 204 k events each, some 77 bytes an event): what TraceJson reserves per event.
+constexpr std::size_t kTypicalTraceEventBytes = 88;
 
 // The events are most of the file: appended piece by piece, the times from integers, each after
 // a comma (they follow their board's names).
@@ -380,7 +439,7 @@ void AppendTraceEvents(const RunMetrics& metrics, int base, std::string* out_ptr
     names.push_back(nlohmann::json(name).dump());
   }
   out.reserve(out.size() + metrics.trace_events().size() * kTypicalTraceEventBytes);
-  const auto append_int = [&out](int value) {
+  const auto append_int = [&out](std::int64_t value) {
     const fmt::format_int text(value);
     out.append(text.data(), text.size());
   };
@@ -391,7 +450,7 @@ void AppendTraceEvents(const RunMetrics& metrics, int base, std::string* out_ptr
       out += ",\"ph\":\"C\",\"pid\":"sv;
       append_int(base + e.pid);
       out += ",\"ts\":"sv;
-      detail::AppendMicroseconds(e.ts_ns, &out);
+      append_int(e.ts_ns / 1000);
       out += ",\"args\":{\"cores\":"sv;
       fmt::format_to(std::back_inserter(out), "{}", e.value);
       out += "}}"sv;
@@ -400,10 +459,11 @@ void AppendTraceEvents(const RunMetrics& metrics, int base, std::string* out_ptr
       append_int(base + e.pid);
       out += ",\"tid\":"sv;
       append_int(e.tid);
+      const detail::WholeMicroseconds us = detail::ToWholeMicroseconds(e.ts_ns, e.ts_ns + e.dur_ns);
       out += ",\"ts\":"sv;
-      detail::AppendMicroseconds(e.ts_ns, &out);
+      append_int(us.ts_us);
       out += ",\"dur\":"sv;
-      detail::AppendMicroseconds(e.dur_ns, &out);
+      append_int(us.dur_us);
       out += '}';
     }
   }
@@ -421,13 +481,18 @@ class TraceWriter {
          fmt::format("{}: CPU ({} cores; busy cores, 1.0 = one core)", board, metrics.cores()));
     Meta(base + kPidExecutors, std::nullopt, "process_name",
          board + ": node executors (jobs on the cores or in a slot)");
-    Meta(base + kPidReceive, std::nullopt, "process_name", board + ": DDS receive threads");
+    const bool receive = metrics.options().trace_receive;
+    if (receive) {
+      Meta(base + kPidReceive, std::nullopt, "process_name", board + ": DDS receive threads");
+    }
     Meta(base + kPidSlots, std::nullopt, "process_name", board + ": FPGA slots");
     for (std::size_t i = 0; i < metrics.nodes().size(); ++i) {
       const auto& n = metrics.nodes()[i];
       Meta(base + kPidExecutors, static_cast<int>(i), "thread_name",
            n.name + " (" + n.mapping + ")");
-      Meta(base + kPidReceive, static_cast<int>(i), "thread_name", n.name + " receive");
+      if (receive) {
+        Meta(base + kPidReceive, static_cast<int>(i), "thread_name", n.name + " receive");
+      }
     }
     std::set<int> slots;
     for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {

@@ -26,7 +26,13 @@ struct MetricsOptions {
   Time measure_from{0};
   Duration load_bin{std::chrono::seconds(1)};
   bool trace{true};
-  std::size_t trace_max_events{200000};
+  std::size_t trace_max_events{400000};
+  // The DDS receive threads' spans: a third of a DDS-heavy trace's events, off unless asked (their
+  // CPU is in the busy counter and in each node's cpu_percent either way).
+  bool trace_receive{false};
+  // The trace's busy-cores counter: the mean over each period (to 0.001 cores), written when it
+  // changes; zero: a value at every change (some 60 % of a trace's events).
+  Duration trace_busy_period{std::chrono::milliseconds(10)};
 };
 
 // Where a trace span is drawn: a node's executor (its jobs, on the CPU or in its slot), a node's
@@ -50,7 +56,7 @@ class RunMetrics {
   // its DDS receive thread). AddBusy is the platform total.
   void AddCpu(int node, Time t0, Time t1, double cores);
   void AddBusy(Time t0, Time t1, double cores);
-  void BusyChanged(Time t, double cores);  // trace counter
+  void BusyChanged(Time t, double cores);  // trace counter, if trace_busy_period is zero
 
   // Node activity. `nominal_core_s` is the CPU a job was given to do (independent of contention).
   // `timed`: false for a callback with its own cost that only keeps its message (its CPU counts,
@@ -71,6 +77,7 @@ class RunMetrics {
     std::string mapping;
     std::uint64_t jobs{0}, arrivals{0}, drops{0}, loan_failures{0}, timer_ticks{0},
         timer_overruns{0};
+    std::uint64_t callbacks{0};    // of `jobs`, those not timed (a callback that keeps a message)
     DurationHistogram turnaround;  // of the timed jobs
     double cpu_core_s{0.0};
     double job_core_s{0.0};      // nominal, summed over jobs counted in `jobs`
@@ -114,6 +121,12 @@ class RunMetrics {
   double MeasuredSeconds(Time t0, Time t1) const;
   int TraceName(const std::string& name);
   void AddTrace(const TraceEvent& event);
+  // The busy-cores counter by period (trace_busy_period): AddBusy's intervals, which follow each
+  // other without gaps, summed into the open period; a period's mean is written when a later one
+  // opens.
+  void SampleBusy(Time t0, Time t1, double cores);
+  void CloseBusyPeriod();
+  void WriteBusy(std::int64_t period_index, double mean_cores);
 
   MetricsOptions options_;
   int cores_{1};
@@ -126,6 +139,8 @@ class RunMetrics {
   bool trace_truncated_{false};
   std::optional<Time> trace_truncated_at_;
   double last_busy_{-1.0};
+  std::int64_t busy_period_{-1};   // the open period's index; -1: none yet
+  double busy_area_core_ns_{0.0};  // busy cores × ns in the open period so far
 };
 
 // A histogram of milliseconds on log-spaced bins, kHistogramBinsPerDecade per decade from
@@ -139,9 +154,12 @@ std::vector<double> HistogramEdgesMs();  // bins + 1 edges
 struct NodeReport {
   std::string name;
   std::string mapping;
-  std::uint64_t jobs{0}, arrivals{0}, timer_ticks{0}, drops{0}, loan_failures{0}, timer_overruns{0};
+  // jobs: the node's own work (its timer's, its subscriptions'); callbacks: those of a
+  // subscription that only keeps its message at a cost of its own (the planner's map and odometry)
+  std::uint64_t jobs{0}, callbacks{0}, arrivals{0}, timer_ticks{0}, drops{0}, loan_failures{0},
+      timer_overruns{0};
   double input_hz{0.0};  // messages arrived and timer ticks per second
-  double rate_hz{0.0};   // jobs completed per second
+  double rate_hz{0.0};   // jobs (not callbacks) completed per second
   Stats turnaround_ms;   // take to publish of one job, including waiting for a CPU share
   std::vector<std::uint64_t> turnaround_histogram;  // on HistogramEdgesMs()
   double cpu_percent{0.0};
@@ -205,8 +223,14 @@ struct BoardMetrics {
 
 // nodes.csv: one row per board and node: board, node, mapping, jobs, input_hz, rate_hz,
 // turnaround_{min,p50,p95,max}_ms, cpu_percent, demand_percent, arrivals, timer_ticks, drops,
-// loan_failures, timer_overruns.
+// loan_failures, timer_overruns, callbacks.
 std::string NodesCsv(const std::vector<BoardReport>& boards);
+// topics.csv: one row per board and topic: board, topic, transport, bytes, depth, published,
+// rate_hz, latency_{count,min,p50,p95,p99,max,mean}_ms (empty when nothing was published),
+// drops, loan_failures, and for a DDS topic (empty otherwise) dds_samples_written,
+// dds_write_timeouts, dds_samples_delivered, dds_samples_lost, dds_datagrams_sent,
+// dds_datagrams_retransmitted, dds_datagrams_dropped, dds_nacks.
+std::string TopicsCsv(const std::vector<BoardReport>& boards);
 // For summary.json, per board: {cores, window_s, cpu_percent, cpu_demand_percent, load_bin_s,
 // cpu_load_percent: [...], nodes: [{name, mapping, jobs, input_hz, rate_hz, turnaround_ms: {count,
 // min, p50, p95, p99, max}, turnaround_histogram_ms: {edges, counts}, cpu_percent, demand_percent,
@@ -216,16 +240,21 @@ std::string NodesCsv(const std::vector<BoardReport>& boards);
 // write_timeouts, samples_delivered, samples_lost, datagrams_sent, datagrams_retransmitted,
 // datagrams_dropped, nacks}}]}.
 nlohmann::json ReportJson(const MetricsReport& report);
-// trace.json in the Chrome trace event format (times in microseconds), for Perfetto
+// trace.json in the Chrome trace event format (times in whole microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node
-// executor (its jobs, on the cores or in its slot), per DDS receive thread and per FPGA slot.
+// executor (its jobs, on the cores or in its slot), per FPGA slot and (trace_receive) per DDS
+// receive thread.
 std::string TraceJson(const std::vector<BoardMetrics>& boards);
 
 namespace detail {
-// A trace time, ns nanoseconds, in microseconds as JSON text: what fmt prints for the double
-// ns / 1e3 (its shortest round trip), the whole microseconds and up to three decimals without
-// trailing zeros, from integer arithmetic (below 13 days; the double beyond).
-void AppendMicroseconds(std::int64_t ns, std::string* out);
+// A span from start_ns to end_ns (>= start_ns >= 0) in the trace's whole microseconds: both ends
+// rounded down, so spans that follow each other on a track never overlap (a viewer nests
+// overlapping spans), and a span's text is some 8 bytes shorter than with three decimals.
+struct WholeMicroseconds {
+  std::int64_t ts_us;
+  std::int64_t dur_us;
+};
+WholeMicroseconds ToWholeMicroseconds(std::int64_t start_ns, std::int64_t end_ns);
 }  // namespace detail
 
 }  // namespace autonomsim::sim

@@ -211,6 +211,7 @@ void PlatformConfig::Validate() const {
   Require(load_bin.count() > 0, "load_bin_s must be > 0, got " + Num(ToSeconds(load_bin)));
   Require(trace_max_events >= 0,
           "trace_max_events must be >= 0, got " + std::to_string(trace_max_events));
+  Require(trace_busy_period.count() >= 0, "trace_busy_period_s must be >= 0");
 }
 
 }  // namespace autonomsim::sim

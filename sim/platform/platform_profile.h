@@ -380,7 +380,10 @@ struct PlatformConfig {
   bool background_loads{true};                 // add the profile's background loads
   Duration load_bin{std::chrono::seconds(1)};  // CPU load over time: one value per bin
   bool trace{true};                            // record trace.json
-  int trace_max_events{200000};                // then stop recording (noted in it)
+  int trace_max_events{400000};                // then stop recording (noted in it)
+  bool trace_receive_threads{false};           // also each DDS receive thread's spans
+  // the busy-cores counter: its mean over each period; 0: every change (MetricsOptions)
+  Duration trace_busy_period{std::chrono::milliseconds(10)};
 
   template <class V>
   void Describe(V& v) {
@@ -395,6 +398,8 @@ struct PlatformConfig {
     v("load_bin_s", load_bin);
     v("trace", trace);
     v("trace_max_events", trace_max_events);
+    v("trace_receive_threads", trace_receive_threads);
+    v("trace_busy_period_s", trace_busy_period);
   }
   void Validate() const;
 };

@@ -326,6 +326,7 @@ WholeUnitResult RunWholeUnit(const PlatformProfile& profile, const Table1Options
   Kernel kernel;
   PlatformConfig config;
   config.trace = options.trace;
+  config.trace_receive_threads = true;  // the DDS rows' question is where DDS spends the CPU
   Board board(kernel, "zcu104", config, profile, nullptr, options.warmup);
   NodeGraph& graph = board.graph();
 

@@ -15,7 +15,10 @@ namespace {
 void WriteResults(const LoadedScenario& loaded, const RunRecord& record,
                   const std::vector<ExpectationResult>& expectations, double wall_seconds,
                   const std::filesystem::path& folder) {
-  if (!record.boards.empty()) WriteFile(folder / "nodes.csv", NodesCsv(record.boards));
+  if (!record.boards.empty()) {
+    WriteFile(folder / "nodes.csv", NodesCsv(record.boards));
+    WriteFile(folder / "topics.csv", TopicsCsv(record.boards));
+  }
   if (!record.trace_json.empty()) WriteFile(folder / "trace.json", record.trace_json);
   WriteFile(folder / "scenario.resolved.json", loaded.resolved.dump(2) + "\n");
   WritePng(folder / "track.png", DrawTrackFigure(loaded, record));

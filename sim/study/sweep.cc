@@ -345,6 +345,10 @@ void RunPoints(const std::vector<LoadedScenario>& loaded, const std::vector<Poin
 
 }  // namespace
 
+std::vector<LoadedScenario> ResolveSweep(const SweepSpec& spec, int jobs) {
+  return LoadPoints(spec, ExpandGrid(spec), jobs);
+}
+
 SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   SweepSummary summary;
   CheckSweepSize(spec, options.max_runs);
@@ -357,7 +361,14 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   summary.selected = selected.size();
 
   // resolve every point first: unusable input stops the sweep before anything runs
-  const std::vector<LoadedScenario> loaded = LoadPoints(spec, selected, options.jobs);
+  std::vector<LoadedScenario> loaded = LoadPoints(spec, selected, options.jobs);
+  // A trace is some 10 MB a run and rarely read across a sweep: only when asked. Its run ids (the
+  // resolved scenarios' hashes) stay: whether a trace is written is not what a run does.
+  if (!options.trace) {
+    for (LoadedScenario& l : loaded) {
+      for (CarConfig& car : l.scenario.cars) car.platform.trace = false;
+    }
+  }
   const std::vector<PointRecord> records = RecordPoints(spec, selected, loaded);
   fs::create_directories(options.out_dir / "runs");
   WriteFileAtomically(options.out_dir / ManifestName(options.shard),

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/scenario/scenario.h"
 #include "sim/study/results_table.h"
 #include "sim/study/sweep_spec.h"
 
@@ -45,6 +46,9 @@ struct SweepOptions {
   int jobs{1};
   Shard shard;
   bool plots{true};
+  // Whether each run writes trace.json (its cars' platform.trace): off unless asked (sweep
+  // --trace).
+  bool trace{false};
   std::uint64_t max_runs{kDefaultMaxRuns};  // more runs in the grid: ConfigError (CheckSweepSize)
   // Polled before each run and every simulated second within one (from any thread): true stops
   // the sweep there, the runs in flight unwound (their partial folders removed), the complete ones
@@ -86,6 +90,11 @@ struct SweepTableSummary {
 // sweep.json, runs the points whose run folder is not complete on `jobs` threads, and writes
 // results.csv (this shard's points) and the plots.
 SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options);
+
+// Every run of the sweep's grid resolved to its scenario (its repeat's seed applied), in grid
+// order, on `jobs` threads, as RunSweep does before its first run: unusable input at any point is
+// a ConfigError naming the point and its values. Runs nothing, writes nothing.
+std::vector<LoadedScenario> ResolveSweep(const SweepSpec& spec, int jobs);
 
 // Joins sweep folders (shards of one sweep: same spec, else ConfigError) into `out_dir`: the
 // union of their points in sweep.json, results.csv over every complete run found in any of them,

@@ -4,7 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "tools/tests/cli_testing.h"
 
@@ -46,6 +49,31 @@ TEST(SweepCliTest, RunsThatFailAnExpectationAreCountedAndExitOne) {
                             (dir / "merged").string() + " --no-plots");
   EXPECT_EQ(merged.exit_code, 1) << merged.output;
   EXPECT_THAT(merged.output, HasSubstr("4 run(s) with failed expectations"));
+}
+
+// Issue 34, item 1: every sweep run wrote some 30 MB of trace (185 MB for six 60 s runs). A
+// sweep's runs write trace.json only with --trace; the run ids (what the runs do) are the same.
+TEST(SweepCliTest, RunsWriteATraceOnlyWhenAsked) {
+  const fs::path dir = Scratch();
+  const std::string sweep =
+      "sweep scenarios/lab_two_cars.yaml --set duration_s=1 --set 'expect=[]' --vary seed=1,2 "
+      "--no-plots --quiet --out ";
+  ASSERT_EQ(Cli(sweep + (dir / "plain").string()).exit_code, 0);
+  ASSERT_EQ(Cli(sweep + (dir / "traced").string() + " --trace").exit_code, 0);
+  std::vector<std::string> plain, traced;
+  for (const auto& run : fs::directory_iterator(dir / "plain" / "runs")) {
+    plain.push_back(run.path().filename().string());
+    EXPECT_TRUE(fs::exists(run.path() / "nodes.csv"));
+    EXPECT_FALSE(fs::exists(run.path() / "trace.json")) << run.path();
+  }
+  for (const auto& run : fs::directory_iterator(dir / "traced" / "runs")) {
+    traced.push_back(run.path().filename().string());
+    EXPECT_TRUE(fs::exists(run.path() / "trace.json")) << run.path();
+  }
+  std::sort(plain.begin(), plain.end());
+  std::sort(traced.begin(), traced.end());
+  EXPECT_EQ(plain.size(), 2u);
+  EXPECT_EQ(plain, traced);
 }
 
 // Issue 17: the sweep's index.html links each run's replay report, and its rows are the table's.

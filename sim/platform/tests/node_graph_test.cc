@@ -441,6 +441,23 @@ TEST(Board, BuildsFromAScenarioConfigAndWritesNodesCsvTraceAndSummary) {
   const std::string csv = NodesCsv({report});
   EXPECT_THAT(csv, ::testing::StartsWith("board,node,mapping,jobs,input_hz,rate_hz,"));
   EXPECT_THAT(csv, HasSubstr("\ncar0,point_cloud,hw:slot0,"));
+  EXPECT_THAT(csv, HasSubstr("loan_failures,timer_overruns,callbacks\n"));
+  // topics.csv (issue 34): per-topic latency and DDS counts, empty where a topic has none
+  const std::string topics = TopicsCsv({report});
+  EXPECT_THAT(topics, ::testing::StartsWith("board,topic,transport,bytes,depth,published,rate_hz,"
+                                            "latency_count,latency_min_ms,"));
+  const TopicReport& dds = *report.report.FindTopic("/points");
+  ASSERT_TRUE(dds.dds.has_value());
+  EXPECT_THAT(topics, HasSubstr(fmt::format("\ncar0,/points,dds,{},{},{},", dds.bytes, dds.depth,
+                                            dds.published)));
+  EXPECT_THAT(topics,
+              HasSubstr(fmt::format(
+                  ",{},{},{},{},{},{},{},{}\n", dds.dds->samples_written, dds.dds->write_timeouts,
+                  dds.dds->samples_delivered, dds.dds->samples_lost, dds.dds->datagrams_sent,
+                  dds.dds->datagrams_retransmitted, dds.dds->datagrams_dropped, dds.dds->nacks)));
+  const std::size_t depth_row = topics.find("\ncar0,/depth,zero_copy,");
+  ASSERT_NE(depth_row, std::string::npos) << topics;
+  EXPECT_EQ(topics.substr(topics.find('\n', depth_row + 1) - 8, 9), ",,,,,,,,\n");
 
   const nlohmann::json summary = ReportJson(report.report);
   for (const char* key : {"cpu_percent", "cpu_demand_percent", "cpu_load_percent", "load_bin_s",
@@ -475,36 +492,72 @@ TEST(Board, BuildsFromAScenarioConfigAndWritesNodesCsvTraceAndSummary) {
   EXPECT_THROW(Board(other_kernel, "car2", missing, "scenarios", &rng), ConfigError);
 }
 
-// Trace times are written from integers; the text must be what fmt writes for the double they
-// stood for before (ns / 1e3), which tools and earlier traces read.
-TEST(NodeMetrics, TraceTimesAreTheMicrosecondsFmtWritesForTheDouble) {
-  std::vector<std::int64_t> values{0,
-                                   1,
-                                   9,
-                                   10,
-                                   100,
-                                   999,
-                                   1000,
-                                   1001,
-                                   1010,
-                                   1100,
-                                   1500,
-                                   123456789,
-                                   200000000000,
-                                   86400000000000,
-                                   9007199254740991,
-                                   -1,
-                                   -1500,
-                                   -123456789};
-  std::uint64_t state = 42;  // a fixed LCG: spread over 1 ns to 100 days
+// Trace spans are in whole microseconds, both ends rounded down: spans that follow each other on a
+// track stay apart (a viewer nests overlapping ones), however their nanoseconds fall.
+TEST(NodeMetrics, TraceSpansInWholeMicrosecondsNeverOverlapTheNext) {
+  using detail::ToWholeMicroseconds;
+  EXPECT_EQ(ToWholeMicroseconds(400, 1600).ts_us, 0);
+  EXPECT_EQ(ToWholeMicroseconds(400, 1600).dur_us, 1);
+  EXPECT_EQ(ToWholeMicroseconds(1600, 2900).ts_us, 1);
+  EXPECT_EQ(ToWholeMicroseconds(1600, 2900).dur_us, 1);
+  EXPECT_EQ(ToWholeMicroseconds(1100, 1900).dur_us, 0);  // under a microsecond
+  EXPECT_EQ(ToWholeMicroseconds(123456789000, 123456790999).dur_us, 1);
+  std::uint64_t state = 42;  // a fixed LCG: back-to-back spans of 1 ns to 1 s
+  std::int64_t at_ns = 0;
+  std::int64_t previous_end_us = 0;
   for (int k = 0; k < 100000; ++k) {
     state = state * 6364136223846793005ull + 1442695040888963407ull;
-    values.push_back(static_cast<std::int64_t>((state >> 11) % (1ull << (10 + k % 43))));
+    const std::int64_t length_ns = static_cast<std::int64_t>((state >> 11) % (1ull << (k % 30)));
+    const detail::WholeMicroseconds us = ToWholeMicroseconds(at_ns, at_ns + length_ns);
+    ASSERT_GE(us.ts_us, previous_end_us) << k;
+    ASSERT_GE(us.dur_us, 0);
+    ASSERT_LE(std::abs(us.ts_us * 1000 - at_ns), 999);
+    ASSERT_LE(std::abs((us.ts_us + us.dur_us) * 1000 - (at_ns + length_ns)), 999);
+    previous_end_us = us.ts_us + us.dur_us;
+    at_ns += length_ns;
   }
-  for (const std::int64_t ns : values) {
-    std::string text;
-    detail::AppendMicroseconds(ns, &text);
-    ASSERT_EQ(text, fmt::format("{}", static_cast<double>(ns) / 1e3)) << ns;
+}
+
+// Issue 34, item 1: the busy-cores counter was an event at every change, 60 % of a trace that then
+// covered 47 of the default run's 200 s. It is now the mean over each period, written when it
+// changes. Hand-computed with 10 ms periods: 1 core for 4 ms, idle to 25 ms, 2 cores to 50 ms.
+TEST(NodeMetrics, TheBusyCounterIsTheMeanOfEachPeriodWrittenWhenItChanges) {
+  RunMetrics metrics(MetricsOptions{.trace_busy_period = milliseconds(10)});
+  metrics.AddBusy(kZeroTime, kZeroTime + milliseconds(4), 1.0);
+  metrics.BusyChanged(kZeroTime + milliseconds(4), 0.0);  // only with a zero period
+  metrics.AddBusy(kZeroTime + milliseconds(4), kZeroTime + milliseconds(25), 0.0);
+  metrics.AddBusy(kZeroTime + milliseconds(25), kZeroTime + milliseconds(50), 2.0);
+  metrics.AddBusy(kZeroTime + milliseconds(50), kZeroTime + milliseconds(51), 0.0);  // stays open
+  std::vector<std::pair<std::int64_t, double>> counter;
+  for (const RunMetrics::TraceEvent& e : metrics.trace_events()) {
+    ASSERT_EQ(e.phase, 'C');
+    counter.emplace_back(e.ts_ns, e.value);
+  }
+  EXPECT_THAT(counter, ElementsAre(std::pair<std::int64_t, double>{0, 0.4},
+                                   std::pair<std::int64_t, double>{10'000'000, 0.0},
+                                   std::pair<std::int64_t, double>{20'000'000, 1.0},
+                                   std::pair<std::int64_t, double>{30'000'000, 2.0}));
+  // a zero period: a value at every change, as before
+  RunMetrics every(MetricsOptions{.trace_busy_period = Duration::zero()});
+  every.AddBusy(kZeroTime, kZeroTime + milliseconds(4), 1.0);
+  every.BusyChanged(kZeroTime + milliseconds(4), 0.0);
+  every.BusyChanged(kZeroTime + milliseconds(5), 0.0);
+  every.BusyChanged(kZeroTime + milliseconds(6), 2.0);
+  EXPECT_EQ(every.trace_events().size(), 2u);
+}
+
+// The receive threads' spans are in the trace only when asked (trace_receive).
+TEST(NodeMetrics, ReceiveThreadSpansOnlyWhenAsked) {
+  for (const bool receive : {false, true}) {
+    RunMetrics metrics(MetricsOptions{.trace_receive = receive});
+    const int node = metrics.AddNode("n", "sw");
+    metrics.Span(TraceLane::kReceive, node, "dds receive", kZeroTime, kZeroTime + milliseconds(1));
+    metrics.Span(TraceLane::kExecutor, node, "n", kZeroTime + milliseconds(1),
+                 kZeroTime + milliseconds(2));
+    EXPECT_EQ(metrics.trace_events().size(), receive ? 2u : 1u);
+    const std::string trace = TraceJson({{"car0", &metrics}});
+    EXPECT_EQ(trace.find("DDS receive threads") != std::string::npos, receive);
+    EXPECT_EQ(trace.find("\"n receive\"") != std::string::npos, receive);
   }
 }
 
@@ -528,7 +581,12 @@ TEST(NodeGraph, ACachingSubscriptionCostsItsOwnCost) {
   const NodeReport* n = report.FindNode("slow");
   ASSERT_NE(n, nullptr);
   EXPECT_EQ(n->drops, 0u);
-  EXPECT_EQ(n->jobs, 3u);
+  // Issue 34: a caching callback is not the node's own work (nodes.csv gave planner_server 23 Hz,
+  // its plans are 1 Hz): counted as a callback, outside jobs and rate_hz
+  EXPECT_EQ(n->callbacks, 3u);
+  EXPECT_EQ(n->jobs, 0u);
+  EXPECT_EQ(n->rate_hz, 0.0);
+  EXPECT_GT(n->cpu_percent, 0.0);  // its cost still counts
 }
 
 TEST(NodeGraph, ACachingSubscriptionNeedsASoftwareNode) {
