@@ -36,9 +36,11 @@ ExpectClause Read(const std::string& yaml) {
   return ReadConfig<ExpectClause>(YAML::Load(yaml), ConfigSource{"test.yaml", {}});
 }
 
-ExpectationResult Judge(const ExpectClause& clause, const RunRecord& record) {
+ExpectationResult Judge(const ExpectClause& clause, const RunRecord& record,
+                        const std::vector<ObstacleConfig>& obstacles = {}) {
   Scenario scenario;
   scenario.expect = {clause};
+  scenario.obstacles = obstacles;
   return EvaluateExpectations(scenario, record).at(0);
 }
 
@@ -192,6 +194,33 @@ TEST(ExpectationsTest, NoCollisionCountsBothCarsOfACarCarContact) {
   EXPECT_TRUE(Judge(Clause(NoCollisionExpect{}), r).passed);
 }
 
+// Issue 34: recovers_within took a car standing before an obstacle, which a fault happened to
+// overlap, for a car that did not recover. A standstill that begins with an obstacle in the car's
+// way is not the fault's; the same standstill with the box behind the car still fails.
+TEST(ExpectationsTest, RecoversWithinDoesNotJudgeACarHeldByAnObstacle) {
+  RunRecord r = TwoCars();
+  StandThenDrive(&r, 0, 10.0, 60.0);  // at (1, 1), heading +x
+  StandThenDrive(&r, 1, 200.0, 200.0);
+  Event begin = At(12.0, EventKind::kFaultBegin, -1);
+  begin.fault = FaultKind::kV2iPartition;
+  Event end = At(15.0, EventKind::kFaultEnd, -1);
+  end.fault = FaultKind::kV2iPartition;
+  r.events = {begin, end};
+  const ExpectClause clause = Clause(RecoversWithinExpect{.max_s = 5.0});
+  const ObstacleConfig ahead{.name = "box", .x_m = 1.6, .y_m = 1.0};
+  const ObstacleConfig behind{.name = "box", .x_m = 0.4, .y_m = 1.0};
+  const ExpectationResult held = Judge(clause, r, {ahead});
+  EXPECT_TRUE(held.passed) << held.detail;
+  EXPECT_THAT(held.detail, HasSubstr("1 standstill(s) before an obstacle not judged"));
+  const ExpectationResult stuck = Judge(clause, r, {behind});
+  EXPECT_FALSE(stuck.passed);
+  EXPECT_THAT(stuck.detail, HasSubstr("car 0 stood still from t=10.0 s to t=60.0 s"));
+  // a box that is gone by then holds nobody
+  ObstacleConfig gone = ahead;
+  gone.disappear_s = 5.0;
+  EXPECT_FALSE(Judge(clause, r, {gone}).passed);
+}
+
 TEST(ExpectationsTest, CompletesNeedsTheLapsByTheDeadline) {
   RunRecord r = TwoCars();
   r.cars[0].laps = 3;
@@ -204,6 +233,9 @@ TEST(ExpectationsTest, CompletesNeedsTheLapsByTheDeadline) {
   EXPECT_FALSE(both.passed);
   EXPECT_THAT(both.detail, HasSubstr("car 1: 2 lap(s) by 100.0 s"));
   EXPECT_EQ(both.name, "completes(laps=3)");
+  // a deadline past the end (a warning at load) is judged on the run's time, and says so
+  const ExpectationResult cut = Judge(Clause(CompletesExpect{.laps = 3, .within_s = 150}), r);
+  EXPECT_THAT(cut.detail, HasSubstr("car 1: 2 lap(s) by the run's end at 100.0 s"));
 }
 
 TEST(ExpectationsTest, MaxLateralErrorAndMinObstacleGapCompareWithTheirBounds) {
