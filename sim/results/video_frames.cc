@@ -16,6 +16,7 @@ constexpr int kCameraWidthPx = 480;  // each camera view's width in the panel
 constexpr int kScenePanelPx = 500;   // to the right of those, when 3D views are shown
 const cv::Size kSceneViewSize(480, 300);
 const cv::Scalar kVideoText(235, 235, 235), kQueueText(65, 179, 227);
+const cv::Scalar kFaultText(80, 80, 240);  // red (BGR), as collisions are marked
 constexpr int kVideoFont = cv::FONT_HERSHEY_SIMPLEX;
 
 void DrawCar(cv::Mat& image, const TrackFigureLayout& at, const detail::CarTrack& car,
@@ -134,13 +135,64 @@ void CarTrack::Advance(Time t) {
   while (now + 1 < samples.size() && samples[now + 1]->t <= t) ++now;
 }
 
+std::vector<std::string> FaultTimeline::ActiveAt(Time t) const {
+  std::vector<std::string> lines;
+  for (const Span& f : spans) {
+    if (f.begin > t || (f.end && *f.end <= t)) continue;
+    lines.push_back(fmt::format("{}{} (since {:.1f} s)", ToName(f.kind),
+                                f.car >= 0 ? fmt::format(", car {}", f.car) : "",
+                                ToSeconds(f.begin)));
+  }
+  return lines;
+}
+
+FaultTimeline FaultsOfRun(const FinishedRun& run) {
+  FaultTimeline timeline;
+  for (const Event& e : run.record.events) {
+    if (!e.fault) continue;
+    if (e.type == EventKind::kFaultBegin) timeline.spans.push_back({*e.fault, e.car, e.t, {}});
+    if (e.type != EventKind::kFaultEnd) continue;
+    for (FaultTimeline::Span& f : timeline.spans) {  // the earliest open one of its kind and car
+      if (!f.end && f.kind == *e.fault && f.car == e.car) {
+        f.end = e.t;
+        break;
+      }
+    }
+  }
+  return timeline;
+}
+
+std::vector<std::string> WrapToWidth(const std::string& text, int max_width_px, double scale,
+                                     int thickness) {
+  std::vector<std::string> lines;
+  std::string line;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t space = text.find(' ', at);
+    const std::string word = text.substr(at, space == std::string::npos ? space : space - at);
+    at = space == std::string::npos ? text.size() : space + 1;
+    const std::string wider = line.empty() ? word : line + " " + word;
+    int baseline = 0;
+    if (!line.empty() &&
+        cv::getTextSize(wider, kVideoFont, scale, thickness, &baseline).width > max_width_px) {
+      lines.push_back(line);
+      line = word;
+    } else {
+      line = wider;
+    }
+  }
+  if (!line.empty()) lines.push_back(line);
+  return lines;
+}
+
 VideoFrames::VideoFrames(const FinishedRun& run, const VideoOptions& options)
     : run_(run),
       options_(options),
       streams_(run.scenario.seed),
       cars_(CarTracks(run)),
       timelines_(IntersectionTimelines(run)),
-      collisions_(Collisions(run)) {
+      collisions_(Collisions(run)),
+      faults_(FaultsOfRun(run)) {
   if (options.camera_car) viewer_.emplace(run.track, run.scenario, *options.camera_car);
   if (options.chase_car || options.overview) scene_.emplace(run.track, run.scenario);
   TrackFigureBase base = DrawTrackFigureBase(run.scenario, run.track, false);
@@ -167,6 +219,7 @@ const cv::Mat& VideoFrames::Draw(Time t) {
   DrawTrailsAndCollisions(t);
   const std::vector<world::Pose2> poses = DrawCars();
   DrawClock(t);
+  DrawFaults(t);
   if (viewer_) DrawCameraPanel(poses, t);
   if (scene_) DrawScenePanel(poses, t);
   return frame_;
@@ -238,6 +291,21 @@ void VideoFrames::DrawClock(Time t) {
               kVideoFont, 0.5, kVideoText, 1, cv::LINE_AA);
 }
 
+// The faults striking at t, in red under the clock, each line wrapped to the legend's width.
+void VideoFrames::DrawFaults(Time t) {
+  const std::vector<std::string> active = faults_.ActiveAt(t);
+  if (active.empty()) return;
+  const int width = figure_cols_ - legend_x_ - 8;
+  int y = legend_end_ + 76;
+  cv::putText(frame_, "fault:", {legend_x_, y}, kVideoFont, 0.5, kFaultText, 1, cv::LINE_AA);
+  for (const std::string& fault : active) {
+    for (const std::string& line : WrapToWidth(fault, width, 0.45, 1)) {
+      y += 20;
+      cv::putText(frame_, line, {legend_x_, y}, kVideoFont, 0.45, kFaultText, 1, cv::LINE_AA);
+    }
+  }
+}
+
 void VideoFrames::DrawCameraPanel(const std::vector<world::Pose2>& poses, Time t) {
   const CameraViewImages views =
       viewer_->Render(SnapshotWithPoses(run_.scenario, poses, t), streams_);
@@ -252,8 +320,12 @@ void VideoFrames::DrawCameraPanel(const std::vector<world::Pose2>& poses, Time t
                cv::INTER_AREA);
     y += h + 10;
     if (view == &views.color) {
-      cv::putText(frame_, views.lane, {x, y + 8}, kVideoFont, 0.42, kVideoText, 1, cv::LINE_AA);
-      y += 36;
+      // the lane detector's words, wrapped to the panel (one line ran off the frame's edge)
+      for (const std::string& line : WrapToWidth(views.lane, kCameraWidthPx, 0.42, 1)) {
+        cv::putText(frame_, line, {x, y + 8}, kVideoFont, 0.42, kVideoText, 1, cv::LINE_AA);
+        y += 18;
+      }
+      y += 18;
       cv::putText(frame_, "depth camera", {x, y - 8}, kVideoFont, 0.5, kVideoText, 1, cv::LINE_AA);
     }
   }

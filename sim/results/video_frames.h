@@ -8,6 +8,7 @@
 #include <map>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,25 @@ struct IntersectionTimeline {
   const IntersectionState& At(Time t) const;
 };
 std::map<int, IntersectionTimeline> IntersectionTimelines(const FinishedRun& run);
+
+// The faults of a run (fault_begin and fault_end events) and, at an instant, a line for each one
+// that strikes then: "v2i_partition, car 1 (since 7.6 s)".
+struct FaultTimeline {
+  struct Span {
+    FaultKind kind;
+    int car{-1};  // -1: none in particular
+    Time begin{0};
+    std::optional<Time> end;  // none: to the run's end
+  };
+  std::vector<Span> spans;
+  std::vector<std::string> ActiveAt(Time t) const;
+};
+FaultTimeline FaultsOfRun(const FinishedRun& run);
+
+// `text` in lines that each fit `max_width_px` in the video's font at `scale` and `thickness`,
+// broken at spaces (a single word wider than that stays whole).
+std::vector<std::string> WrapToWidth(const std::string& text, int max_width_px, double scale,
+                                     int thickness);
 
 // Each car's samples in time order, and a cursor that moves forward with the frames.
 struct CarTrack {
@@ -68,6 +88,7 @@ class VideoFrames {
   void DrawTrailsAndCollisions(Time t);
   std::vector<world::Pose2> DrawCars();
   void DrawClock(Time t);
+  void DrawFaults(Time t);
   void DrawCameraPanel(const std::vector<world::Pose2>& poses, Time t);
   void DrawScenePanel(const std::vector<world::Pose2>& poses, Time t);
 
@@ -83,6 +104,7 @@ class VideoFrames {
   std::vector<CarTrack> cars_;
   std::map<int, IntersectionTimeline> timelines_;
   std::vector<std::pair<Time, int>> collisions_;  // (t, car)
+  FaultTimeline faults_;
   std::size_t next_collision_{0};
   std::vector<cv::Point> collision_points_;
   cv::Mat frame_;

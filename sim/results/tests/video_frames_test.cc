@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -141,6 +142,48 @@ TEST(VideoFramesTest, AHeldIntersectionIsTintedOnlyWhileHeld) {
   const cv::Vec3b free_after = frames.Draw(FromSeconds(1.8)).at<cv::Vec3b>(centre);
   EXPECT_NE(held, free_before);
   EXPECT_EQ(free_after, free_before);
+}
+
+// Issue 34: the video showed no faults. A fault is named under the clock while it strikes.
+TEST(VideoFramesTest, AFaultIsNamedWhileItStrikes) {
+  FinishedRun run = TwoSampleRun();
+  Event begin = At(0.5, EventKind::kFaultBegin, 1, -1);
+  begin.fault = FaultKind::kV2iPartition;
+  Event end = At(1.5, EventKind::kFaultEnd, 1, -1);
+  end.fault = FaultKind::kV2iPartition;
+  Event stall = At(1.2, EventKind::kFaultBegin, -1, -1);
+  stall.fault = FaultKind::kBrokerOutage;
+  run.record.events = {begin, stall, end};
+  const FaultTimeline faults = FaultsOfRun(run);
+  EXPECT_TRUE(faults.ActiveAt(FromSeconds(0.4)).empty());
+  EXPECT_THAT(faults.ActiveAt(FromSeconds(1.0)),
+              ::testing::ElementsAre("v2i_partition, car 1 (since 0.5 s)"));
+  EXPECT_THAT(faults.ActiveAt(FromSeconds(1.6)),
+              ::testing::ElementsAre("broker_outage (since 1.2 s)"));  // to the run's end
+
+  VideoFrames with(run, {});
+  run.record.events.clear();
+  VideoFrames without(run, {});
+  const cv::Mat drawn = with.Draw(FromSeconds(1.0)).clone();
+  EXPECT_GT(cv::norm(drawn, without.Draw(FromSeconds(1.0)), cv::NORM_L1), 0.0);
+}
+
+// Issue 34: the camera caption ran off the frame's right edge. Wrapped, every line fits and
+// nothing is lost.
+TEST(VideoFramesTest, ACaptionIsWrappedToFitItsWidth) {
+  const std::string caption =
+      "lane detection: yellow line (yellow 123456 px, white 654321 px), invalid (no trajectory)";
+  const std::vector<std::string> lines = WrapToWidth(caption, 300, 0.42, 1);
+  EXPECT_GE(lines.size(), 2u);
+  std::string joined;
+  for (const std::string& line : lines) {
+    int baseline = 0;
+    EXPECT_LE(cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, 0.42, 1, &baseline).width, 300)
+        << line;
+    joined += (joined.empty() ? "" : " ") + line;
+  }
+  EXPECT_EQ(joined, caption);
+  EXPECT_EQ(WrapToWidth("short", 300, 0.42, 1), std::vector<std::string>{"short"});
 }
 
 }  // namespace
