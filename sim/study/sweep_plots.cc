@@ -514,16 +514,21 @@ void AddPlatformPlots(PlatformSeries series, NamedPlots* plots) {
 
 }  // namespace
 
+NamedPlots SweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
+                      const std::vector<RunSummary>& summaries, const ResultsTable& table) {
+  NamedPlots plots;
+  if (points.empty()) return plots;
+  AddMetricPlots(spec, table, &plots);
+  AddPlatformPlots(PlatformSeriesOf(spec, points, summaries), &plots);
+  return plots;
+}
+
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
                      const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
-  if (points.empty()) return;
-  NamedPlots plots;
-  AddMetricPlots(spec, table, &plots);
-  AddPlatformPlots(PlatformSeriesOf(spec, points, summaries), &plots);
-  RenderPlots(plots, dir);
+  RenderPlots(SweepPlots(spec, points, summaries, table), dir);
 }
 
 }  // namespace autonomsim::sim

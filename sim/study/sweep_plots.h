@@ -53,8 +53,15 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
 void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots,
                  const std::filesystem::path& dir);
 
-// Writes every plot of a sweep into `dir` (replacing what is there). `points[i]` and
-// `summaries[i]` belong together (grid order); `table` is their results.csv.
+// Every plot of a sweep, (NAME, plot), not drawn. `points[i]` and `summaries[i]` belong together
+// (grid order); `table` is their results.csv. A metric a run did not measure (an empty cell) gives
+// no point for that run: no dot, and no part in its line's mean.
+std::vector<std::pair<std::string, PlotSpec>> SweepPlots(const SweepSpec& spec,
+                                                         const std::vector<PointRecord>& points,
+                                                         const std::vector<RunSummary>& summaries,
+                                                         const ResultsTable& table);
+
+// Writes every plot of a sweep (SweepPlots) into `dir`, replacing what is there.
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
                      const std::filesystem::path& dir);

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
@@ -173,6 +174,54 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
   EXPECT_THAT(csv, HasSubstr(",\"a,b\","));
   EXPECT_THAT(csv, HasSubstr(",\"say \"\"hi\"\"\","));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
+}
+
+RunSummary WithLaneError(std::optional<double> lane_error_max_m) {
+  RunSummary s = FakeSummary(0.1, 1, false);
+  s.cars[0].perception = PerceptionMetrics{.lane_frames = 300, .lane_valid_frames = 200};
+  if (lane_error_max_m) {
+    s.cars[0].perception->lane_error_samples = 50;
+    s.cars[0].perception->lane_error_max_m = lane_error_max_m;
+    s.cars[0].perception->lane_error_rms_m = *lane_error_max_m / 2;
+  }
+  return s;
+}
+
+// Issue 34, item 3: a run whose lane detector gave no sample to judge had lane_error_max_m 0, a
+// "0" in results.csv, and a point at 0 m in the plot, pulling its line's mean down.
+TEST(Sweep, AMetricARunDidNotMeasureIsAnEmptyCellAndNoPoint) {
+  SweepSpec spec;
+  spec.axes = {ParseVary("v2i.latency_s=0,1")};
+  spec.repeat = 2;
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a0", .labels = {"0"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "a1", .labels = {"0"}, .repeat = 1, .seed = 2},
+      {.index = 2, .run_id = "b0", .labels = {"1"}, .repeat = 0, .seed = 1},
+      {.index = 3, .run_id = "b1", .labels = {"1"}, .repeat = 1, .seed = 2}};
+  const std::vector<RunSummary> summaries = {WithLaneError(0.02), WithLaneError(std::nullopt),
+                                             WithLaneError(0.04), WithLaneError(0.06)};
+  const ResultsTable table = BuildResultsTable({"v2i.latency_s"}, points, summaries);
+  const std::size_t column = table.Column("car0.lane_error_max_m").value();
+  EXPECT_EQ(table.rows[0][column], "0.02");
+  EXPECT_EQ(table.rows[1][column], "");  // not measured: empty, not 0
+  EXPECT_EQ(table.rows[1][table.Column("car0.lane_error_rms_m").value()], "");
+  EXPECT_EQ(table.rows[1][table.Column("car0.lane_valid_fraction").value()], "0.6666666666666666");
+
+  const auto plots = SweepPlots(spec, points, summaries, table);
+  const auto plot = std::find_if(plots.begin(), plots.end(), [](const auto& p) {
+    return p.first == "lane_error_max_m_vs_v2i_latency_s";
+  });
+  ASSERT_NE(plot, plots.end());
+  std::map<std::string, const PlotSeries*> series;
+  for (const PlotSeries& s : plot->second.series) series[s.label] = &s;
+  ASSERT_TRUE(series.count("car0, mean") && series.count("car0, each run"));
+  // the mean at latency 0 is the one measured run's, not (0.02 + 0) / 2
+  EXPECT_THAT(series["car0, mean"]->x, ElementsAre(0.0, 1.0));
+  EXPECT_THAT(series["car0, mean"]->y, ElementsAre(0.02, 0.05));
+  // three dots: the unmeasured run has none
+  EXPECT_THAT(series["car0, each run"]->x, ElementsAre(0.0, 1.0, 1.0));
+  EXPECT_THAT(series["car0, each run"]->y, ElementsAre(0.02, 0.04, 0.06));
+  EXPECT_THAT(GnuplotData(plot->second), ::testing::Not(HasSubstr("\n0 0\n")));
 }
 
 // Issue 33: `--vary K=a,b --vary K=c` was accepted: two columns named K, and rows of the same run.
