@@ -38,6 +38,9 @@ struct PlotSpec {
   // Categorical x axis: the tick at x = i is labelled categories[i] (x values are indices).
   std::vector<std::string> categories;
   bool log_x{false};  // x values are plotted on a log10 scale (must be > 0)
+  // Lines under the subtitle, smaller: what the short names of long values stand for
+  // ("key=value 2: {lane_detection: {target: sw}}").
+  std::vector<std::string> notes;
 };
 
 // The data file of a plot: one block per series ("x y" lines, blocks two blank lines apart, a

@@ -2,6 +2,7 @@
 // real sweeps (resume, --jobs and sharding do not change results.csv).
 #include "sim/study/sweep.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -16,6 +17,7 @@
 
 #include "sim/core/config.h"
 #include "sim/core/parallel.h"
+#include "sim/platform/node_metrics.h"
 #include "sim/study/sweep_plots.h"
 
 namespace autonomsim::sim {
@@ -365,6 +367,120 @@ TEST(SweepPlots, ManyLongCategoryNamesAreSlantedAndGivenRoomBelow) {
   const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
   EXPECT_THAT(gp, HasSubstr("'localization_jump' 11) rotate by 30 right"));
   EXPECT_THAT(gp, HasSubstr("set bmargin 7"));  // 2 lines + 0.3 of a line per character
+}
+
+// Issue 34, item 4: with six long legend names or more the legend, under the plot in gnuplot's own
+// layout, covered the tic labels and the axis label. Under the plot it now sits at the picture's
+// bottom in columns, and the bottom margin holds the tic labels, the axis label and its rows.
+TEST(SweepPlots, ALegendOfManyLongNamesGoesBelowTheAxisLabelWithRoomForItsRows) {
+  PlotSpec spec{.title = "CPU load", .x_label = "simulated time (s)", .y_label = "CPU (%)"};
+  for (int i = 0; i < 7; ++i) {
+    spec.series.push_back(PlotSeries{
+        .label = fmt::format("cars[0].platform.cost_scale.lane_planner={}, seed 4{}", i, i),
+        .x = {0, 1},
+        .y = {1, 2}});
+  }
+  const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
+  // 51 characters a name: two columns across, four rows; 3.5 lines for the tics and axis label
+  EXPECT_THAT(gp, HasSubstr("set key at screen 0.01, screen 0.01 left bottom horizontal Left "
+                            "reverse maxcols 2 maxrows 4\nset bmargin 7.5\n"));
+  // short names stay beside the plot, on the right
+  spec.series.resize(3);
+  for (PlotSeries& s : spec.series) s.label = s.label.substr(s.label.size() - 7);
+  EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"),
+              HasSubstr("set key outside right top Left reverse\n"));
+  // a name longer than the picture is wide is cut, not drawn past its edge
+  spec.series[0].label = std::string(300, 'k');
+  EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"), HasSubstr(std::string(108, 'k') + "…'"));
+}
+
+RunSummary WithTurnaround(const std::vector<double>& counts) {
+  RunSummary s = FakeSummary(0.1, 1, true);
+  nlohmann::json& node = (*s.platform)["car0"]["nodes"][0];
+  node["turnaround_histogram_ms"] = {{"edges", HistogramEdgesMs()}, {"counts", counts}};
+  return s;
+}
+
+// Issue 34, item 4: a hardware node's turnaround, all in one log-spaced bin, was drawn as a
+// triangle: zeros at the neighbouring bins' centres joined to one peak. Each bin is now a step
+// from its left edge to its right.
+TEST(SweepPlots, AHistogramIsDrawnAsStepsSoThatOneFullBinIsABox) {
+  const std::vector<double> edges = HistogramEdgesMs();  // 0.1, 0.158, ... 3.98, 6.31, 10, ...
+  std::vector<double> counts(edges.size() - 1, 0.0);
+  counts[9] = 300;  // every job in [6.31, 10) ms
+  SweepSpec spec;
+  spec.axes = {ParseVary("v2i.latency_s=0,1")};
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a", .labels = {"0"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "b", .labels = {"1"}, .repeat = 0, .seed = 1}};
+  std::vector<double> half = counts;
+  half[9] = 150;
+  half[10] = 150;  // and half of them in [10, 15.8)
+  const std::vector<RunSummary> summaries = {WithTurnaround(counts), WithTurnaround(half)};
+  const auto plots =
+      SweepPlots(spec, points, summaries, BuildResultsTable({"v2i.latency_s"}, points, summaries));
+  const auto plot = std::find_if(plots.begin(), plots.end(), [](const auto& p) {
+    return p.first == "turnaround_car0_poly_fit";
+  });
+  ASSERT_NE(plot, plots.end());
+  ASSERT_EQ(plot->second.series.size(), 2u);
+  const PlotSeries& one_bin = plot->second.series[0];
+  EXPECT_EQ(one_bin.label, "v2i.latency_s=0");
+  EXPECT_FALSE(one_bin.dots);
+  // from the empty bin before the data to the empty bin after the last filled one (either run's)
+  EXPECT_THAT(one_bin.x, ElementsAre(edges[8], edges[8], edges[9], edges[9], edges[10], edges[10],
+                                     edges[11], edges[11], edges[12], edges[12]));
+  EXPECT_THAT(one_bin.y, ElementsAre(0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0));
+  EXPECT_THAT(plot->second.series[1].y,
+              ElementsAre(0.0, 0.0, 0.0, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0, 0.0));
+  // the log axis has tics to read the bins by, not only the one power of ten in range
+  EXPECT_THAT(GnuplotScript(plot->second, "t.dat", "t.png"),
+              HasSubstr("set xtics (4, 5, 6, 7, 8, 9, 10, 20)\n"));
+}
+
+// Issue 34, item 4: a mapping given to --vary was printed whole on the axis and in every legend.
+// Its values are named "value 1", "value 2", ..., each written out once above the plot.
+TEST(SweepPlots, LongValuesAreNamedShortOnThePlotAndWrittenOutInANote) {
+  SweepSpec spec;
+  spec.axes = {
+      ParseVary("cars[0].platform.mapping={},{lane_detection: {target: sw}, "
+                "obstacle_detection: {target: sw}}")};
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a", .labels = {"{}"}, .repeat = 0, .seed = 1},
+      {.index = 1,
+       .run_id = "b",
+       .labels = {"{lane_detection: {target: sw}, obstacle_detection: {target: sw}}"},
+       .repeat = 0,
+       .seed = 1}};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.1, 1, true), FakeSummary(0.2, 1, true)};
+  const ResultsTable table = BuildResultsTable({"cars[0].platform.mapping"}, points, summaries);
+  // the table keeps the values as given
+  EXPECT_EQ(table.rows[1][2], "{lane_detection: {target: sw}, obstacle_detection: {target: sw}}");
+  const auto plots = SweepPlots(spec, points, summaries, table);
+  std::map<std::string, PlotSpec> by_name(plots.begin(), plots.end());
+  const PlotSpec& laps = by_name.at("laps_vs_cars_0__platform_mapping");
+  EXPECT_THAT(laps.categories, ElementsAre("value 1", "value 2"));
+  EXPECT_THAT(laps.notes, ElementsAre("cars[0].platform.mapping=value 1: {}",
+                                      "cars[0].platform.mapping=value 2: {lane_detection: {target: "
+                                      "sw}, obstacle_detection: {target: sw}}"));
+  const std::string gp = GnuplotScript(laps, "p.dat", "p.png");
+  EXPECT_THAT(gp, HasSubstr("set xtics ('value 1' 0, 'value 2' 1)\n"));
+  EXPECT_THAT(gp, HasSubstr("set label 4 'cars[0].platform.mapping=value 2: {lane_detection: "
+                            "{target: sw}, obstacle_detection: {target: sw}}'"));
+  const PlotSpec& load = by_name.at("cpu_load_car0");
+  EXPECT_EQ(load.series.size(), 2u);
+  EXPECT_EQ(load.series[1].label, "cars[0].platform.mapping=value 2");
+  EXPECT_EQ(load.notes, laps.notes);
+  // short values (a study file's labels) are shown as they are
+  spec.axes = {ParseVary("cars[0].platform.mapping=all_hw,lane_sw")};
+  const std::vector<PointRecord> labelled = {
+      {.index = 0, .run_id = "a", .labels = {"all_hw"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "b", .labels = {"lane_sw"}, .repeat = 0, .seed = 1}};
+  const auto short_plots =
+      SweepPlots(spec, labelled, summaries,
+                 BuildResultsTable({"cars[0].platform.mapping"}, labelled, summaries));
+  EXPECT_THAT(short_plots.front().second.categories, ElementsAre("all_hw", "lane_sw"));
+  EXPECT_TRUE(short_plots.front().second.notes.empty());
 }
 
 // ---- Real sweeps on the oracle scenario (no board: fast) ----
