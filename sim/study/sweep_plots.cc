@@ -7,10 +7,12 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <string_view>
 
 #include "sim/core/files.h"
 #include "sim/platform/node_metrics.h"
@@ -556,28 +558,62 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
   return gp;
 }
 
-void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots, const fs::path& dir) {
+namespace {
+
+// What the driver script prints after each plot: a line RenderPlots counts instead of showing it.
+constexpr std::string_view kPlotDoneLine = "autonomsim: plot drawn\n";
+
+// Runs `command` (its stderr with its stdout), calling `on_plot` for each kPlotDoneLine it prints;
+// returns its exit status (-1: it could not be started) and the rest of its output in *output.
+int RunCountingPlots(const std::string& command, const std::function<void()>& on_plot,
+                     std::string* output) {
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  std::array<char, 4096> buffer;
+  std::string line;  // fgets returns a long line in pieces
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) {
+    line += buffer.data();
+    if (line.back() != '\n') continue;
+    if (line == kPlotDoneLine) {
+      on_plot();
+    } else {
+      *output += line;
+    }
+    line.clear();
+  }
+  *output += line;
+  return ::pclose(pipe);
+}
+
+}  // namespace
+
+void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots, const fs::path& dir,
+                 const PlotProgress& progress) {
   if (plots.empty()) return;
   const fs::path folder = fs::absolute(dir);
-  // One gnuplot for all: a script that loads each plot's own in the plots folder.
+  // One gnuplot for all: a script that loads each plot's own in the plots folder, and says when
+  // it has drawn each (gnuplot prints to stderr)
   std::string all = "cd " + Quoted(folder.string()) + "\n";
   for (const auto& [name, plot] : plots) {
     WriteFile(folder / (name + ".dat"), GnuplotData(plot));
     WriteFile(folder / (name + ".gp"), GnuplotScript(plot, name + ".dat", name + ".png"));
-    all += "reset\nload " + Quoted(name + ".gp") + "\n";
+    all += "reset\nload " + Quoted(name + ".gp") + "\nunset output\nprint " +
+           Quoted(std::string(kPlotDoneLine.substr(0, kPlotDoneLine.size() - 1))) + "\n";
   }
   const fs::path driver = folder / (".all-" + std::to_string(::getpid()) + ".gp");
   WriteFile(driver, all);
   std::string command = "gnuplot '";
   for (char c : driver.string()) command += c == '\'' ? std::string("'\\''") : std::string(1, c);
   command += "' 2>&1";
+  std::size_t drawn = 0;
+  if (progress) progress(0, plots.size());
   std::string output;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe != nullptr) {
-    std::array<char, 4096> buffer;
-    while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  }
-  const int status = pipe != nullptr ? ::pclose(pipe) : -1;
+  const int status = RunCountingPlots(
+      command,
+      [&] {
+        if (progress) progress(++drawn, plots.size());
+      },
+      &output);
   fs::remove(driver);
   if (status != 0) {
     throw std::runtime_error(
@@ -712,10 +748,10 @@ NamedPlots SweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& poi
 
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
-                     const fs::path& dir) {
+                     const fs::path& dir, const PlotProgress& progress) {
   fs::remove_all(dir);
   fs::create_directories(dir);
-  RenderPlots(SweepPlots(spec, points, summaries, table), dir);
+  RenderPlots(SweepPlots(spec, points, summaries, table), dir, progress);
 }
 
 }  // namespace autonomsim::sim

@@ -51,10 +51,10 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
                           const std::string& png);
 
 // Writes NAME.gp and NAME.dat for each (NAME, plot) into `dir` and runs gnuplot on the scripts
-// there, which write NAME.png. std::runtime_error with gnuplot's message when it fails or is not
-// installed.
+// there, which write NAME.png, calling `progress` (if any) before the first and after each plot
+// is drawn. std::runtime_error with gnuplot's message when it fails or is not installed.
 void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots,
-                 const std::filesystem::path& dir);
+                 const std::filesystem::path& dir, const PlotProgress& progress = {});
 
 // Every plot of a sweep, (NAME, plot), not drawn. `points[i]` and `summaries[i]` belong together
 // (grid order); `table` is their results.csv. A metric a run did not measure (an empty cell) gives
@@ -64,9 +64,9 @@ std::vector<std::pair<std::string, PlotSpec>> SweepPlots(const SweepSpec& spec,
                                                          const std::vector<RunSummary>& summaries,
                                                          const ResultsTable& table);
 
-// Writes every plot of a sweep (SweepPlots) into `dir`, replacing what is there.
+// Writes every plot of a sweep (SweepPlots) into `dir`, replacing what is there (RenderPlots).
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
-                     const std::filesystem::path& dir);
+                     const std::filesystem::path& dir, const PlotProgress& progress = {});
 
 }  // namespace autonomsim::sim

@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <regex>
+#include <string>
+#include <vector>
 
 #include "tools/tests/cli_testing.h"
 
@@ -87,6 +90,39 @@ TEST(SweepCliTest, ARunThatCannotBeWrittenExitsTwoWithTheOsReason) {
   EXPECT_THAT(r.output, HasSubstr("cannot write " + (dir / "runs").string()));
   EXPECT_THAT(r.output, HasSubstr(": File too large"));
   EXPECT_FALSE(fs::exists(dir / "runs") && !fs::is_empty(dir / "runs"));  // no half-written run
+}
+
+// Issue 34, item 8: the sweep was silent for the ≈ 8 s its plots took after the last run. Off a
+// terminal it says how many are drawn at each tenth; --quiet says nothing.
+TEST(SweepCliTest, ItSaysHowManyPlotsAreDrawnUnlessQuiet) {
+  const fs::path dir = Scratch();
+  const std::string loud = kSweep.substr(0, kSweep.rfind(" --quiet"));
+  const Result r = Cli(loud + " --out " + (dir / "loud").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::smatch last;
+  const std::regex line("  plotting: ([0-9]+) of ([0-9]+) plots\n");
+  std::vector<std::string> done;
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), line);
+       it != std::sregex_iterator(); ++it) {
+    done.push_back((*it)[1]);
+    last = *it;
+  }
+  ASSERT_GE(done.size(), 3u) << r.output;
+  EXPECT_EQ(done.front(), "0");
+  EXPECT_EQ(last[1], last[2]);  // the last line: all drawn
+  int pngs = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "loud" / "plots")) {
+    pngs += entry.path().extension() == ".png";
+  }
+  EXPECT_EQ(std::to_string(pngs), last[2].str());
+  // after the runs, before the table's summary line
+  EXPECT_LT(r.output.find("4/4 runs done"), r.output.find("plotting: 0 of"));
+  EXPECT_LT(r.output.rfind("plotting: "), r.output.find("run(s)"));
+  const Result quiet = Cli(kSweep + " --out " + (dir / "quiet").string());
+  EXPECT_THAT(quiet.output, ::testing::Not(HasSubstr("plotting")));
+  const Result merged =
+      Cli("sweep merge " + (dir / "loud").string() + " --out " + (dir / "merged").string());
+  EXPECT_THAT(merged.output, HasSubstr("plotting: " + last[2].str() + " of " + last[2].str()));
 }
 
 TEST(SweepCliTest, HelpAnswers) {

@@ -483,6 +483,34 @@ TEST(SweepPlots, LongValuesAreNamedShortOnThePlotAndWrittenOutInANote) {
   EXPECT_TRUE(short_plots.front().second.notes.empty());
 }
 
+// Issue 34, item 8: a sweep said nothing for the seconds its plots took. RenderPlots says how many
+// are drawn, before the first and after each, when that plot's picture is complete.
+TEST(SweepPlots, RenderingReportsEachPlotAsItIsDrawn) {
+  TempDir dir;
+  std::vector<std::pair<std::string, PlotSpec>> plots;
+  for (const char* name : {"a", "b", "c"}) {
+    plots.emplace_back(name,
+                       PlotSpec{.title = name,
+                                .x_label = "x",
+                                .y_label = "y",
+                                .series = {PlotSeries{.label = "s", .x = {0, 1}, .y = {1, 2}}}});
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> calls;
+  std::vector<bool> complete;  // each plot's picture readable when its call came
+  RenderPlots(plots, dir.path, [&](std::size_t done, std::size_t total) {
+    calls.emplace_back(done, total);
+    if (done > 0) {
+      complete.push_back(
+          !cv::imread((dir.path / (plots[done - 1].first + ".png")).string()).empty());
+    }
+  });
+  EXPECT_THAT(calls, ElementsAre(std::pair<std::size_t, std::size_t>{0, 3},
+                                 std::pair<std::size_t, std::size_t>{1, 3},
+                                 std::pair<std::size_t, std::size_t>{2, 3},
+                                 std::pair<std::size_t, std::size_t>{3, 3}));
+  EXPECT_THAT(complete, ElementsAre(true, true, true));
+}
+
 // ---- Real sweeps on the oracle scenario (no board: fast) ----
 
 SweepSpec TinySweep() {
