@@ -93,10 +93,10 @@ int ReportSweep(const sim::SweepSummary& summary, const sim::Shard& shard, const
                summary.ran);
   }
   fmt::print(
-      "{} run(s) in this shard: {} ran, {} already complete, {} failed to run, {} with failed "
-      "expectations\n",
-      summary.selected, summary.ran, summary.already_done, summary.failures.size(),
-      summary.failed_expectations.size());
+      "{} run(s){}: {} ran, {} already complete, {} failed to run, {} with failed expectations\n",
+      summary.selected,
+      shard.n > 1 ? fmt::format(" in shard {}/{}", shard.k, shard.n) : std::string(), summary.ran,
+      summary.already_done, summary.failures.size(), summary.failed_expectations.size());
   for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
   for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
   if (!summary.plots_error.empty())
@@ -155,9 +155,11 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   std::size_t grid = 1;
   for (const sim::VaryAxis& axis : spec.axes) grid *= axis.values.size();
   if (!o.quiet) {
-    fmt::print(
-        stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s), shard {}/{}, {} job(s))\n",
-        spec.scenario.string(), grid, spec.repeat, options.shard.k, options.shard.n, options.jobs);
+    fmt::print(stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s){}, {} job(s))\n",
+               spec.scenario.string(), grid, spec.repeat,
+               options.shard.n > 1 ? fmt::format(", shard {}/{}", options.shard.k, options.shard.n)
+                                   : std::string(),
+               options.jobs);
   }
   sim::SweepSummary summary;
   try {

@@ -125,6 +125,18 @@ TEST(SweepCliTest, ItSaysHowManyPlotsAreDrawnUnlessQuiet) {
   EXPECT_THAT(merged.output, HasSubstr("plotting: " + last[2].str() + " of " + last[2].str()));
 }
 
+// Issue 34: "4 run(s) in this shard" was printed for a sweep without shards.
+TEST(SweepCliTest, OnlyAShardSaysItIsOne) {
+  const fs::path dir = Scratch();
+  Result r = Cli(kSweep + " --no-plots --out " + (dir / "whole").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, ::testing::StartsWith("4 run(s): 4 ran, 0 already complete,"));
+  EXPECT_THAT(r.output, ::testing::Not(HasSubstr("shard")));
+  r = Cli(kSweep + " --no-plots --shard 2/2 --out " + (dir / "half").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("2 run(s) in shard 2/2: 2 ran,"));
+}
+
 TEST(SweepCliTest, HelpAnswers) {
   const Result sweep = Cli("sweep --help");
   EXPECT_EQ(sweep.exit_code, 0);
@@ -141,6 +153,7 @@ TEST(SweepCliTest, BadInputExitsTwoNamingWhatIsWrong) {
   const std::string out = " --out " + (dir / "out").string();
   Result r = Cli(kSweep + " --vary 'v2i.latency_s=0:1'" + out);  // neither list nor range
   EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("a range is start:stop:count"));  // issue 34: it gave no hint
   r = Cli(kSweep + " --vary 'v2i.latency_s=0:2:x'" + out);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("v2i.latency_s=0:2:x"));

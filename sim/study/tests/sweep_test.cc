@@ -66,13 +66,37 @@ TEST(Sweep, VaryTakesAListOrARange) {
   EXPECT_THAT(Labels(maps), ElementsAre("{lane_detection: {target: sw}}", "{}"));
   EXPECT_THAT(Labels(ParseVary("k=[1, 2],[3]")), ElementsAre("[1, 2]", "[3]"));
 
-  for (const std::string bad :
-       {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2", "x=a:1:3"}) {
+  for (const std::string bad : {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2",
+                                "x=a:1:3", "x=0:1", "x=0:1:5:2"}) {
     try {
       ParseVary(bad);
       FAIL() << "expected a ConfigError for " << bad;
     } catch (const ConfigError& e) {
       EXPECT_THAT(e.what(), HasSubstr(bad)) << "the message names the spec";
+    }
+  }
+}
+
+// Issue 34, smaller items: a range's points were printed (and run) with float noise, 0.1:0.5:5
+// giving 0.30000000000000004 in results.csv; two numbers for a range said nothing of its form.
+TEST(Sweep, RangePointsAreRoundedAndRunAsShownAndABadRangeSaysItsForm) {
+  const VaryAxis tenths = ParseVary("x=0.1:0.5:5");
+  EXPECT_THAT(Labels(tenths), ElementsAre("0.1", "0.2", "0.3", "0.4", "0.5"));
+  for (const VaryValue& v : tenths.values) EXPECT_EQ(v.yaml, v.label);  // what the row shows ran
+  EXPECT_THAT(Labels(ParseVary("x=0:1:4")), ElementsAre("0", "0.3333333", "0.6666667", "1"));
+  EXPECT_THAT(Labels(ParseVary("x=-0.3:0.3:3")), ElementsAre("-0.3", "0", "0.3"));
+  EXPECT_THAT(Labels(ParseVary("x=0.0001:0.0003:3")), ElementsAre("0.0001", "0.0002", "0.0003"));
+  EXPECT_THAT(Labels(ParseVary("x=1e6:2e6:3")), ElementsAre("1000000", "1500000", "2000000"));
+  // values of a list stay as typed
+  EXPECT_THAT(Labels(ParseVary("x=0.30,1e-3,.5")), ElementsAre("0.30", "1e-3", ".5"));
+  for (const std::string bad : {"v2i.latency_s=0:1", "v2i.latency_s=0:1:5:2"}) {
+    try {
+      ParseVary(bad);
+      FAIL() << bad;
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("--vary " + bad +
+                                      ": a range is start:stop:count, three "
+                                      "numbers (e.g. v2i.latency_s=0:1:5"));
     }
   }
 }
