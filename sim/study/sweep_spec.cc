@@ -181,16 +181,24 @@ ConfigError StudyError(const fs::path& file, const YAML::Node& node, const std::
       fmt::format("{}:{}:{}: {}", file.string(), mark.line + 1, mark.column + 1, message));
 }
 
-void CheckStudyKeys(const fs::path& file, const YAML::Node& root) {
-  for (const auto& item : root) {
+// Throws for a key of `node` not in `known`, naming the closest known key for a typo, as a
+// scenario's keys do (sim/core/config.h ClosestName), and listing them all. `what`: "a study",
+// "a vary entry".
+void CheckKnownKeys(const fs::path& file, const YAML::Node& node,
+                    const std::vector<std::string>& known, const std::string& what) {
+  for (const auto& item : node) {
     const std::string key = item.first.as<std::string>();
-    if (key != "scenario" && key != "description" && key != "set" && key != "repeat" &&
-        key != "vary") {
-      throw StudyError(
-          file, item.first,
-          "unknown key '" + key + "' (a study has scenario, description, set, repeat, vary)");
-    }
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    const std::string closest = detail::ClosestName(key, known);
+    throw StudyError(file, item.first,
+                     fmt::format("unknown key '{}' ({}{} has {})", key,
+                                 closest.empty() ? "" : "did you mean '" + closest + "'? ", what,
+                                 fmt::join(known, ", ")));
   }
+}
+
+void CheckStudyKeys(const fs::path& file, const YAML::Node& root) {
+  CheckKnownKeys(file, root, {"scenario", "description", "set", "repeat", "vary"}, "a study");
 }
 
 // A vary entry's `values`: a list of YAML values (each its own label), or a mapping label: value.
@@ -223,6 +231,7 @@ VaryAxis StudyAxis(const fs::path& file, const YAML::Node& entry) {
       throw StudyError(file, entry, e.what());
     }
   }
+  if (entry.IsMap()) CheckKnownKeys(file, entry, {"key", "values", "range"}, "a vary entry");
   if (!entry.IsMap() || !entry["key"] || (!entry["values"] == !entry["range"])) {
     throw StudyError(file, entry,
                      "a vary entry is {key, values} or {key, range: [start, stop, count]}");

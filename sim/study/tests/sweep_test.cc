@@ -342,6 +342,18 @@ vary:
     FAIL() << "expected a ConfigError";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("bad.yaml:3:1: unknown key 'repat'"));
+    // issue 34: a scenario's typo got a suggestion, a study's none
+    EXPECT_THAT(e.what(), HasSubstr("(did you mean 'repeat'? a study has scenario, description, "
+                                    "set, repeat, vary)"));
+  }
+  std::ofstream(dir.path / "entry.yaml")
+      << "scenario: x.yaml\nvary:\n  - {key: seed, vlaues: [1]}\n";
+  try {
+    LoadStudy(dir.path / "entry.yaml");
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown key 'vlaues' (did you mean 'values'? a vary entry has "
+                                    "key, values, range)"));
   }
 }
 
