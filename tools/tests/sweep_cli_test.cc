@@ -4,7 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
 #include <vector>
@@ -74,6 +76,44 @@ TEST(SweepCliTest, TheIndexLinksEveryRunsReport) {
   EXPECT_EQ(merged.exit_code, 0) << merged.output;
   EXPECT_TRUE(fs::exists(first / "report.html"));
   EXPECT_THAT(Read(scratch / "merged" / "index.html"), HasSubstr("../sweep/runs/"));
+}
+
+// Issue 34, smaller items: a board sweep's index.html showed every node's columns (149 in all)
+// with no way to hide them. In chromium the page shows the run's and the cars' and boards'
+// metrics, and the nodes' once its checkbox is ticked.
+TEST(SweepCliTest, TheIndexHidesPerNodeColumnsUntilAsked) {
+  ASSERT_EQ(Shell("command -v chromium").exit_code, 0)
+      << "chromium is not installed: tools/install_deps.sh installs it (Debian's chromium)";
+  const fs::path dir = Scratch();
+  const Result r =
+      Cli("sweep scenarios/lab_two_cars.yaml --set duration_s=1 --set 'expect=[]' --vary "
+          "'v2i.latency_s=0,1' --no-plots -q --out " +
+          (dir / "sweep").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string table = Read(dir / "sweep" / "results.csv");
+  const std::string header = table.substr(0, table.find('\n'));
+  const long columns = std::count(header.begin(), header.end(), ',') + 1;
+  long node_columns = 0;  // <board>.<node>.<metric>
+  for (std::size_t at = 0, next = 0; at <= header.size(); at = next + 1) {
+    next = std::min(header.find(',', at), header.size());
+    const std::string column = header.substr(at, next - at);
+    node_columns += std::count(column.begin(), column.end(), '.') == 2;
+  }
+  ASSERT_GT(node_columns, 20);
+  fs::create_directories(dir / "profile");
+  const Result browser =
+      Shell("/usr/bin/python3 tools/tests/chromium_probe.py --timeout 60 --user-data-dir " +
+            (dir / "profile").string() + " 'file://" + (dir / "sweep" / "index.html").string() +
+            "#probe'");
+  const std::size_t json_begin = browser.output.find("{\"probe\"");
+  ASSERT_NE(json_begin, std::string::npos) << browser.output;
+  const nlohmann::json opened = nlohmann::json::parse(browser.output.substr(json_begin));
+  EXPECT_TRUE(opened["exceptions"].empty()) << opened["exceptions"];
+  ASSERT_EQ(browser.exit_code, 0) << "the page wrote no probe: " << opened.dump(1);
+  const nlohmann::json probe = nlohmann::json::parse(opened["probe"].get<std::string>());
+  EXPECT_EQ(probe["columns"], columns);
+  EXPECT_EQ(probe["shown"], columns - node_columns);
+  EXPECT_EQ(probe["shown_with_nodes"], columns);
 }
 
 // Issue 33, item 4: a sweep on a full disk exited 1 (the "an expectation failed" code) and never

@@ -18,6 +18,7 @@
 #include "sim/core/config.h"
 #include "sim/core/parallel.h"
 #include "sim/platform/node_metrics.h"
+#include "sim/study/sweep_index.h"
 #include "sim/study/sweep_plots.h"
 
 namespace autonomsim::sim {
@@ -248,6 +249,28 @@ TEST(Sweep, AMetricARunDidNotMeasureIsAnEmptyCellAndNoPoint) {
   EXPECT_THAT(series["car0, each run"]->x, ElementsAre(0.0, 1.0, 1.0));
   EXPECT_THAT(series["car0, each run"]->y, ElementsAre(0.02, 0.04, 0.06));
   EXPECT_THAT(GnuplotData(plot->second), ::testing::Not(HasSubstr("\n0 0\n")));
+}
+
+// Issue 34, smaller items: a board sweep's index.html showed 149 columns, most of them one node's
+// each, with no way to hide them. The page is told which columns are a node's, and hides them
+// until asked (the browser's side: SweepCliTest.TheIndexHidesPerNodeColumnsUntilAsked).
+TEST(Sweep, TheIndexKnowsWhichColumnsAreANodes) {
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "aa", .labels = {"a.b"}, .repeat = 0, .seed = 42}};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.3, 2, true)};
+  // a varied key with two dots is not a node's column
+  const ResultsTable table = BuildResultsTable({"cars[0].platform.mapping"}, points, summaries);
+  const std::string page = SweepIndexHtml(
+      SweepIndexInput{.title = "t", .axis_keys = {"cars[0].platform.mapping"}, .table = &table});
+  const std::string open = "<script type=\"application/json\" id=\"sweep-data\">";
+  const std::size_t begin = page.find(open) + open.size();
+  const nlohmann::json data =
+      nlohmann::json::parse(page.substr(begin, page.find("</script>", begin) - begin));
+  std::vector<std::string> node_columns;
+  for (std::size_t c : data.at("node_columns")) node_columns.push_back(table.columns.at(c));
+  EXPECT_THAT(node_columns, ElementsAre("car0.poly_fit.rate_hz", "car0.poly_fit.turnaround_p50_ms",
+                                        "car0.poly_fit.cpu_percent"));
+  EXPECT_THAT(page, HasSubstr("show per-node columns"));
 }
 
 // Issue 33: `--vary K=a,b --vary K=c` was accepted: two columns named K, and rows of the same run.
