@@ -50,6 +50,19 @@ class SweepProgressPrinter {
     }
   }
 
+  // Drawing the plots takes seconds after the last run: a count rewritten in place on a terminal,
+  // a line at each tenth otherwise.
+  void Plots(std::size_t done, std::size_t total) {
+    if (quiet_ || total == 0) return;
+    if (tty_) {
+      fmt::print(stderr, "\r  plotting: {} of {} plots   ", done, total);
+      if (done == total) fmt::print(stderr, "\n");
+      std::fflush(stderr);
+    } else if (done == 0 || done == total || done * 10 / total != (done - 1) * 10 / total) {
+      fmt::print(stderr, "  plotting: {} of {} plots\n", done, total);
+    }
+  }
+
  private:
   bool quiet_;
   bool tty_;
@@ -71,6 +84,36 @@ struct SweepOptions {
   std::string merge_out;
   bool force{false};
 };
+
+// What a finished sweep prints on stdout (a stop and missing plots on stderr), and its exit code.
+int ReportSweep(const sim::SweepSummary& summary, const sim::Shard& shard, const std::string& out) {
+  if (summary.stopped) {
+    fmt::print(stderr,
+               "autonomsim sweep: interrupted after {} run(s); the runs in flight were removed, "
+               "the complete ones kept and tabled: the same command resumes where it stopped\n",
+               summary.ran);
+  }
+  fmt::print(
+      "{} run(s){}: {} ran, {} already complete, {} failed to run, {} with failed expectations\n",
+      summary.selected,
+      shard.n > 1 ? fmt::format(" in shard {}/{}", shard.k, shard.n) : std::string(), summary.ran,
+      summary.already_done, summary.failures.size(), summary.failed_expectations.size());
+  for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
+  for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
+  if (!summary.plots_error.empty())
+    fmt::print(stderr, "warning: no plots: {}\n", summary.plots_error);
+  fmt::print("results: {}\n", summary.table.string());
+  if (shard.n == 1) {
+    fmt::print("index: {}\n", (fs::path(out) / "index.html").string());
+  } else {
+    fmt::print("(a shard's table: `sweep merge` joins the shards' folders into results.csv)\n");
+  }
+  if (summary.stopped) return kExitInterrupted;
+  if (!summary.failures.empty()) {
+    return summary.cannot_run ? kExitUnusableInput : kExitExpectationFailed;
+  }
+  return summary.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
+}
 
 int SweepCommand(const SweepOptions& o, bool repeat_given) {
   InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
@@ -103,6 +146,9 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   options.stop_requested = InterruptRequested;  // Ctrl-C: stop, keep the complete runs
   SweepProgressPrinter printer(o.quiet);
   options.progress = [&printer](const sim::SweepProgress& p) { printer.Update(p); };
+  options.plot_progress = [&printer](std::size_t done, std::size_t total) {
+    printer.Plots(done, total);
+  };
   options.wall_clock = [] {
     return std::chrono::duration_cast<std::chrono::nanoseconds>(
         std::chrono::steady_clock::now().time_since_epoch());
@@ -111,9 +157,11 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
   std::size_t grid = 1;
   for (const sim::VaryAxis& axis : spec.axes) grid *= axis.values.size();
   if (!o.quiet) {
-    fmt::print(
-        stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s), shard {}/{}, {} job(s))\n",
-        spec.scenario.string(), grid, spec.repeat, options.shard.k, options.shard.n, options.jobs);
+    fmt::print(stderr, "autonomsim sweep: {} ({} grid point(s) x {} seed(s){}, {} job(s))\n",
+               spec.scenario.string(), grid, spec.repeat,
+               options.shard.n > 1 ? fmt::format(", shard {}/{}", options.shard.k, options.shard.n)
+                                   : std::string(),
+               options.jobs);
   }
   sim::SweepSummary summary;
   try {
@@ -122,32 +170,7 @@ int SweepCommand(const SweepOptions& o, bool repeat_given) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
   }
-  if (summary.stopped) {
-    fmt::print(stderr,
-               "autonomsim sweep: interrupted after {} run(s); the runs in flight were removed, "
-               "the complete ones kept and tabled: the same command resumes where it stopped\n",
-               summary.ran);
-  }
-  fmt::print(
-      "{} run(s) in this shard: {} ran, {} already complete, {} failed to run, {} with failed "
-      "expectations\n",
-      summary.selected, summary.ran, summary.already_done, summary.failures.size(),
-      summary.failed_expectations.size());
-  for (const std::string& f : summary.failures) fmt::print("  FAILED {}\n", f);
-  for (const std::string& f : summary.failed_expectations) fmt::print("  FAIL {}\n", f);
-  if (!summary.plots_error.empty())
-    fmt::print(stderr, "warning: no plots: {}\n", summary.plots_error);
-  fmt::print("results: {}\n", summary.table.string());
-  if (options.shard.n == 1) {
-    fmt::print("index: {}\n", (fs::path(o.out) / "index.html").string());
-  } else {
-    fmt::print("(a shard's table: `sweep merge` joins the shards' folders into results.csv)\n");
-  }
-  if (summary.stopped) return kExitInterrupted;
-  if (!summary.failures.empty()) {
-    return summary.cannot_run ? kExitUnusableInput : kExitExpectationFailed;
-  }
-  return summary.failed_expectations.empty() ? kExitOk : kExitExpectationFailed;
+  return ReportSweep(summary, options.shard, o.out);
 }
 
 int MergeCommand(const SweepOptions& o) {
@@ -156,7 +179,10 @@ int MergeCommand(const SweepOptions& o) {
   sim::SweepTableSummary merged;
   try {
     if (!o.merge_out.empty()) out = sim::PrepareOutputFolder(o.merge_out, o.force);
-    merged = sim::MergeSweeps(dirs, out, !o.no_plots);
+    SweepProgressPrinter printer(o.quiet);
+    merged = sim::MergeSweeps(
+        dirs, out, !o.no_plots,
+        [&printer](std::size_t done, std::size_t total) { printer.Plots(done, total); });
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -234,6 +260,7 @@ Command AddSweepCommand(CLI::App& parent) {
   merge->add_flag("--force", o->force,
                   "Write into --out even if this program did not write it (never a device)");
   merge->add_flag("--no-plots", o->no_plots, "Write results.csv only");
+  merge->add_flag("--quiet,-q", o->quiet, "No progress output");
 
   return {sweep, [o, merge, repeat] {
             if (*merge) return MergeCommand(*o);

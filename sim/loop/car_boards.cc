@@ -138,7 +138,7 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
             StackMetrics& m = *agent->metrics.stack;
             const double error =
                 (estimate.X_map_base.position() - agent->car->pose().position()).norm();
-            m.max_localization_error_m = std::max(m.max_localization_error_m, error);
+            m.max_localization_error_m = std::max(m.max_localization_error_m.value_or(0.0), error);
             m.final_localization_error_m = error;
           },
       .on_control =

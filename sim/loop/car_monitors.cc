@@ -124,7 +124,7 @@ void LaneMonitor::OnLanes(const LaneJudgeParams& params, const world::Track& tra
   const std::optional<double> error =
       LaneDetectionError(params, track, route.path, frame->second, lanes);
   if (!error) return;
-  metrics->lane_error_max_m = std::max(metrics->lane_error_max_m, *error);
+  metrics->lane_error_max_m = std::max(metrics->lane_error_max_m.value_or(0.0), *error);
   error_sq_sum_ += *error * *error;
   ++metrics->lane_error_samples;
 }

@@ -33,9 +33,14 @@ int PidOf(TraceLane lane) {
   return kPidExecutors;
 }
 
+// With no sample (a node without jobs, a topic that never published) every statistic is null,
+// not Stats' 0: a sweep's table and plots leave it out rather than draw a perfect 0 ms.
 nlohmann::json StatsJson(const Stats& s) {
-  return {{"count", s.count}, {"min", s.min}, {"p50", s.p50},
-          {"p95", s.p95},     {"p99", s.p99}, {"max", s.max}};
+  const auto measured = [&s](double value) {
+    return s.count > 0 ? nlohmann::json(value) : nlohmann::json();
+  };
+  return {{"count", s.count},       {"min", measured(s.min)}, {"p50", measured(s.p50)},
+          {"p95", measured(s.p95)}, {"p99", measured(s.p99)}, {"max", measured(s.max)}};
 }
 
 }  // namespace

@@ -238,7 +238,8 @@ std::string TopicsCsv(const std::vector<BoardReport>& boards);
 // depth, published, rate_hz, latency_ms: {...}, latency_per_bin_ms: {mean: [...], max: [...]} (null
 // for a bin without messages), drops, loan_failures, dds (DDS topics, whole run): {samples_written,
 // write_timeouts, samples_delivered, samples_lost, datagrams_sent, datagrams_retransmitted,
-// datagrams_dropped, nacks}}]}.
+// datagrams_dropped, nacks}}]}. A statistics object of no sample (count 0: a node without jobs, a
+// topic never published) has null for each statistic; nodes.csv keeps Stats' zeros.
 nlohmann::json ReportJson(const MetricsReport& report);
 // trace.json in the Chrome trace event format (times in whole microseconds), for Perfetto
 // (ui.perfetto.dev) or chrome://tracing: per board a CPU busy-cores counter, one track per node

@@ -64,10 +64,11 @@ struct PerceptionMetrics {
   std::uint64_t lane_frames{0};        // lane detection results
   std::uint64_t lane_valid_frames{0};  // of them, valid
   // The detected lane centre 0.5 m ahead against the route's lane centre: its distance from it,
-  // over the valid results that reach 0.5 m.
+  // over the valid results that reach 0.5 m. Empty without such a result (no sample): a 0 would
+  // read as a perfect detector in tables and plots.
   std::uint64_t lane_error_samples{0};
-  double lane_error_max_m{0.0};
-  double lane_error_rms_m{0.0};
+  std::optional<double> lane_error_max_m;
+  std::optional<double> lane_error_rms_m;
   std::uint64_t grid_frames{0};           // obstacle grids
   std::uint64_t grid_obstacle_frames{0};  // of them, with a cell the costmap layer marks lethal
 };
@@ -79,9 +80,10 @@ struct StackMetrics {
   std::uint64_t collision_cycles{0};    // of which failed FollowPath by a collision ahead
   int recoveries{0};                    // recovery actions (clear a costmap, wait)
   bool navigation_failed{false};        // retries exhausted
-  // The EKF's map-frame position against the true chassis centre, at each estimate.
-  double max_localization_error_m{0.0};
-  double final_localization_error_m{0.0};
+  // The EKF's map-frame position against the true chassis centre, at each estimate; empty before
+  // the first estimate (none measured).
+  std::optional<double> max_localization_error_m;
+  std::optional<double> final_localization_error_m;
 };
 
 struct CarMetrics {

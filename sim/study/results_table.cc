@@ -48,6 +48,11 @@ std::string Cell(const nlohmann::json& value) {
 
 // ---- The table ----
 
+bool IsNodeColumn(const std::string& metric_column) {
+  // a board's name (carN) and a node's (a ROS name part) hold no dot: AddBoardColumns below
+  return std::count(metric_column.begin(), metric_column.end(), '.') == 2;
+}
+
 std::optional<std::size_t> ResultsTable::Column(const std::string& name) const {
   const auto it = std::find(columns.begin(), columns.end(), name);
   if (it == columns.end()) return std::nullopt;

@@ -32,6 +32,11 @@ struct ResultsTable {
   // Index of a column, or nullopt.
   std::optional<std::size_t> Column(const std::string& name) const;
 };
+// Whether a metric column of the table is one node's, <board>.<node>.<metric> (e.g.
+// car0.poly_fit.rate_hz), rather than a car's or a board's, <car or board>.<metric>. Not for the
+// columns before the metrics (a varied key's name may hold dots).
+bool IsNodeColumn(const std::string& metric_column);
+
 // `summaries[i]` belongs to `points[i]` (points in grid order).
 ResultsTable BuildResultsTable(const std::vector<std::string>& axis_keys,
                                const std::vector<PointRecord>& points,

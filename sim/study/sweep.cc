@@ -135,7 +135,8 @@ std::string TableName(const Shard& shard) { return ShardFileName(shard, "results
 // alone.
 SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                                      const std::vector<fs::path>& dirs, const fs::path& out_dir,
-                                     bool plots, const std::string& table_name = "results.csv") {
+                                     bool plots, const std::string& table_name = "results.csv",
+                                     const PlotProgress& plot_progress = {}) {
   std::vector<PointRecord> complete;
   std::vector<RunSummary> summaries;
   std::map<std::string, RunSummary> cache;  // points may share a run
@@ -162,7 +163,7 @@ SweepTableSummary WriteTableAndPlots(const SweepSpec& spec, const std::vector<Po
   const bool whole = table_name == "results.csv";
   if (plots && whole) {
     try {
-      WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots");
+      WriteSweepPlots(spec, complete, summaries, table, out_dir / "plots", plot_progress);
     } catch (const std::runtime_error& e) {  // the table stands without them
       result.plots_error = e.what();
     }
@@ -380,15 +381,16 @@ SweepSummary RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   const std::vector<std::size_t> todo = RunsToDo(records, options.out_dir, &summary.already_done);
   RunPoints(loaded, records, todo, options, &summary);
   summary.table = options.out_dir / TableName(options.shard);
-  SweepTableSummary table = WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir,
-                                               options.plots, TableName(options.shard));
+  SweepTableSummary table =
+      WriteTableAndPlots(spec, records, {options.out_dir}, options.out_dir, options.plots,
+                         TableName(options.shard), options.plot_progress);
   summary.failed_expectations = std::move(table.failed_expectations);
   summary.plots_error = std::move(table.plots_error);
   return summary;
 }
 
 SweepTableSummary MergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out_dir,
-                              bool plots) {
+                              bool plots, const PlotProgress& plot_progress) {
   if (dirs.empty()) throw ConfigError("sweep merge: no folders given");
   std::optional<SweepSpec> spec;
   std::optional<nlohmann::json> identity;
@@ -443,7 +445,8 @@ SweepTableSummary MergeSweeps(const std::vector<fs::path>& dirs, const fs::path&
   manifest["merged_from"] = nlohmann::json::array();
   for (const fs::path& dir : dirs) manifest["merged_from"].push_back(dir.string());
   WriteFileAtomically(out_dir / "sweep.json", manifest.dump(2) + "\n");
-  SweepTableSummary table = WriteTableAndPlots(*spec, ordered, dirs, out_dir, plots);
+  SweepTableSummary table =
+      WriteTableAndPlots(*spec, ordered, dirs, out_dir, plots, "results.csv", plot_progress);
   table.missing += grid_points - ordered.size();
   return table;
 }

@@ -36,6 +36,10 @@ struct SweepProgress {
   double wall_s{0.0};    // since the runs began, on SweepOptions::wall_clock
 };
 
+// Progress of a sweep's plots: `done` of `total` drawn (0 before the first). Drawing them takes
+// seconds (47 plots of a two-car sweep: ≈ 8 s), after the last run's progress.
+using PlotProgress = std::function<void(std::size_t done, std::size_t total)>;
+
 // The wall clock as a sweep reads it, for progress and each run's wall_seconds: a monotonic time
 // from any fixed origin, called from the worker threads. No module under sim/ reads the wall
 // clock itself (ARCHITECTURE): the CLI passes std::chrono::steady_clock, tests a fake.
@@ -55,6 +59,7 @@ struct SweepOptions {
   // kept and tabled (SweepSummary::stopped). None: never.
   std::function<bool()> stop_requested;
   std::function<void(const SweepProgress&)> progress;  // called after each run, from any thread
+  PlotProgress plot_progress;  // called as the plots are drawn, from the calling thread
   // None: every wall time is 0 (no elapsed time in progress; summary.json: wall_seconds 0,
   // real_time_factor null).
   WallClock wall_clock;
@@ -101,6 +106,7 @@ std::vector<LoadedScenario> ResolveSweep(const SweepSpec& spec, int jobs);
 // and the plots. Returns how many grid points have no complete run (warned about) and the runs
 // whose expectations failed.
 SweepTableSummary MergeSweeps(const std::vector<std::filesystem::path>& dirs,
-                              const std::filesystem::path& out_dir, bool plots = true);
+                              const std::filesystem::path& out_dir, bool plots = true,
+                              const PlotProgress& plot_progress = {});
 
 }  // namespace autonomsim::sim

@@ -38,6 +38,9 @@ struct PlotSpec {
   // Categorical x axis: the tick at x = i is labelled categories[i] (x values are indices).
   std::vector<std::string> categories;
   bool log_x{false};  // x values are plotted on a log10 scale (must be > 0)
+  // Lines under the subtitle, smaller: what the short names of long values stand for
+  // ("key=value 2: {lane_detection: {target: sw}}").
+  std::vector<std::string> notes;
 };
 
 // The data file of a plot: one block per series ("x y" lines, blocks two blank lines apart, a
@@ -48,15 +51,22 @@ std::string GnuplotScript(const PlotSpec& spec, const std::string& data_file,
                           const std::string& png);
 
 // Writes NAME.gp and NAME.dat for each (NAME, plot) into `dir` and runs gnuplot on the scripts
-// there, which write NAME.png. std::runtime_error with gnuplot's message when it fails or is not
-// installed.
+// there, which write NAME.png, calling `progress` (if any) before the first and after each plot
+// is drawn. std::runtime_error with gnuplot's message when it fails or is not installed.
 void RenderPlots(const std::vector<std::pair<std::string, PlotSpec>>& plots,
-                 const std::filesystem::path& dir);
+                 const std::filesystem::path& dir, const PlotProgress& progress = {});
 
-// Writes every plot of a sweep into `dir` (replacing what is there). `points[i]` and
-// `summaries[i]` belong together (grid order); `table` is their results.csv.
+// Every plot of a sweep, (NAME, plot), not drawn. `points[i]` and `summaries[i]` belong together
+// (grid order); `table` is their results.csv. A metric a run did not measure (an empty cell) gives
+// no point for that run: no dot, and no part in its line's mean.
+std::vector<std::pair<std::string, PlotSpec>> SweepPlots(const SweepSpec& spec,
+                                                         const std::vector<PointRecord>& points,
+                                                         const std::vector<RunSummary>& summaries,
+                                                         const ResultsTable& table);
+
+// Writes every plot of a sweep (SweepPlots) into `dir`, replacing what is there (RenderPlots).
 void WriteSweepPlots(const SweepSpec& spec, const std::vector<PointRecord>& points,
                      const std::vector<RunSummary>& summaries, const ResultsTable& table,
-                     const std::filesystem::path& dir);
+                     const std::filesystem::path& dir, const PlotProgress& progress = {});
 
 }  // namespace autonomsim::sim

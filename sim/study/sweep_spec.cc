@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/core/config.h"
 #include "sim/core/files.h"
@@ -29,6 +30,25 @@ double ParseNumber(const std::string& text, const std::string& spec) {
 
 // The shortest text that reads back as `value` (fmt's default for doubles).
 std::string NumberText(double value) { return fmt::format("{}", value); }
+
+// A range point as text: rounded to the fewest decimals that hold it within 5e-7 of a step, so
+// that 0.1 + 2 × 0.1 is 0.3, not the sum's 0.30000000000000004, and a third of a step 0.3333333.
+// The ends, as typed, need no more decimals than typed.
+std::string RangePointText(double value, double step) {
+  const double tolerance = 5e-7 * std::abs(step);
+  for (int decimals = 0; decimals <= std::numeric_limits<double>::max_digits10; ++decimals) {
+    const double rounded = std::stod(fmt::format("{:.{}f}", value, decimals));
+    if (std::abs(rounded - value) <= tolerance) return NumberText(rounded + 0.0);  // not -0
+  }
+  return NumberText(value);
+}
+
+// "K=0:1" or "K=0:1:5:2": numbers split by colons, but not three of them: meant as a range.
+bool LooksLikeABadRange(const std::vector<std::string>& parts) {
+  return parts.size() >= 2 && parts.size() != 3 &&
+         std::all_of(parts.begin(), parts.end(),
+                     [](const std::string& p) { return ParseFiniteNumber(p).has_value(); });
+}
 
 }  // namespace
 
@@ -78,9 +98,14 @@ VaryAxis ParseVary(const std::string& spec) {
   VaryAxis axis{.key = Trim(spec.substr(0, eq)), .values = {}};
   const std::string rest = spec.substr(eq + 1);
   const std::vector<std::string> range = SplitTopLevel(rest, ':');
-  const bool looks_like_range = range.size() == 3 && rest.find(',') == std::string::npos &&
-                                rest.find('{') == std::string::npos;
-  if (looks_like_range) {
+  const bool no_list = rest.find(',') == std::string::npos && rest.find('{') == std::string::npos;
+  if (no_list && LooksLikeABadRange(range)) {
+    throw ConfigError(fmt::format(
+        "--vary {}: a range is start:stop:count, three numbers (e.g. {}=0:1:5 for 0, 0.25, 0.5, "
+        "0.75, 1); a list is a,b,c",
+        spec, axis.key));
+  }
+  if (no_list && range.size() == 3) {
     const double start = ParseNumber(range[0], spec);
     const double stop = ParseNumber(range[1], spec);
     const double count_d = ParseNumber(range[2], spec);
@@ -91,13 +116,16 @@ VaryAxis ParseVary(const std::string& spec) {
           spec, kMaxRangeCount, range[2], kDefaultMaxRuns));
     }
     const int count = static_cast<int>(count_d);
+    const double step = (stop - start) / std::max(1, count - 1);
     for (int i = 0; i < count; ++i) {
       // the last value is `stop` exactly, not start + (count - 1) * step
       const double value =
           i == count - 1 && count > 1
               ? stop
               : start + (stop - start) * static_cast<double>(i) / std::max(1, count - 1);
-      axis.values.push_back({NumberText(value), NumberText(value)});
+      // the run is given the value its row shows
+      const std::string text = RangePointText(value, step);
+      axis.values.push_back({text, text});
     }
   } else {
     for (const std::string& value : SplitTopLevel(rest, ',')) {
@@ -153,16 +181,24 @@ ConfigError StudyError(const fs::path& file, const YAML::Node& node, const std::
       fmt::format("{}:{}:{}: {}", file.string(), mark.line + 1, mark.column + 1, message));
 }
 
-void CheckStudyKeys(const fs::path& file, const YAML::Node& root) {
-  for (const auto& item : root) {
+// Throws for a key of `node` not in `known`, naming the closest known key for a typo, as a
+// scenario's keys do (sim/core/config.h ClosestName), and listing them all. `what`: "a study",
+// "a vary entry".
+void CheckKnownKeys(const fs::path& file, const YAML::Node& node,
+                    const std::vector<std::string>& known, const std::string& what) {
+  for (const auto& item : node) {
     const std::string key = item.first.as<std::string>();
-    if (key != "scenario" && key != "description" && key != "set" && key != "repeat" &&
-        key != "vary") {
-      throw StudyError(
-          file, item.first,
-          "unknown key '" + key + "' (a study has scenario, description, set, repeat, vary)");
-    }
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    const std::string closest = detail::ClosestName(key, known);
+    throw StudyError(file, item.first,
+                     fmt::format("unknown key '{}' ({}{} has {})", key,
+                                 closest.empty() ? "" : "did you mean '" + closest + "'? ", what,
+                                 fmt::join(known, ", ")));
   }
+}
+
+void CheckStudyKeys(const fs::path& file, const YAML::Node& root) {
+  CheckKnownKeys(file, root, {"scenario", "description", "set", "repeat", "vary"}, "a study");
 }
 
 // A vary entry's `values`: a list of YAML values (each its own label), or a mapping label: value.
@@ -195,6 +231,7 @@ VaryAxis StudyAxis(const fs::path& file, const YAML::Node& entry) {
       throw StudyError(file, entry, e.what());
     }
   }
+  if (entry.IsMap()) CheckKnownKeys(file, entry, {"key", "values", "range"}, "a vary entry");
   if (!entry.IsMap() || !entry["key"] || (!entry["values"] == !entry["range"])) {
     throw StudyError(file, entry,
                      "a vary entry is {key, values} or {key, range: [start, stop, count]}");

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -101,6 +103,44 @@ TEST(SweepCliTest, TheIndexLinksEveryRunsReport) {
   EXPECT_THAT(Read(scratch / "merged" / "index.html"), HasSubstr("../sweep/runs/"));
 }
 
+// Issue 34, smaller items: a board sweep's index.html showed every node's columns (149 in all)
+// with no way to hide them. In chromium the page shows the run's and the cars' and boards'
+// metrics, and the nodes' once its checkbox is ticked.
+TEST(SweepCliTest, TheIndexHidesPerNodeColumnsUntilAsked) {
+  ASSERT_EQ(Shell("command -v chromium").exit_code, 0)
+      << "chromium is not installed: tools/install_deps.sh installs it (Debian's chromium)";
+  const fs::path dir = Scratch();
+  const Result r =
+      Cli("sweep scenarios/lab_two_cars.yaml --set duration_s=1 --set 'expect=[]' --vary "
+          "'v2i.latency_s=0,1' --no-plots -q --out " +
+          (dir / "sweep").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string table = Read(dir / "sweep" / "results.csv");
+  const std::string header = table.substr(0, table.find('\n'));
+  const long columns = std::count(header.begin(), header.end(), ',') + 1;
+  long node_columns = 0;  // <board>.<node>.<metric>
+  for (std::size_t at = 0, next = 0; at <= header.size(); at = next + 1) {
+    next = std::min(header.find(',', at), header.size());
+    const std::string column = header.substr(at, next - at);
+    node_columns += std::count(column.begin(), column.end(), '.') == 2;
+  }
+  ASSERT_GT(node_columns, 20);
+  fs::create_directories(dir / "profile");
+  const Result browser =
+      Shell("/usr/bin/python3 tools/tests/chromium_probe.py --timeout 60 --user-data-dir " +
+            (dir / "profile").string() + " 'file://" + (dir / "sweep" / "index.html").string() +
+            "#probe'");
+  const std::size_t json_begin = browser.output.find("{\"probe\"");
+  ASSERT_NE(json_begin, std::string::npos) << browser.output;
+  const nlohmann::json opened = nlohmann::json::parse(browser.output.substr(json_begin));
+  EXPECT_TRUE(opened["exceptions"].empty()) << opened["exceptions"];
+  ASSERT_EQ(browser.exit_code, 0) << "the page wrote no probe: " << opened.dump(1);
+  const nlohmann::json probe = nlohmann::json::parse(opened["probe"].get<std::string>());
+  EXPECT_EQ(probe["columns"], columns);
+  EXPECT_EQ(probe["shown"], columns - node_columns);
+  EXPECT_EQ(probe["shown_with_nodes"], columns);
+}
+
 // Issue 33, item 4: a sweep on a full disk exited 1 (the "an expectation failed" code) and never
 // said why. Here the writes fail with the file-size limit (ulimit -f, SIGXFSZ ignored: EFBIG, as a
 // full disk gives ENOSPC): exit 2, each run with its path and the OS's reason. 24 blocks of 512
@@ -115,6 +155,51 @@ TEST(SweepCliTest, ARunThatCannotBeWrittenExitsTwoWithTheOsReason) {
   EXPECT_THAT(r.output, HasSubstr("cannot write " + (dir / "runs").string()));
   EXPECT_THAT(r.output, HasSubstr(": File too large"));
   EXPECT_FALSE(fs::exists(dir / "runs") && !fs::is_empty(dir / "runs"));  // no half-written run
+}
+
+// Issue 34, item 8: the sweep was silent for the ≈ 8 s its plots took after the last run. Off a
+// terminal it says how many are drawn at each tenth; --quiet says nothing.
+TEST(SweepCliTest, ItSaysHowManyPlotsAreDrawnUnlessQuiet) {
+  const fs::path dir = Scratch();
+  const std::string loud = kSweep.substr(0, kSweep.rfind(" --quiet"));
+  const Result r = Cli(loud + " --out " + (dir / "loud").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::smatch last;
+  const std::regex line("  plotting: ([0-9]+) of ([0-9]+) plots\n");
+  std::vector<std::string> done;
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), line);
+       it != std::sregex_iterator(); ++it) {
+    done.push_back((*it)[1]);
+    last = *it;
+  }
+  ASSERT_GE(done.size(), 3u) << r.output;
+  EXPECT_EQ(done.front(), "0");
+  EXPECT_EQ(last[1], last[2]);  // the last line: all drawn
+  int pngs = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "loud" / "plots")) {
+    pngs += entry.path().extension() == ".png";
+  }
+  EXPECT_EQ(std::to_string(pngs), last[2].str());
+  // after the runs, before the table's summary line
+  EXPECT_LT(r.output.find("4/4 runs done"), r.output.find("plotting: 0 of"));
+  EXPECT_LT(r.output.rfind("plotting: "), r.output.find("run(s)"));
+  const Result quiet = Cli(kSweep + " --out " + (dir / "quiet").string());
+  EXPECT_THAT(quiet.output, ::testing::Not(HasSubstr("plotting")));
+  const Result merged =
+      Cli("sweep merge " + (dir / "loud").string() + " --out " + (dir / "merged").string());
+  EXPECT_THAT(merged.output, HasSubstr("plotting: " + last[2].str() + " of " + last[2].str()));
+}
+
+// Issue 34: "4 run(s) in this shard" was printed for a sweep without shards.
+TEST(SweepCliTest, OnlyAShardSaysItIsOne) {
+  const fs::path dir = Scratch();
+  Result r = Cli(kSweep + " --no-plots --out " + (dir / "whole").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, ::testing::StartsWith("4 run(s): 4 ran, 0 already complete,"));
+  EXPECT_THAT(r.output, ::testing::Not(HasSubstr("shard")));
+  r = Cli(kSweep + " --no-plots --shard 2/2 --out " + (dir / "half").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("2 run(s) in shard 2/2: 2 ran,"));
 }
 
 TEST(SweepCliTest, HelpAnswers) {
@@ -133,6 +218,7 @@ TEST(SweepCliTest, BadInputExitsTwoNamingWhatIsWrong) {
   const std::string out = " --out " + (dir / "out").string();
   Result r = Cli(kSweep + " --vary 'v2i.latency_s=0:1'" + out);  // neither list nor range
   EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("a range is start:stop:count"));  // issue 34: it gave no hint
   r = Cli(kSweep + " --vary 'v2i.latency_s=0:2:x'" + out);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("v2i.latency_s=0:2:x"));

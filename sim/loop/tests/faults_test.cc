@@ -315,8 +315,8 @@ TEST(Faults, AGyroBiasStepTurnsTheHeadingEstimateOnlyOfAGyroIntegratedImu) {
         RunWithFaults(faults, 25.0,
                       {"cars[0].stack.localization.use_pose_fix=false",
                        std::string("cars[0].sensors.imu.imu.heading_source=") + heading_source});
-    return std::pair{r.cars[0].stack->max_localization_error_m,
-                     r.cars[1].stack->max_localization_error_m};
+    return std::pair{r.cars[0].stack->max_localization_error_m.value(),
+                     r.cars[1].stack->max_localization_error_m.value()};
   };
   const auto [gyro_biased, gyro_other] = error(fault, "gyro");
   const auto [gyro_plain, gyro_other_plain] = error("[]", "gyro");
@@ -331,8 +331,8 @@ TEST(Faults, AGyroBiasStepTurnsTheHeadingEstimateOnlyOfAGyroIntegratedImu) {
 TEST(Faults, ALocalizationJumpMovesTheEstimate) {
   const RunRecord record =
       RunWithFaults("[{localization_jump: {car: 0, dx_m: 0.5, at_s: 5}}]", 8.0);
-  EXPECT_GT(record.cars[0].stack->max_localization_error_m, 0.4);
-  EXPECT_LT(Baseline().cars[0].stack->max_localization_error_m, 0.1);
+  EXPECT_GT(record.cars[0].stack->max_localization_error_m.value(), 0.4);
+  EXPECT_LT(Baseline().cars[0].stack->max_localization_error_m.value(), 0.1);
 }
 
 // Same scenario and seed, same bytes: every kind at once, run twice.

@@ -130,6 +130,26 @@ TEST(Metrics, LatencyOverTimeIsBinnedOverTheWholeRun) {
   EXPECT_NEAR(json["mean"][0].get<double>(), 20.0, 1e-9);
 }
 
+// Issue 34, item 3: a node without jobs and a topic never published had turnaround and latency
+// statistics of 0 ms in summary.json, which a sweep tabled and plotted as measured.
+TEST(Metrics, StatisticsOfNoSampleAreNullInTheJson) {
+  RunMetrics metrics;
+  const int idle = metrics.AddNode("idle", "sw");
+  const int busy = metrics.AddNode("busy", "sw");
+  metrics.AddTopic("/never", "dds", 16, 1);
+  using std::chrono::milliseconds;
+  metrics.JobDone(busy, milliseconds(100), milliseconds(104), 0.004);
+  const nlohmann::json json = ReportJson(BuildReport(metrics, std::chrono::seconds(1)));
+  const nlohmann::json& idle_turnaround = json["nodes"][idle]["turnaround_ms"];
+  EXPECT_EQ(idle_turnaround["count"], 0);
+  for (const char* statistic : {"min", "p50", "p95", "p99", "max"}) {
+    EXPECT_TRUE(idle_turnaround[statistic].is_null()) << statistic;
+    EXPECT_TRUE(json["topics"][0]["latency_ms"][statistic].is_null()) << statistic;
+  }
+  EXPECT_EQ(json["nodes"][busy]["turnaround_ms"]["count"], 1);
+  EXPECT_NEAR(json["nodes"][busy]["turnaround_ms"]["p50"].get<double>(), 4.0, 0.01);
+}
+
 TEST(Cpu, RejectsNonsense) {
   CpuRig rig(1);
   EXPECT_THROW(rig.cpu.Start(0, -1.0, 1.0, [] {}), std::invalid_argument);

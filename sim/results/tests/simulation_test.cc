@@ -304,7 +304,8 @@ TEST(SimulationStackTest, TheStacksNodesDriveTheCarFromItsBoard) {
   ASSERT_TRUE(car.stack.has_value());
   EXPECT_GT(car.distance_m, 1.5);  // 12 s at up to 0.25 m/s, a stop at the intersection
   EXPECT_GT(car.stack->control_cycles, 150u);
-  EXPECT_LT(car.stack->max_localization_error_m, 0.1);  // with the pose fix
+  ASSERT_TRUE(car.stack->max_localization_error_m.has_value());  // the EKF estimated
+  EXPECT_LT(*car.stack->max_localization_error_m, 0.1);          // with the pose fix
   EXPECT_LT(car.max_lateral_error_m, 0.2);  // as the shipped scenarios (lab_two_cars.yaml)
 }
 
@@ -454,9 +455,9 @@ TEST(SimulationStackTest, WithoutThePoseFixTheEstimateDrifts) {
       "scenarios/stack_obstacle.yaml",
       {"duration_s=40", "expect=[]", "cars[0].stack.localization.use_pose_fix=false"}));
   ASSERT_TRUE(fixed.cars[0].stack && drifting.cars[0].stack);
-  EXPECT_LT(fixed.cars[0].stack->final_localization_error_m, 0.06);
-  EXPECT_GT(drifting.cars[0].stack->final_localization_error_m,
-            2.0 * fixed.cars[0].stack->final_localization_error_m);
+  EXPECT_LT(fixed.cars[0].stack->final_localization_error_m.value(), 0.06);
+  EXPECT_GT(drifting.cars[0].stack->final_localization_error_m.value(),
+            2.0 * fixed.cars[0].stack->final_localization_error_m.value());
   EXPECT_EQ(drifting.boards[0].report.FindNode("pose_fix"), nullptr);
 }
 

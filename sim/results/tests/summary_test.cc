@@ -190,6 +190,29 @@ TEST(Summary, EmptyOptionalsAreNullOrLeftOutAndNaNReadsBack) {
   EXPECT_TRUE(std::isnan(back.cars[0].max_wait_s));  // JSON has no NaN: written as null
 }
 
+// Issue 34, item 3: car 1 of lab_two_cars.yaml, whose lane detector's results never reach 0.5 m
+// on a straight, had lane_error_max_m 0.0 beside lane_error_samples 0, and a sweep drew it as a
+// perfect detector. What was not measured is null, and reads back empty.
+TEST(Summary, AMetricWithoutSamplesIsNullNotZero) {
+  RunSummary s = HandMadeSummary();
+  s.cars[0].perception = PerceptionMetrics{.lane_frames = 300, .lane_valid_frames = 120};
+  s.cars[0].stack = StackMetrics{};  // no localization estimate yet
+  const nlohmann::json j = SummaryJson(s);
+  const nlohmann::json& perception = j.at("cars")[0].at("perception");
+  EXPECT_EQ(perception.at("lane_error_samples"), 0);
+  EXPECT_TRUE(perception.at("lane_error_max_m").is_null());
+  EXPECT_TRUE(perception.at("lane_error_rms_m").is_null());
+  EXPECT_TRUE(j.at("cars")[0].at("stack").at("max_localization_error_m").is_null());
+  EXPECT_TRUE(j.at("cars")[0].at("stack").at("final_localization_error_m").is_null());
+  const RunSummary back = ParseSummary(nlohmann::json::parse(j.dump()));
+  EXPECT_FALSE(back.cars[0].perception->lane_error_max_m.has_value());
+  EXPECT_FALSE(back.cars[0].stack->max_localization_error_m.has_value());
+  // a file written before (0.0 with no sample) still reads, as the value it holds
+  nlohmann::json old = j;
+  old["cars"][0]["perception"]["lane_error_max_m"] = 0.0;
+  EXPECT_EQ(ParseSummary(old).cars[0].perception->lane_error_max_m, 0.0);
+}
+
 TEST(Summary, ARealTimeRunsPacingIsUnderRealtimeAndOtherRunsHaveNoSuchKey) {
   EXPECT_FALSE(SummaryJson(HandMadeSummary()).contains("realtime"));
   RunSummary s = HandMadeSummary();

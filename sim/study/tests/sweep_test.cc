@@ -2,6 +2,7 @@
 // real sweeps (resume, --jobs and sharding do not change results.csv).
 #include "sim/study/sweep.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -9,12 +10,15 @@
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 
 #include "sim/core/config.h"
 #include "sim/core/parallel.h"
+#include "sim/platform/node_metrics.h"
+#include "sim/study/sweep_index.h"
 #include "sim/study/sweep_plots.h"
 
 namespace autonomsim::sim {
@@ -63,13 +67,37 @@ TEST(Sweep, VaryTakesAListOrARange) {
   EXPECT_THAT(Labels(maps), ElementsAre("{lane_detection: {target: sw}}", "{}"));
   EXPECT_THAT(Labels(ParseVary("k=[1, 2],[3]")), ElementsAre("[1, 2]", "[3]"));
 
-  for (const std::string bad :
-       {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2", "x=a:1:3"}) {
+  for (const std::string bad : {"novalue", "=1,2", "x=0:1:zero", "x=0:1:0", "x=0:1:2.5", "x=1,,2",
+                                "x=a:1:3", "x=0:1", "x=0:1:5:2"}) {
     try {
       ParseVary(bad);
       FAIL() << "expected a ConfigError for " << bad;
     } catch (const ConfigError& e) {
       EXPECT_THAT(e.what(), HasSubstr(bad)) << "the message names the spec";
+    }
+  }
+}
+
+// Issue 34, smaller items: a range's points were printed (and run) with float noise, 0.1:0.5:5
+// giving 0.30000000000000004 in results.csv; two numbers for a range said nothing of its form.
+TEST(Sweep, RangePointsAreRoundedAndRunAsShownAndABadRangeSaysItsForm) {
+  const VaryAxis tenths = ParseVary("x=0.1:0.5:5");
+  EXPECT_THAT(Labels(tenths), ElementsAre("0.1", "0.2", "0.3", "0.4", "0.5"));
+  for (const VaryValue& v : tenths.values) EXPECT_EQ(v.yaml, v.label);  // what the row shows ran
+  EXPECT_THAT(Labels(ParseVary("x=0:1:4")), ElementsAre("0", "0.3333333", "0.6666667", "1"));
+  EXPECT_THAT(Labels(ParseVary("x=-0.3:0.3:3")), ElementsAre("-0.3", "0", "0.3"));
+  EXPECT_THAT(Labels(ParseVary("x=0.0001:0.0003:3")), ElementsAre("0.0001", "0.0002", "0.0003"));
+  EXPECT_THAT(Labels(ParseVary("x=1e6:2e6:3")), ElementsAre("1000000", "1500000", "2000000"));
+  // values of a list stay as typed
+  EXPECT_THAT(Labels(ParseVary("x=0.30,1e-3,.5")), ElementsAre("0.30", "1e-3", ".5"));
+  for (const std::string bad : {"v2i.latency_s=0:1", "v2i.latency_s=0:1:5:2"}) {
+    try {
+      ParseVary(bad);
+      FAIL() << bad;
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("--vary " + bad +
+                                      ": a range is start:stop:count, three "
+                                      "numbers (e.g. v2i.latency_s=0:1:5"));
     }
   }
 }
@@ -175,6 +203,76 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
 }
 
+RunSummary WithLaneError(std::optional<double> lane_error_max_m) {
+  RunSummary s = FakeSummary(0.1, 1, false);
+  s.cars[0].perception = PerceptionMetrics{.lane_frames = 300, .lane_valid_frames = 200};
+  if (lane_error_max_m) {
+    s.cars[0].perception->lane_error_samples = 50;
+    s.cars[0].perception->lane_error_max_m = lane_error_max_m;
+    s.cars[0].perception->lane_error_rms_m = *lane_error_max_m / 2;
+  }
+  return s;
+}
+
+// Issue 34, item 3: a run whose lane detector gave no sample to judge had lane_error_max_m 0, a
+// "0" in results.csv, and a point at 0 m in the plot, pulling its line's mean down.
+TEST(Sweep, AMetricARunDidNotMeasureIsAnEmptyCellAndNoPoint) {
+  SweepSpec spec;
+  spec.axes = {ParseVary("v2i.latency_s=0,1")};
+  spec.repeat = 2;
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a0", .labels = {"0"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "a1", .labels = {"0"}, .repeat = 1, .seed = 2},
+      {.index = 2, .run_id = "b0", .labels = {"1"}, .repeat = 0, .seed = 1},
+      {.index = 3, .run_id = "b1", .labels = {"1"}, .repeat = 1, .seed = 2}};
+  const std::vector<RunSummary> summaries = {WithLaneError(0.02), WithLaneError(std::nullopt),
+                                             WithLaneError(0.04), WithLaneError(0.06)};
+  const ResultsTable table = BuildResultsTable({"v2i.latency_s"}, points, summaries);
+  const std::size_t column = table.Column("car0.lane_error_max_m").value();
+  EXPECT_EQ(table.rows[0][column], "0.02");
+  EXPECT_EQ(table.rows[1][column], "");  // not measured: empty, not 0
+  EXPECT_EQ(table.rows[1][table.Column("car0.lane_error_rms_m").value()], "");
+  EXPECT_EQ(table.rows[1][table.Column("car0.lane_valid_fraction").value()], "0.6666666666666666");
+
+  const auto plots = SweepPlots(spec, points, summaries, table);
+  const auto plot = std::find_if(plots.begin(), plots.end(), [](const auto& p) {
+    return p.first == "lane_error_max_m_vs_v2i_latency_s";
+  });
+  ASSERT_NE(plot, plots.end());
+  std::map<std::string, const PlotSeries*> series;
+  for (const PlotSeries& s : plot->second.series) series[s.label] = &s;
+  ASSERT_TRUE(series.count("car0, mean") && series.count("car0, each run"));
+  // the mean at latency 0 is the one measured run's, not (0.02 + 0) / 2
+  EXPECT_THAT(series["car0, mean"]->x, ElementsAre(0.0, 1.0));
+  EXPECT_THAT(series["car0, mean"]->y, ElementsAre(0.02, 0.05));
+  // three dots: the unmeasured run has none
+  EXPECT_THAT(series["car0, each run"]->x, ElementsAre(0.0, 1.0, 1.0));
+  EXPECT_THAT(series["car0, each run"]->y, ElementsAre(0.02, 0.04, 0.06));
+  EXPECT_THAT(GnuplotData(plot->second), ::testing::Not(HasSubstr("\n0 0\n")));
+}
+
+// Issue 34, smaller items: a board sweep's index.html showed 149 columns, most of them one node's
+// each, with no way to hide them. The page is told which columns are a node's, and hides them
+// until asked (the browser's side: SweepCliTest.TheIndexHidesPerNodeColumnsUntilAsked).
+TEST(Sweep, TheIndexKnowsWhichColumnsAreANodes) {
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "aa", .labels = {"a.b"}, .repeat = 0, .seed = 42}};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.3, 2, true)};
+  // a varied key with two dots is not a node's column
+  const ResultsTable table = BuildResultsTable({"cars[0].platform.mapping"}, points, summaries);
+  const std::string page = SweepIndexHtml(
+      SweepIndexInput{.title = "t", .axis_keys = {"cars[0].platform.mapping"}, .table = &table});
+  const std::string open = "<script type=\"application/json\" id=\"sweep-data\">";
+  const std::size_t begin = page.find(open) + open.size();
+  const nlohmann::json data =
+      nlohmann::json::parse(page.substr(begin, page.find("</script>", begin) - begin));
+  std::vector<std::string> node_columns;
+  for (std::size_t c : data.at("node_columns")) node_columns.push_back(table.columns.at(c));
+  EXPECT_THAT(node_columns, ElementsAre("car0.poly_fit.rate_hz", "car0.poly_fit.turnaround_p50_ms",
+                                        "car0.poly_fit.cpu_percent"));
+  EXPECT_THAT(page, HasSubstr("show per-node columns"));
+}
+
 // Issue 33: `--vary K=a,b --vary K=c` was accepted: two columns named K, and rows of the same run.
 TEST(Sweep, AKeyVariedTwiceIsRefused) {
   EXPECT_NO_THROW(CheckAxesDistinct({ParseVary("a=1,2"), ParseVary("b=3")}));
@@ -267,6 +365,18 @@ vary:
     FAIL() << "expected a ConfigError";
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("bad.yaml:3:1: unknown key 'repat'"));
+    // issue 34: a scenario's typo got a suggestion, a study's none
+    EXPECT_THAT(e.what(), HasSubstr("(did you mean 'repeat'? a study has scenario, description, "
+                                    "set, repeat, vary)"));
+  }
+  std::ofstream(dir.path / "entry.yaml")
+      << "scenario: x.yaml\nvary:\n  - {key: seed, vlaues: [1]}\n";
+  try {
+    LoadStudy(dir.path / "entry.yaml");
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown key 'vlaues' (did you mean 'values'? a vary entry has "
+                                    "key, values, range)"));
   }
 }
 
@@ -316,6 +426,148 @@ TEST(SweepPlots, ManyLongCategoryNamesAreSlantedAndGivenRoomBelow) {
   const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
   EXPECT_THAT(gp, HasSubstr("'localization_jump' 11) rotate by 30 right"));
   EXPECT_THAT(gp, HasSubstr("set bmargin 7"));  // 2 lines + 0.3 of a line per character
+}
+
+// Issue 34, item 4: with six long legend names or more the legend, under the plot in gnuplot's own
+// layout, covered the tic labels and the axis label. Under the plot it now sits at the picture's
+// bottom in columns, and the bottom margin holds the tic labels, the axis label and its rows.
+TEST(SweepPlots, ALegendOfManyLongNamesGoesBelowTheAxisLabelWithRoomForItsRows) {
+  PlotSpec spec{.title = "CPU load", .x_label = "simulated time (s)", .y_label = "CPU (%)"};
+  for (int i = 0; i < 7; ++i) {
+    spec.series.push_back(PlotSeries{
+        .label = fmt::format("cars[0].platform.cost_scale.lane_planner={}, seed 4{}", i, i),
+        .x = {0, 1},
+        .y = {1, 2}});
+  }
+  const std::string gp = GnuplotScript(spec, "p.dat", "p.png");
+  // 51 characters a name: two columns across, four rows; 3.5 lines for the tics and axis label
+  EXPECT_THAT(gp, HasSubstr("set key at screen 0.01, screen 0.01 left bottom horizontal Left "
+                            "reverse maxcols 2 maxrows 4\nset bmargin 7.5\n"));
+  // short names stay beside the plot, on the right
+  spec.series.resize(3);
+  for (PlotSeries& s : spec.series) s.label = s.label.substr(s.label.size() - 7);
+  EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"),
+              HasSubstr("set key outside right top Left reverse\n"));
+  // a name longer than the picture is wide is cut, not drawn past its edge
+  spec.series[0].label = std::string(300, 'k');
+  EXPECT_THAT(GnuplotScript(spec, "p.dat", "p.png"), HasSubstr(std::string(108, 'k') + "…'"));
+}
+
+RunSummary WithTurnaround(const std::vector<double>& counts) {
+  RunSummary s = FakeSummary(0.1, 1, true);
+  nlohmann::json& node = (*s.platform)["car0"]["nodes"][0];
+  node["turnaround_histogram_ms"] = {{"edges", HistogramEdgesMs()}, {"counts", counts}};
+  return s;
+}
+
+// Issue 34, item 4: a hardware node's turnaround, all in one log-spaced bin, was drawn as a
+// triangle: zeros at the neighbouring bins' centres joined to one peak. Each bin is now a step
+// from its left edge to its right.
+TEST(SweepPlots, AHistogramIsDrawnAsStepsSoThatOneFullBinIsABox) {
+  const std::vector<double> edges = HistogramEdgesMs();  // 0.1, 0.158, ... 3.98, 6.31, 10, ...
+  std::vector<double> counts(edges.size() - 1, 0.0);
+  counts[9] = 300;  // every job in [6.31, 10) ms
+  SweepSpec spec;
+  spec.axes = {ParseVary("v2i.latency_s=0,1")};
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a", .labels = {"0"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "b", .labels = {"1"}, .repeat = 0, .seed = 1}};
+  std::vector<double> half = counts;
+  half[9] = 150;
+  half[10] = 150;  // and half of them in [10, 15.8)
+  const std::vector<RunSummary> summaries = {WithTurnaround(counts), WithTurnaround(half)};
+  const auto plots =
+      SweepPlots(spec, points, summaries, BuildResultsTable({"v2i.latency_s"}, points, summaries));
+  const auto plot = std::find_if(plots.begin(), plots.end(), [](const auto& p) {
+    return p.first == "turnaround_car0_poly_fit";
+  });
+  ASSERT_NE(plot, plots.end());
+  ASSERT_EQ(plot->second.series.size(), 2u);
+  const PlotSeries& one_bin = plot->second.series[0];
+  EXPECT_EQ(one_bin.label, "v2i.latency_s=0");
+  EXPECT_FALSE(one_bin.dots);
+  // from the empty bin before the data to the empty bin after the last filled one (either run's)
+  EXPECT_THAT(one_bin.x, ElementsAre(edges[8], edges[8], edges[9], edges[9], edges[10], edges[10],
+                                     edges[11], edges[11], edges[12], edges[12]));
+  EXPECT_THAT(one_bin.y, ElementsAre(0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0));
+  EXPECT_THAT(plot->second.series[1].y,
+              ElementsAre(0.0, 0.0, 0.0, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0, 0.0));
+  // the log axis has tics to read the bins by, not only the one power of ten in range
+  EXPECT_THAT(GnuplotScript(plot->second, "t.dat", "t.png"),
+              HasSubstr("set xtics (4, 5, 6, 7, 8, 9, 10, 20)\n"));
+}
+
+// Issue 34, item 4: a mapping given to --vary was printed whole on the axis and in every legend.
+// Its values are named "value 1", "value 2", ..., each written out once above the plot.
+TEST(SweepPlots, LongValuesAreNamedShortOnThePlotAndWrittenOutInANote) {
+  SweepSpec spec;
+  spec.axes = {
+      ParseVary("cars[0].platform.mapping={},{lane_detection: {target: sw}, "
+                "obstacle_detection: {target: sw}}")};
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "a", .labels = {"{}"}, .repeat = 0, .seed = 1},
+      {.index = 1,
+       .run_id = "b",
+       .labels = {"{lane_detection: {target: sw}, obstacle_detection: {target: sw}}"},
+       .repeat = 0,
+       .seed = 1}};
+  const std::vector<RunSummary> summaries = {FakeSummary(0.1, 1, true), FakeSummary(0.2, 1, true)};
+  const ResultsTable table = BuildResultsTable({"cars[0].platform.mapping"}, points, summaries);
+  // the table keeps the values as given
+  EXPECT_EQ(table.rows[1][2], "{lane_detection: {target: sw}, obstacle_detection: {target: sw}}");
+  const auto plots = SweepPlots(spec, points, summaries, table);
+  std::map<std::string, PlotSpec> by_name(plots.begin(), plots.end());
+  const PlotSpec& laps = by_name.at("laps_vs_cars_0__platform_mapping");
+  EXPECT_THAT(laps.categories, ElementsAre("value 1", "value 2"));
+  EXPECT_THAT(laps.notes, ElementsAre("cars[0].platform.mapping=value 1: {}",
+                                      "cars[0].platform.mapping=value 2: {lane_detection: {target: "
+                                      "sw}, obstacle_detection: {target: sw}}"));
+  const std::string gp = GnuplotScript(laps, "p.dat", "p.png");
+  EXPECT_THAT(gp, HasSubstr("set xtics ('value 1' 0, 'value 2' 1)\n"));
+  EXPECT_THAT(gp, HasSubstr("set label 4 'cars[0].platform.mapping=value 2: {lane_detection: "
+                            "{target: sw}, obstacle_detection: {target: sw}}'"));
+  const PlotSpec& load = by_name.at("cpu_load_car0");
+  EXPECT_EQ(load.series.size(), 2u);
+  EXPECT_EQ(load.series[1].label, "cars[0].platform.mapping=value 2");
+  EXPECT_EQ(load.notes, laps.notes);
+  // short values (a study file's labels) are shown as they are
+  spec.axes = {ParseVary("cars[0].platform.mapping=all_hw,lane_sw")};
+  const std::vector<PointRecord> labelled = {
+      {.index = 0, .run_id = "a", .labels = {"all_hw"}, .repeat = 0, .seed = 1},
+      {.index = 1, .run_id = "b", .labels = {"lane_sw"}, .repeat = 0, .seed = 1}};
+  const auto short_plots =
+      SweepPlots(spec, labelled, summaries,
+                 BuildResultsTable({"cars[0].platform.mapping"}, labelled, summaries));
+  EXPECT_THAT(short_plots.front().second.categories, ElementsAre("all_hw", "lane_sw"));
+  EXPECT_TRUE(short_plots.front().second.notes.empty());
+}
+
+// Issue 34, item 8: a sweep said nothing for the seconds its plots took. RenderPlots says how many
+// are drawn, before the first and after each, when that plot's picture is complete.
+TEST(SweepPlots, RenderingReportsEachPlotAsItIsDrawn) {
+  TempDir dir;
+  std::vector<std::pair<std::string, PlotSpec>> plots;
+  for (const char* name : {"a", "b", "c"}) {
+    plots.emplace_back(name,
+                       PlotSpec{.title = name,
+                                .x_label = "x",
+                                .y_label = "y",
+                                .series = {PlotSeries{.label = "s", .x = {0, 1}, .y = {1, 2}}}});
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> calls;
+  std::vector<bool> complete;  // each plot's picture readable when its call came
+  RenderPlots(plots, dir.path, [&](std::size_t done, std::size_t total) {
+    calls.emplace_back(done, total);
+    if (done > 0) {
+      complete.push_back(
+          !cv::imread((dir.path / (plots[done - 1].first + ".png")).string()).empty());
+    }
+  });
+  EXPECT_THAT(calls, ElementsAre(std::pair<std::size_t, std::size_t>{0, 3},
+                                 std::pair<std::size_t, std::size_t>{1, 3},
+                                 std::pair<std::size_t, std::size_t>{2, 3},
+                                 std::pair<std::size_t, std::size_t>{3, 3}));
+  EXPECT_THAT(complete, ElementsAre(true, true, true));
 }
 
 // ---- Real sweeps on the oracle scenario (no board: fast) ----
