@@ -165,7 +165,14 @@ ResultsTable BuildResultsTable(const std::vector<std::string>& axis_keys,
 
   ResultsTable table;
   table.columns = {"index", "run_id"};
-  table.columns.insert(table.columns.end(), axis_keys.begin(), axis_keys.end());
+  // a varied key that is also a fixed column's name (--vary seed=...) is "vary.<key>": one table
+  // of two `seed` columns confuses every reader (the run's seed is the varied one plus its repeat)
+  const std::vector<std::string> fixed_columns = {"index", "run_id", "repeat", "seed"};
+  for (const std::string& key : axis_keys) {
+    const bool taken =
+        std::find(fixed_columns.begin(), fixed_columns.end(), key) != fixed_columns.end();
+    table.columns.push_back(taken ? "vary." + key : key);
+  }
   table.columns.insert(table.columns.end(), {"repeat", "seed"});
   const std::size_t fixed = table.columns.size();
   std::map<std::string, std::size_t> metric_column;  // metric columns in first-seen order

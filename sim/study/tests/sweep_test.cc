@@ -203,6 +203,21 @@ TEST(Sweep, TheTableHasOneRowPerPointInGridOrderWhateverTheInputOrder) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
 }
 
+// `--vary seed=...` gave results.csv two columns named `seed`; the varied one is now `vary.seed`,
+// and `seed` stays the run's own (the varied seed plus its repeat).
+TEST(Sweep, AVariedSeedHasAColumnOfItsOwn) {
+  const std::vector<PointRecord> points = {
+      {.index = 0, .run_id = "aa", .labels = {"7"}, .repeat = 0, .seed = 7},
+      {.index = 1, .run_id = "bb", .labels = {"7"}, .repeat = 1, .seed = 8}};
+  const ResultsTable table =
+      BuildResultsTable({"seed"}, points, {FakeSummary(0.1, 1, false), FakeSummary(0.1, 1, false)});
+  EXPECT_THAT(std::vector<std::string>(table.columns.begin(), table.columns.begin() + 5),
+              ElementsAre("index", "run_id", "vary.seed", "repeat", "seed"));
+  EXPECT_EQ(std::count(table.columns.begin(), table.columns.end(), "seed"), 1);
+  EXPECT_EQ(table.rows[1][*table.Column("vary.seed")], "7");
+  EXPECT_EQ(table.rows[1][*table.Column("seed")], "8");
+}
+
 RunSummary WithLaneError(std::optional<double> lane_error_max_m) {
   RunSummary s = FakeSummary(0.1, 1, false);
   s.cars[0].perception = PerceptionMetrics{.lane_frames = 300, .lane_valid_frames = 200};
