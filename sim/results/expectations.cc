@@ -213,29 +213,6 @@ std::vector<Wait> Waits(const RunRecord& record) {
 }
 
 // A fault of the run, from its fault_begin and fault_end events (sim/loop/faults.h).
-struct FaultSpan {
-  FaultKind kind{FaultKind::kCarStall};
-  int car{-1};  // the car it strikes; -1: none in particular
-  Time begin{0};
-  std::optional<Time> end;  // none: it lasted to the run's end
-};
-
-std::vector<FaultSpan> Faults(const RunRecord& record) {
-  std::vector<FaultSpan> faults;
-  ForEachEvent(record, [&](const Event& e) {
-    if (!e.fault) return;
-    if (e.type == EventKind::kFaultBegin) faults.push_back({*e.fault, e.car, e.t, std::nullopt});
-    if (e.type != EventKind::kFaultEnd) return;
-    for (FaultSpan& f : faults) {  // the earliest open one of its kind and car
-      if (!f.end && f.kind == *e.fault && f.car == e.car) {
-        f.end = e.t;
-        break;
-      }
-    }
-  });
-  return faults;
-}
-
 ExpectationResult Evaluate(const MaxWaitExpect& args, const RunRecord& record) {
   std::optional<Wait> longest;
   std::optional<Wait> first_over;
@@ -344,7 +321,7 @@ std::map<int, std::vector<std::pair<Time, Time>>> ExcusedStandstills(const RunRe
   }
   for (const auto& [car, t] : parked) excused[car].emplace_back(t, record.sim_duration);
   // a car whose motor a fault killed cannot move: that is car_stall's effect, not a gridlock
-  for (const FaultSpan& f : Faults(record)) {
+  for (const FaultSpan& f : FaultSpans(record)) {
     if (f.kind == FaultKind::kCarStall)
       excused[f.car].emplace_back(f.begin, f.end.value_or(record.sim_duration));
   }
@@ -470,7 +447,7 @@ std::map<int, std::vector<Standstill>> StandstillsNotHeldByObstacles(
 ExpectationResult Evaluate(const RecoversWithinExpect& args, const RunRecord& record,
                            const std::vector<ObstacleConfig>& obstacles) {
   const double bound_s = args.max_s;
-  const std::vector<FaultSpan> faults = Faults(record);
+  const std::vector<FaultSpan> faults = FaultSpans(record);
   if (faults.empty()) return {"", true, "no fault in the run"};
   std::size_t held_by_obstacles = 0;
   const std::map<int, std::vector<Standstill>> standstills =
@@ -522,6 +499,22 @@ ExpectationResult Evaluate(const RecoversWithinExpect& args, const RunRecord& re
 }
 
 }  // namespace
+
+std::vector<FaultSpan> FaultSpans(const RunRecord& record) {
+  std::vector<FaultSpan> faults;
+  ForEachEvent(record, [&](const Event& e) {
+    if (!e.fault) return;
+    if (e.type == EventKind::kFaultBegin) faults.push_back({*e.fault, e.car, e.t, std::nullopt});
+    if (e.type != EventKind::kFaultEnd) return;
+    for (FaultSpan& f : faults) {  // the earliest open one of its kind and car
+      if (!f.end && f.kind == *e.fault && f.car == e.car) {
+        f.end = e.t;
+        break;
+      }
+    }
+  });
+  return faults;
+}
 
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
                                                     const RunRecord& record) {

@@ -21,6 +21,16 @@ struct ExpectationResult {
   std::optional<int> car;
 };
 
+// A fault of the run, from its fault_begin event to its fault_end (each end closes the earliest
+// open fault of its kind and car); the video and recovers_within read them.
+struct FaultSpan {
+  FaultKind kind{FaultKind::kCarStall};
+  int car{-1};  // the car it strikes; -1: none in particular
+  Time begin{0};
+  std::optional<Time> end;  // none: it lasted to the run's end
+};
+std::vector<FaultSpan> FaultSpans(const RunRecord& record);
+
 std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
                                                     const RunRecord& record);
 

@@ -137,7 +137,7 @@ void CarTrack::Advance(Time t) {
 
 std::vector<std::string> FaultTimeline::ActiveAt(Time t) const {
   std::vector<std::string> lines;
-  for (const Span& f : spans) {
+  for (const FaultSpan& f : spans) {
     if (f.begin > t || (f.end && *f.end <= t)) continue;
     lines.push_back(fmt::format("{}{} (since {:.1f} s)", ToName(f.kind),
                                 f.car >= 0 ? fmt::format(", car {}", f.car) : "",
@@ -146,21 +146,7 @@ std::vector<std::string> FaultTimeline::ActiveAt(Time t) const {
   return lines;
 }
 
-FaultTimeline FaultsOfRun(const FinishedRun& run) {
-  FaultTimeline timeline;
-  for (const Event& e : run.record.events) {
-    if (!e.fault) continue;
-    if (e.type == EventKind::kFaultBegin) timeline.spans.push_back({*e.fault, e.car, e.t, {}});
-    if (e.type != EventKind::kFaultEnd) continue;
-    for (FaultTimeline::Span& f : timeline.spans) {  // the earliest open one of its kind and car
-      if (!f.end && f.kind == *e.fault && f.car == e.car) {
-        f.end = e.t;
-        break;
-      }
-    }
-  }
-  return timeline;
-}
+FaultTimeline FaultsOfRun(const FinishedRun& run) { return {FaultSpans(run.record)}; }
 
 std::vector<std::string> WrapToWidth(const std::string& text, int max_width_px, double scale,
                                      int thickness) {

@@ -14,6 +14,7 @@
 
 #include "sim/core/random.h"
 #include "sim/results/camera_views.h"
+#include "sim/results/expectations.h"
 #include "sim/results/finished_run.h"
 #include "sim/results/scene_views.h"
 #include "sim/results/track_figure.h"
@@ -42,13 +43,7 @@ std::map<int, IntersectionTimeline> IntersectionTimelines(const FinishedRun& run
 // The faults of a run (fault_begin and fault_end events) and, at an instant, a line for each one
 // that strikes then: "v2i_partition, car 1 (since 7.6 s)".
 struct FaultTimeline {
-  struct Span {
-    FaultKind kind;
-    int car{-1};  // -1: none in particular
-    Time begin{0};
-    std::optional<Time> end;  // none: to the run's end
-  };
-  std::vector<Span> spans;
+  std::vector<FaultSpan> spans;
   std::vector<std::string> ActiveAt(Time t) const;
 };
 FaultTimeline FaultsOfRun(const FinishedRun& run);
