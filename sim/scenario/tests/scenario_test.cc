@@ -292,6 +292,21 @@ INSTANTIATE_TEST_SUITE_P(
                    {"cars[0]", "set perception.enabled: true"}}),
     [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
 
+// Issue 34: a number in a message reads as the user wrote it ("got 65", not "got 65.000000").
+TEST(ScenarioTest, AMessageWritesABadNumberAsTheUserWouldWriteIt) {
+  ScenarioFile file("number_in_message", kValid);
+  for (const auto& [key, value] :
+       {std::pair{"color_stddev", "65"}, std::pair{"depth_stddev_per_m", "0.25"}}) {
+    try {
+      LoadScenario(file.path(),
+                   {std::string("cars[0].sensors.color_camera.noise.") + key + "=" + value});
+      FAIL() << key << ": no error";
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), ::testing::EndsWith(std::string(", got ") + value)) << key;
+    }
+  }
+}
+
 // Issue 15: a scenario kept outside scenarios/ finds the shipped track and profile.
 TEST(ScenarioTest, AScenarioAnywhereFindsTheShippedTrackAndProfile) {
   const TempDir dir("scenario_test_");
