@@ -161,6 +161,23 @@ world::Track LoadScenarioTrack(const Scenario& scenario, const std::filesystem::
   }
 }
 
+// "unknown start pose 'real_cra' (did you mean 'real_car'?); known start poses: gazebo, real_car":
+// what the track offers in place of a name it lacks, `kind` naming what the name is of.
+template <class Value>
+std::string UnknownName(const std::string& kind, const std::string& name,
+                        const std::map<std::string, Value>& known) {
+  std::vector<std::string> names;
+  std::string list;
+  for (const auto& [known_name, value] : known) {
+    names.push_back(known_name);
+    list += (list.empty() ? "" : ", ") + known_name;
+  }
+  const std::string closest = detail::ClosestName(name, names);
+  return fmt::format("unknown {} '{}'{}; known {}s: {}", kind, name,
+                     closest.empty() ? "" : " (did you mean '" + closest + "'?)", kind,
+                     list.empty() ? "(none)" : list);
+}
+
 // Where car `i` starts on its route: its named start pose (which must lie on the route, heading
 // along it) or its distance along the route.
 std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i,
@@ -171,7 +188,7 @@ std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i
     const std::optional<world::Pose2> named = track.StartPose(*car.start);
     if (!named) {
       FailAt(site.root, site.source, {"cars", i, "start"},
-             "unknown start pose '" + *car.start + "'");
+             UnknownName("start pose", *car.start, track.spec().start_poses));
     }
     const world::Polyline::Projection on = path.Project(named->position());
     const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
@@ -198,6 +215,10 @@ LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track
                      const std::filesystem::path& folder, const ScenarioSite& site) {
   const CarConfig& car = scenario.cars[i];
   LoadedCar resolved{.config = &car};
+  if (car.route && track.spec().routes.count(*car.route) == 0) {
+    FailAt(site.root, site.source, {"cars", i, "route"},
+           UnknownName("route", *car.route, track.spec().routes));
+  }
   try {
     resolved.route = car.route ? track.RouteByName(*car.route)
                                : world::MakeRoute(track.road_graph(),

@@ -134,6 +134,24 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "route: inner_loop", "route: figure_nine"),
                    {},
                    {F("unknown_route") + ":10:12: cars[1].route:", "figure_nine", "south_loop"}},
+        BrokenCase{"route_typo",
+                   Replace(kValid, "route: inner_loop", "route: inner_lop"),
+                   {},
+                   {F("route_typo") + ":10:12: cars[1].route: unknown route 'inner_lop' (did you "
+                                      "mean 'inner_loop'?); known routes: inner_loop, north_loop, "
+                                      "outer_loop, south_loop"}},
+        // issue 34: the start pose's error named neither the track's poses nor the closest
+        BrokenCase{"unknown_start",
+                   Replace(kValid, "start: real_car", "start: real_cra"),
+                   {},
+                   {F("unknown_start") + ":8:12: cars[0].start: unknown start pose 'real_cra' (did "
+                                         "you mean 'real_car'?); known start poses: gazebo, "
+                                         "inner_north, real_car"}},
+        BrokenCase{"unknown_start_far_from_any",
+                   Replace(kValid, "start: real_car", "start: pit_lane"),
+                   {},
+                   {"cars[0].start: unknown start pose 'pit_lane'; known start poses: gazebo, "
+                    "inner_north, real_car"}},
         BrokenCase{"lanes_disconnected",
                    Replace(kValid, "route: inner_loop", "lanes: [outer_south, middle_west]"),
                    {},
