@@ -65,9 +65,11 @@ void CarConfig::Validate() const {
 
 void ObstacleConfig::Validate() const {
   Require(!name.empty(), "obstacle needs a name");
-  Require(length_m > 0 && width_m > 0 && height_m > 0,
-          "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " + Num(width_m) +
-              ", " + Num(height_m));
+  // one check per key, each message opening with its key: the reader reports it at that key's line
+  for (const auto& [key, value] : {std::pair{"length_m", length_m}, std::pair{"width_m", width_m},
+                                   std::pair{"height_m", height_m}}) {
+    Require(value > 0, std::string(key) + " must be > 0, got " + Num(value));
+  }
   // instants within a run's longest duration (24 h) and then some; beyond, they never come
   constexpr double kLatest_s = 1e6;
   Require(appear_s >= 0.0 && appear_s <= kLatest_s,

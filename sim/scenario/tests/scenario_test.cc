@@ -209,6 +209,12 @@ INSTANTIATE_TEST_SUITE_P(
                    {},
                    {F("obstacle_times") + ":16:41: obstacles[0].disappear_s: disappear_s must be "
                                           "after appear_s"}},
+        // issue 34: a negative height was reported at length_m's line
+        BrokenCase{"obstacle_negative_height",
+                   std::string(kValid) + "obstacles:\n  - {name: b, height_m: -0.1}\n",
+                   {},
+                   {F("obstacle_negative_height") +
+                    ":16:25: obstacles[0].height_m: height_m must be > 0, got -0.1"}},
         BrokenCase{"no_cars", "name: empty\ncars: []\n", {}, {"cars must not be empty"}},
         // issue 34: `run STUDY.yaml` said "unknown key 'scenario'"
         BrokenCase{"a_study",
