@@ -103,14 +103,6 @@ void Scenario::Validate() const {
   Require(duration > kZeroTime && duration <= std::chrono::hours(24),
           "duration_s must be in (0, 86400] s, got " + Num(ToSeconds(duration)));
   Require(!cars.empty(), "cars must not be empty");
-  std::set<int> ids;
-  for (const CarConfig& car : cars) {
-    Require(ids.insert(car.id).second, "duplicate car id " + std::to_string(car.id));
-  }
-  std::set<std::string> names;
-  for (const ObstacleConfig& obstacle : obstacles) {
-    Require(names.insert(obstacle.name).second, "duplicate obstacle name '" + obstacle.name + "'");
-  }
 }
 
 namespace {
@@ -246,6 +238,32 @@ LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track
     }
   }
   return resolved;
+}
+
+// No two cars share an id and no two obstacles a name, reported at the second one's key, naming
+// the first. Returns the cars' ids.
+std::set<int> CheckNamesUnique(const Scenario& scenario, const ScenarioSite& site) {
+  std::map<int, std::size_t> car_of_id;
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const auto [first, inserted] = car_of_id.emplace(scenario.cars[i].id, i);
+    if (!inserted) {
+      FailAt(site.root, site.source, {"cars", i, "id"},
+             fmt::format("duplicate car id {}: cars[{}] has it too (each car needs its own id)",
+                         scenario.cars[i].id, first->second));
+    }
+  }
+  std::map<std::string, std::size_t> obstacle_of_name;
+  for (std::size_t i = 0; i < scenario.obstacles.size(); ++i) {
+    const auto [first, inserted] = obstacle_of_name.emplace(scenario.obstacles[i].name, i);
+    if (!inserted) {
+      FailAt(site.root, site.source, {"obstacles", i, "name"},
+             fmt::format("duplicate obstacle name '{}': obstacles[{}] has it too",
+                         scenario.obstacles[i].name, first->second));
+    }
+  }
+  std::set<int> ids;
+  for (const auto& [id, index] : car_of_id) ids.insert(id);
+  return ids;
 }
 
 // A car without a board (perception off) runs no nodes: platform settings naming nodes or topics
@@ -582,9 +600,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   LoadedScenario loaded(file, std::move(read), std::move(track));
   const Scenario& scenario = loaded.scenario;
 
-  std::set<int> car_ids;
+  const std::set<int> car_ids = CheckNamesUnique(scenario, site);
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
-    car_ids.insert(scenario.cars[i].id);
     loaded.cars.push_back(ResolveCar(scenario, i, loaded.track, file.parent_path(), site));
   }
   CheckSizes(loaded, site);

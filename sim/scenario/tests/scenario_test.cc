@@ -129,7 +129,18 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "id: 1", "id: 12"),
                    {},
                    {F("car_id") + ":9:9: cars[1].id: id must be a single digit"}},
-        BrokenCase{"duplicate_car", Replace(kValid, "id: 1", "id: 0"), {}, {"duplicate car id 0"}},
+        // issue 34: once at the top level, line 1; now at the second car's id, naming the first
+        BrokenCase{
+            "duplicate_car",
+            Replace(kValid, "id: 1", "id: 0"),
+            {},
+            {F("duplicate_car") + ":9:9: cars[1].id: duplicate car id 0: cars[0] has it too"}},
+        BrokenCase{"duplicate_obstacle",
+                   std::string(kValid) + "obstacles:\n  - {name: b}\n  - {name: b, x_m: 1}\n",
+                   {},
+                   {F("duplicate_obstacle") +
+                    ":17:12: obstacles[1].name: duplicate obstacle name 'b': obstacles[0] has it "
+                    "too"}},
         BrokenCase{"unknown_route",
                    Replace(kValid, "route: inner_loop", "route: figure_nine"),
                    {},
