@@ -56,9 +56,9 @@ struct LaneThresholds {
   HsvRange yellow;
 };
 
-// The two documented threshold sets (reference §5): "real_car" and "simulation" (theirs, Gazebo).
-// Throws std::invalid_argument naming the known sets.
-LaneThresholds LaneThresholdsByName(const std::string& name);
+// The two documented threshold sets (reference §5): "simulation" (theirs, Gazebo) and "real_car".
+enum class LaneThresholdSet { kSimulation, kRealCar };
+LaneThresholds LaneThresholdsOf(LaneThresholdSet set);
 
 // The colour camera as the lane detection needs it, as plain data (the node converts the vehicle's
 // camera model): the raw image's intrinsics and plumb_bob distortion, and the optical frame (z
@@ -112,6 +112,12 @@ enum class SwNoLine { kInvalid, kSilent };
 
 namespace autonomsim {
 template <>
+struct NameTable<stack::LaneThresholdSet> {
+  static constexpr std::array<std::pair<stack::LaneThresholdSet, std::string_view>, 2> kEntries{
+      {{stack::LaneThresholdSet::kSimulation, "simulation"},
+       {stack::LaneThresholdSet::kRealCar, "real_car"}}};
+};
+template <>
 struct NameTable<stack::BirdsEyeClasses> {
   static constexpr std::array<std::pair<stack::BirdsEyeClasses, std::string_view>, 2> kEntries{
       {{stack::BirdsEyeClasses::kNonZero, "non_zero"}, {stack::BirdsEyeClasses::kExact, "exact"}}};
@@ -144,7 +150,7 @@ struct LaneDetectionParams {
   // never has: its camera sees the lab's white with a tint. Their simulation's white (H 0–179, S
   // ≤ 35, V ≥ 215) and yellow (H 10–100, S ≥ 70, V ≥ 95) take both of our colours and leave the
   // black floor (V 0) and the grey wall (110, 110, 110: S 0, V 110) out.
-  std::string thresholds{"simulation"};
+  LaneThresholdSet thresholds{LaneThresholdSet::kSimulation};
   // The bird's-eye warp, source (raw image) → destination (bird's-eye) points, (col, row) in px,
   // order: near left, near right, far left, far right. Destination: reference §5.
   //

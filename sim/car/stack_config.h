@@ -17,7 +17,24 @@
 #include "stack/localization_ekf.h"
 #include "stack/obstacle_grid.h"
 #include "stack/path_follower.h"
+#include "world/enum_names.h"
 #include "world/time.h"
+
+namespace autonomsim::sim {
+
+// `stack.preset`: the lab's stack as published, or every fix this simulator offers
+// (sim/scenario/stack_presets.h).
+enum class StackPreset { kLab, kSafe };
+
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::StackPreset> {
+  static constexpr std::array<std::pair<sim::StackPreset, std::string_view>, 2> kEntries{
+      {{sim::StackPreset::kLab, "lab"}, {sim::StackPreset::kSafe, "safe"}}};
+};
+}  // namespace autonomsim
 
 namespace autonomsim::sim {
 
@@ -84,9 +101,9 @@ struct StackConfig {
   stack::CruiseControlParams cruise_control;
   // Beyond the lab's stack: the ultrasonic ranger stops the car (stack/emergency_stop.h).
   stack::EmergencyStopParams emergency_stop;
-  // "lab" or "safe": fills every option that departs from the lab's code (the struct's and the
-  // car's intersection_client) that the scenario does not set (sim/scenario/stack_presets.h).
-  std::optional<std::string> preset;
+  // Fills every option that departs from the lab's code (the struct's and the car's
+  // intersection_client) that the scenario does not set (sim/scenario/stack_presets.h).
+  std::optional<StackPreset> preset;
 
   template <class V>
   void Describe(V& v) {

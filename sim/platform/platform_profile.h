@@ -340,8 +340,26 @@ struct TopicTransportConfig {
 // "fixed" (value_s), "uniform" (min_s, max_s), "normal" (mean_s, stddev_s; a draw below 0 counts
 // as 0) or "lognormal" (mean_s and stddev_s of the cost itself, not of its logarithm). Seconds are
 // core-seconds of work for a software node and fabric seconds for a hardware node.
+enum class CostDistribution { kFixed, kUniform, kNormal, kLognormal };
+
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::CostDistribution> {
+  using K = sim::CostDistribution;
+  static constexpr std::array<std::pair<K, std::string_view>, 4> kEntries{
+      {{K::kFixed, "fixed"},
+       {K::kUniform, "uniform"},
+       {K::kNormal, "normal"},
+       {K::kLognormal, "lognormal"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::sim {
+
 struct CostDistributionConfig {
-  std::string distribution{"fixed"};
+  CostDistribution distribution{CostDistribution::kFixed};
   std::optional<double> value_s;
   std::optional<double> min_s;
   std::optional<double> max_s;

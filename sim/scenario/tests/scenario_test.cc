@@ -273,6 +273,11 @@ INSTANTIATE_TEST_SUITE_P(
                    kValid,
                    {"cars[0].driver=autopilot"},
                    {"--set cars[0].driver", "driver must be 'oracle'", "or 'stack'"}},
+        BrokenCase{"lane_thresholds_unknown",
+                   kValid,
+                   {"cars[0].perception.lane_detection.thresholds=real_cars"},
+                   {"--set cars[0].perception.lane_detection.thresholds: thresholds must be "
+                    "'simulation' or 'real_car', got 'real_cars' (did you mean 'real_car'?)"}},
         BrokenCase{"deadline_past_the_end",
                    Replace(kValid, "laps: 1}", "laps: 1, within_s: 20}"),
                    {},
