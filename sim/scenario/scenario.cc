@@ -122,13 +122,28 @@ std::filesystem::path ResolveScenarioFile(const std::filesystem::path& folder,
   const fs::path given(name);
   const fs::path local = folder / given;
   if (given.is_absolute() || fs::exists(local)) return local;
-  const fs::path shipped = fs::path(AUTONOMSIM_SCENARIOS_DIR) / given;
+  const fs::path shipped = ShippedScenarioFile(name);
   if (!name.empty() && fs::exists(shipped)) return shipped;
   throw ConfigError(local.string() + ": no such file (nor " + shipped.string() +
                     " among the shipped ones)");
 }
 
 }  // namespace
+
+std::filesystem::path ShippedScenarioFile(const std::string& name) {
+  return std::filesystem::path(AUTONOMSIM_SCENARIOS_DIR) / name;
+}
+
+bool StartPlacement::on() const {
+  return distance_m <= 0.1 && std::abs(heading_error_rad) <= std::numbers::pi / 6;
+}
+
+StartPlacement PlaceStart(const world::Pose2& pose, const world::Route& route) {
+  const world::Polyline::Projection on = route.path.Project(pose.position());
+  return {.s_m = on.s_m,
+          .distance_m = on.distance_m,
+          .heading_error_rad = world::WrapAngle(route.path.HeadingAt(on.s_m) - pose.yaw_rad)};
+}
 
 std::filesystem::path ResolveShippedFile(const std::string& given) {
   namespace fs = std::filesystem;
@@ -184,15 +199,14 @@ std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i
       FailAt(site.root, site.source, {"cars", i, "start"},
              UnknownName("start pose", *car.start, track.spec().start_poses));
     }
-    const world::Polyline::Projection on = path.Project(named->position());
-    const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
-    if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
+    const StartPlacement placed = PlaceStart(*named, route);
+    if (!placed.on()) {
       FailAt(site.root, site.source, {"cars", i, "start"},
-             "start pose '" + *car.start + "' is not on route (" + Num(on.distance_m) +
-                 " m away, heading off by " + Num(heading_error * 180 / std::numbers::pi) +
-                 " deg)");
+             "start pose '" + *car.start + "' is not on route (" + Num(placed.distance_m) +
+                 " m away, heading off by " +
+                 Num(placed.heading_error_rad * 180 / std::numbers::pi) + " deg)");
     }
-    return {on.s_m, *named};
+    return {placed.s_m, *named};
   }
   const double s = car.start_s_m.value_or(0.0);
   if (s < 0.0 || s >= path.length_m()) {

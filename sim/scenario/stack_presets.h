@@ -26,7 +26,9 @@ struct FleetStackConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("preset", preset);
+    v("preset", preset,
+      "the lab's stack as published (`lab`) or every fix (`safe`), for every car and the server, "
+      "filling only what the scenario leaves out ([the lab's stack](lab-stack.md))");
   }
   void Validate() const;
 };
