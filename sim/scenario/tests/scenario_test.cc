@@ -207,6 +207,14 @@ INSTANTIATE_TEST_SUITE_P(
             Replace(kValid, "- no_collision:", "- no_collision: {laps: 3}"),
             {},
             {"expect[0].no_collision.laps: 'no_collision' takes no key 'laps' (its keys: car)"}},
+        // issue 34 asked that a fault's unknown key list only its own kind's keys: it does (since
+        // the reference's commit), this keeps it so
+        BrokenCase{"fault_argument",
+                   std::string(kValid) +
+                       "faults:\n  - node_crash: {car: 0, node: lane_detection, for_s: 2}\n",
+                   {},
+                   {F("fault_argument") + ":16:48: faults[0].node_crash.for_s: 'node_crash' takes "
+                                          "no key 'for_s' (its keys: at_s, car, node)"}},
         BrokenCase{"expect_two_kinds",
                    Replace(kValid, "- no_collision:", "- {no_collision: , intersection_mutex: }"),
                    {},
