@@ -55,7 +55,7 @@ struct NoEntryWithoutGrantExpect {
 // {car?, laps, within_s?}: laps finished by within_s (default: the scenario's duration).
 struct CompletesExpect {
   static constexpr ExpectKind kKind = ExpectKind::kCompletes;
-  static constexpr std::string_view kMeaning = "the car finishes `laps` laps by `within_s`";
+  static constexpr std::string_view kMeaning = "The car finishes `laps` laps by `within_s`";
   std::optional<int> car;
   int laps{1};
   std::optional<double> within_s;

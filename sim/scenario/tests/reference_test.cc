@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -190,7 +191,8 @@ TEST(ScenarioReferenceTest, EveryFaultAndExpectationKindSaysWhatItDoes) {
     std::getline(lines, blank);
     std::getline(lines, sentence);
     EXPECT_TRUE(blank.empty()) << kind;
-    EXPECT_GT(sentence.size(), 20u) << kind;
+    ASSERT_GT(sentence.size(), 20u) << kind;
+    EXPECT_TRUE(std::isupper(static_cast<unsigned char>(sentence[0]))) << kind << ": " << sentence;
     EXPECT_FALSE(sentence.starts_with("|") || sentence.starts_with("No keys")) << kind;
   }
 }
