@@ -92,21 +92,29 @@ struct BehaviorParams {
 
   template <class V>
   void Describe(V& v) {
-    v("tick_period_s", tick_period);
-    v("gate_period_s", gate_period);
-    v("goals_period_s", goals_period);
-    v("waypoint_spacing_m", waypoint_spacing_m);
-    v("waypoint_horizon_m", waypoint_horizon_m);
-    v("recovery_wait_s", recovery_wait);
-    v("max_retries", max_retries);
-    v("follow_path_retries", follow_path_retries);
-    v("plan_retries", plan_retries);
-    v("recovery_reset_m", recovery_reset_m);
-    v("tracking_window_m", tracking_window_m);
-    v("patient_in_queue", patient_in_queue);
-    v("queue_margin_m", queue_margin_m);
-    v("queue_wait_s", queue_wait);
-    v("intersection_free_timeout_s", intersection_free_timeout);
+    v("tick_period_s", tick_period, "how often the behaviour tree ticks");
+    v("gate_period_s", gate_period, "how often it asks whether the intersection ahead is free");
+    v("goals_period_s", goals_period, "how often it sends the goals ahead to the planner");
+    v("waypoint_spacing_m", waypoint_spacing_m, "the goals' spacing along the lane");
+    v("waypoint_horizon_m", waypoint_horizon_m, "how far ahead along the route the goals reach");
+    v("recovery_wait_s", recovery_wait, "a recovery's wait before the car tries again");
+    v("max_retries", max_retries, "recoveries before the navigation fails for good");
+    v("follow_path_retries", follow_path_retries, "FollowPath's retries before a recovery");
+    v("plan_retries", plan_retries, "the planner's retries before a recovery");
+    v("recovery_reset_m", recovery_reset_m,
+      "driving this far after a recovery resets the count of retries (lab: 0, never)");
+    v("tracking_window_m", tracking_window_m,
+      "how far the car's position may move along the route between two ticks, to track it on the "
+      "route");
+    v("patient_in_queue", patient_in_queue,
+      "a car stopped behind a queue near an intersection waits without using up its retries (lab: "
+      "false)");
+    v("queue_margin_m", queue_margin_m,
+      "`patient_in_queue`: how far back from an intersection's boxes a stop counts as queueing");
+    v("queue_wait_s", queue_wait,
+      "`patient_in_queue`: how long a queued car waits before it tries again");
+    v("intersection_free_timeout_s", intersection_free_timeout,
+      "in a stop zone, a permission older than this counts as not free (lab: 0, off)");
   }
   void Validate() const;
 };

@@ -48,8 +48,9 @@ struct ProgressCheckerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("required_movement_radius_m", required_movement_radius_m);
-    v("movement_time_allowance_s", movement_time_allowance);
+    v("required_movement_radius_m", required_movement_radius_m,
+      "the car must move this far within `movement_time_allowance_s`");
+    v("movement_time_allowance_s", movement_time_allowance, "or the controller gives up");
   }
   void Validate() const;
 };

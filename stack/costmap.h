@@ -92,8 +92,8 @@ struct FootprintParams {
 
   template <class V>
   void Describe(V& v) {
-    v("half_length_m", half_length_m);
-    v("half_width_m", half_width_m);
+    v("half_length_m", half_length_m, "half the footprint's length, from base_link");
+    v("half_width_m", half_width_m, "half the footprint's width");
   }
   void Validate() const;
   bool operator==(const FootprintParams&) const = default;
@@ -110,8 +110,9 @@ struct InflationParams {
 
   template <class V>
   void Describe(V& v) {
-    v("inflation_radius_m", inflation_radius_m);
-    v("cost_scaling_factor", cost_scaling_factor);
+    v("inflation_radius_m", inflation_radius_m, "how far from an obstacle its cost spreads");
+    v("cost_scaling_factor", cost_scaling_factor,
+      "how fast the inflated cost falls off with distance (1/m)");
   }
   void Validate() const;
   bool operator==(const InflationParams&) const = default;
@@ -158,8 +159,10 @@ struct StaticLayerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("trinary_costmap", trinary_costmap);
-    v("lethal_cost_threshold", lethal_cost_threshold);
+    v("trinary_costmap", trinary_costmap,
+      "map values below the threshold are free, above it lethal (false: graded costs)");
+    v("lethal_cost_threshold", lethal_cost_threshold,
+      "the map value from which a cell is lethal (0..100)");
   }
   void Validate() const;  // threshold in [0, 100] (Galactic clamps it, static_layer.cpp:160)
   bool operator==(const StaticLayerParams&) const = default;
@@ -199,10 +202,10 @@ struct GlobalCostmapParams {
 
   template <class V>
   void Describe(V& v) {
-    v("resolution_m", resolution_m);
-    v("static_layer", static_layer);
-    v("inflation", inflation);
-    v("footprint", footprint);
+    v("resolution_m", resolution_m, "the planner map's cell size (the lab's map's)");
+    v("static_layer", static_layer, "how the track's static map becomes costs");
+    v("inflation", inflation, "the cost around obstacles");
+    v("footprint", footprint, "the car's outline for the costs");
   }
   void Validate() const;
   bool operator==(const GlobalCostmapParams&) const = default;
@@ -249,12 +252,12 @@ struct LocalCostmapParams {
 
   template <class V>
   void Describe(V& v) {
-    v("width_m", width_m);
-    v("height_m", height_m);
-    v("resolution_m", resolution_m);
-    v("inflation", inflation);
-    v("footprint", footprint);
-    v("update_rate_hz", update_rate_hz);
+    v("width_m", width_m, "the rolling window's size along x");
+    v("height_m", height_m, "the rolling window's size along y");
+    v("resolution_m", resolution_m, "its cell size");
+    v("inflation", inflation, "the cost around obstacles");
+    v("footprint", footprint, "the car's outline for the costs");
+    v("update_rate_hz", update_rate_hz, "how often it is updated");
   }
   void Validate() const;
 };

@@ -63,18 +63,21 @@ struct CruiseControlParams {
 
   template <class V>
   void Describe(V& v) {
-    v("p_gain", p_gain);
-    v("i_gain_per_s", i_gain_per_s);
-    v("d_gain_s", d_gain_s);
-    v("i_clamp_min", i_clamp_min);
-    v("i_clamp_max", i_clamp_max);
-    v("antiwindup", antiwindup);
-    v("throttle_limit", throttle_limit);
-    v("watchdog_timeout_s", watchdog_timeout);
-    v("period_s", period);
-    v("max_curvature_per_m", max_curvature_per_m);
-    v("min_speed_for_curvature_mps", min_speed_for_curvature_mps);
-    v("hold_steering_on_zero_command", hold_steering_on_zero_command);
+    v("p_gain", p_gain, "the speed PID's proportional gain (throttle per m/s)");
+    v("i_gain_per_s", i_gain_per_s, "its integral gain");
+    v("d_gain_s", d_gain_s, "its derivative gain");
+    v("i_clamp_min", i_clamp_min, "the integral term's lower bound (throttle units)");
+    v("i_clamp_max", i_clamp_max, "the integral term's upper bound");
+    v("antiwindup", antiwindup, "clamp the integral itself (false: only its term, as the lab's)");
+    v("throttle_limit", throttle_limit, "the throttle's bound, ±");
+    v("watchdog_timeout_s", watchdog_timeout, "no command or odometry for this long stops the car");
+    v("period_s", period, "how often the control loop runs");
+    v("max_curvature_per_m", max_curvature_per_m, "the steering curvature's bound");
+    v("min_speed_for_curvature_mps", min_speed_for_curvature_mps,
+      "below this commanded speed a turn command is full lock, as the real car's ω / 0");
+    v("hold_steering_on_zero_command", hold_steering_on_zero_command,
+      "a zero command keeps the steering where it was, as the lab's car does (false: straightens "
+      "it)");
   }
   void Validate() const;
 };

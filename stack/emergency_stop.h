@@ -26,9 +26,10 @@ struct EmergencyStopParams {
 
   template <class V>
   void Describe(V& v) {
-    v("enabled", enabled);
-    v("stop_distance_m", stop_distance_m);
-    v("release_distance_m", release_distance_m);
+    v("enabled", enabled, "the ultrasonic ranger stops the car (lab: false)");
+    v("stop_distance_m", stop_distance_m, "stop when an echo is nearer than this");
+    v("release_distance_m", release_distance_m,
+      "drive on when the echo is farther than this again");
   }
   void Validate() const;  // 0 < stop < release <= 4 m
 };

@@ -54,10 +54,11 @@ struct SmootherParams {
 
   template <class V>
   void Describe(V& v) {
-    v("max_iterations", max_iterations);
-    v("w_smooth", w_smooth);
-    v("w_data", w_data);
-    v("tolerance", tolerance);
+    v("max_iterations", max_iterations, "the smoother's sweeps at most");
+    v("w_smooth", w_smooth, "weight of smoothness");
+    v("w_data", w_data, "weight of staying on the planned path");
+    v("tolerance", tolerance,
+      "a sweep changing the path by less than this (m, summed) ends the smoothing");
   }
   void Validate() const;
   bool operator==(const SmootherParams&) const = default;
@@ -87,13 +88,16 @@ struct GlobalPlannerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("tolerance_m", tolerance_m);
-    v("cost_travel_multiplier", cost_travel_multiplier);
-    v("allow_unknown", allow_unknown);
-    v("max_expansions", max_expansions);
-    v("max_on_approach_iterations", max_on_approach_iterations);
-    v("smoother", smoother);
-    v("start_escape_m", start_escape_m);
+    v("tolerance_m", tolerance_m, "a goal in an obstacle may be reached this close instead");
+    v("cost_travel_multiplier", cost_travel_multiplier, "how strongly A* avoids costly cells");
+    v("allow_unknown", allow_unknown, "plan through unknown cells");
+    v("max_expansions", max_expansions, "A* expansions before it gives up");
+    v("max_on_approach_iterations", max_on_approach_iterations,
+      "expansions once within the tolerance of the goal");
+    v("smoother", smoother, "the smoother run on the plan");
+    v("start_escape_m", start_escape_m,
+      "cells this close to the start may be near a line, so a car that came near one can plan away "
+      "(lab: 0)");
   }
   void Validate() const;
   bool operator==(const GlobalPlannerParams&) const = default;

@@ -106,16 +106,25 @@ struct IntersectionClientParams {
 
   template <class V>
   void Describe(V& v) {
-    v("tick_period_s", tick_period);
-    v("retry_period_s", retry_period);
-    v("keepalive_period_s", keepalive_period);
-    v("release_margin_m", release_margin_m);
-    v("exit_margin_m", exit_margin_m);
-    v("re_request", re_request);
-    v("latch_wait", latch_wait);
-    v("release_on_failure", release_on_failure);
-    v("enter_only_if_clear", enter_only_if_clear);
-    v("blocking", blocking);
+    v("tick_period_s", tick_period, "how often the client checks the car's zone");
+    v("retry_period_s", retry_period, "ask again when no grant came within this (`re_request`)");
+    v("keepalive_period_s", keepalive_period,
+      "a holder renews its grant this often (`re_request`)");
+    v("release_margin_m", release_margin_m,
+      "until the car has been inside, it keeps its claim within this of the intersection's boxes "
+      "(lab: 0)");
+    v("exit_margin_m", exit_margin_m,
+      "after it has been inside, it frees when this far outside the boxes (lab: 0)");
+    v("re_request", re_request,
+      "ask again after a denial or a lost message, and keep the grant alive (lab: false, asks "
+      "once)");
+    v("latch_wait", latch_wait, "a car held in a stop zone stays held until granted (lab: false)");
+    v("release_on_failure", release_on_failure,
+      "a car whose navigation failed frees what it holds and asks no more (lab: false)");
+    v("enter_only_if_clear", enter_only_if_clear,
+      "a granted car waits while it sees another car in the area (lab: false)");
+    v("blocking", blocking,
+      "the lab's client as it runs: blocks from its request until its grant (lab: true)");
   }
   void Validate() const;
 };

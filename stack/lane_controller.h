@@ -28,8 +28,8 @@ struct LaneControllerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("pursuit", pursuit);
-    v("collision", collision);
+    v("pursuit", pursuit, "its pure pursuit and speed regulation");
+    v("collision", collision, "its check for a collision ahead");
   }
   void Validate() const;
 };

@@ -180,16 +180,15 @@ BirdsEyeRowSums RowSumsOfMasks(const BirdsEyeMasks& masks) {
 
 void HsvRange::Validate() const { RequireHsv(*this, "hsv range"); }
 
-LaneThresholds LaneThresholdsByName(const std::string& name) {
+LaneThresholds LaneThresholdsOf(LaneThresholdSet set) {
   // reference §5, table "white H,S,V | yellow H,S,V"
-  if (name == "real_car") {
-    return {.white = {{70, 0, 195}, {90, 87, 255}}, .yellow = {{30, 95, 50}, {34, 255, 255}}};
+  switch (set) {
+    case LaneThresholdSet::kRealCar:
+      return {.white = {{70, 0, 195}, {90, 87, 255}}, .yellow = {{30, 95, 50}, {34, 255, 255}}};
+    case LaneThresholdSet::kSimulation:
+      return {.white = {{0, 0, 215}, {179, 35, 255}}, .yellow = {{10, 70, 95}, {100, 255, 255}}};
   }
-  if (name == "simulation") {
-    return {.white = {{0, 0, 215}, {179, 35, 255}}, .yellow = {{10, 70, 95}, {100, 255, 255}}};
-  }
-  throw std::invalid_argument("thresholds must be \"real_car\" or \"simulation\", got \"" + name +
-                              "\"");
+  throw std::invalid_argument("LaneThresholdsOf: not a threshold set");
 }
 
 void LaneCameraCalibration::Validate() const {
@@ -204,7 +203,6 @@ void LaneCameraCalibration::Validate() const {
 }
 
 void LaneDetectionParams::Validate() const {
-  (void)LaneThresholdsByName(thresholds);
   RequireQuadrilateral(warp_source_px, "warp_source_px");
   RequireQuadrilateral(warp_destination_px, "warp_destination_px");
   Require(yellow_min_px >= 0,
@@ -475,7 +473,7 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
     : params_(params), camera_(camera) {
   params_.Validate();
   camera_.Validate();
-  thresholds_ = LaneThresholdsByName(params_.thresholds);
+  thresholds_ = LaneThresholdsOf(params_.thresholds);
   // As the real node: cv::getPerspectiveTransform on float points, both ways.
   const auto src = ToCv(params_.warp_source_px);
   const auto dst = ToCv(params_.warp_destination_px);

@@ -56,9 +56,9 @@ struct LaneThresholds {
   HsvRange yellow;
 };
 
-// The two documented threshold sets (reference §5): "real_car" and "simulation" (theirs, Gazebo).
-// Throws std::invalid_argument naming the known sets.
-LaneThresholds LaneThresholdsByName(const std::string& name);
+// The two documented threshold sets (reference §5): "simulation" (theirs, Gazebo) and "real_car".
+enum class LaneThresholdSet { kSimulation, kRealCar };
+LaneThresholds LaneThresholdsOf(LaneThresholdSet set);
 
 // The colour camera as the lane detection needs it, as plain data (the node converts the vehicle's
 // camera model): the raw image's intrinsics and plumb_bob distortion, and the optical frame (z
@@ -112,6 +112,12 @@ enum class SwNoLine { kInvalid, kSilent };
 
 namespace autonomsim {
 template <>
+struct NameTable<stack::LaneThresholdSet> {
+  static constexpr std::array<std::pair<stack::LaneThresholdSet, std::string_view>, 2> kEntries{
+      {{stack::LaneThresholdSet::kSimulation, "simulation"},
+       {stack::LaneThresholdSet::kRealCar, "real_car"}}};
+};
+template <>
 struct NameTable<stack::BirdsEyeClasses> {
   static constexpr std::array<std::pair<stack::BirdsEyeClasses, std::string_view>, 2> kEntries{
       {{stack::BirdsEyeClasses::kNonZero, "non_zero"}, {stack::BirdsEyeClasses::kExact, "exact"}}};
@@ -144,7 +150,7 @@ struct LaneDetectionParams {
   // never has: its camera sees the lab's white with a tint. Their simulation's white (H 0–179, S
   // ≤ 35, V ≥ 215) and yellow (H 10–100, S ≥ 70, V ≥ 95) take both of our colours and leave the
   // black floor (V 0) and the grey wall (110, 110, 110: S 0, V 110) out.
-  std::string thresholds{"simulation"};
+  LaneThresholdSet thresholds{LaneThresholdSet::kSimulation};
   // The bird's-eye warp, source (raw image) → destination (bird's-eye) points, (col, row) in px,
   // order: near left, near right, far left, far right. Destination: reference §5.
   //
@@ -212,23 +218,36 @@ struct LaneDetectionParams {
 
   template <class V>
   void Describe(V& v) {
-    v("thresholds", thresholds);
-    v("warp_source_px", warp_source_px);
-    v("warp_destination_px", warp_destination_px);
-    v("yellow_min_px", yellow_min_px);
-    v("line_min_px", line_min_px);
-    v("sample_row_step_px", sample_row_step_px);
-    v("normal_shift_px", normal_shift_px);
-    v("anchor_rows_px", anchor_rows_px);
-    v("anchor_col_px", anchor_col_px);
-    v("anchor_repeats", anchor_repeats);
-    v("hw_pixel_classes", hw_pixel_classes);
-    v("hw_no_line", hw_no_line);
-    v("hw_truncate_points", hw_truncate_points);
-    v("hw_valid_overwrite", hw_valid_overwrite);
-    v("projection", projection);
-    v("sw_no_line", sw_no_line);
-    v("pnp_floor_points_m", pnp_floor_points_m);
+    v("thresholds", thresholds,
+      "the HSV thresholds: `simulation`, the lab's Gazebo set, or `real_car`");
+    v("warp_source_px", warp_source_px,
+      "the bird's-eye warp's source points in the raw image, (col, row): near left, near right, "
+      "far left, far right");
+    v("warp_destination_px", warp_destination_px, "their places in the bird's-eye image");
+    v("yellow_min_px", yellow_min_px, "yellow is the line if it has at least this many pixels");
+    v("line_min_px", line_min_px, "fewer white pixels than this, and no yellow: no line");
+    v("sample_row_step_px", sample_row_step_px, "the line is sampled every this many rows");
+    v("normal_shift_px", normal_shift_px,
+      "samples move this far from the line towards the lane's centre");
+    v("anchor_rows_px", anchor_rows_px,
+      "rows of extra points at the car's position that pin the fitted trajectory");
+    v("anchor_col_px", anchor_col_px, "their column");
+    v("anchor_repeats", anchor_repeats, "how many times each counts in the fit");
+    v("hw_pixel_classes", hw_pixel_classes,
+      "the hardware lane planner's line pixels: `non_zero`, ours, or `exact`, the lab's");
+    v("hw_no_line", hw_no_line,
+      "when the hardware fit says no line: `white_below_min`, ours, or `both_below_min`, the "
+      "lab's");
+    v("hw_truncate_points", hw_truncate_points,
+      "the hardware fit truncates its points to integers, as the lab's (true)");
+    v("hw_valid_overwrite", hw_valid_overwrite,
+      "the hardware fit writes `valid` over point 0, as the lab's (true)");
+    v("projection", projection,
+      "from a pixel to the floor: `ideal`, ours, or `pnp_swapped`, the lab's");
+    v("sw_no_line", sw_no_line,
+      "the software node without a line: `invalid`, ours, or `silent`, the lab's");
+    v("pnp_floor_points_m", pnp_floor_points_m,
+      "`pnp_swapped`: the lab's calibration points on the floor, (x, y) in base_link");
   }
   // A known threshold set, finite warp points forming a proper quadrilateral, counts >= 0,
   // line_min_px <= yellow_min_px, step > 0, shift >= 0, at least one anchor row and repeat.

@@ -70,19 +70,28 @@ struct LocalizationEkfParams {
 
   template <class V>
   void Describe(V& v) {
-    v("period_s", period);
-    v("sensor_timeout_s", sensor_timeout);
-    v("imu_yaw_relative", imu_yaw_relative);
-    v("q_position_m2_per_s", q_position_m2_per_s);
-    v("q_yaw_rad2_per_s", q_yaw_rad2_per_s);
-    v("q_speed_m2_per_s3", q_speed_m2_per_s3);
-    v("q_yaw_rate_rad2_per_s3", q_yaw_rate_rad2_per_s3);
-    v("initial_variance", initial_variance);
-    v("imu_yaw_variance_rad2", imu_yaw_variance_rad2);
-    v("imu_yaw_rate_variance_rad2_per_s2", imu_yaw_rate_variance_rad2_per_s2);
-    v("wheel_speed_variance_m2_per_s2", wheel_speed_variance_m2_per_s2);
-    v("use_pose_fix", use_pose_fix);
-    v("fuse_imu_yaw", fuse_imu_yaw);
+    v("period_s", period, "how often the EKF runs");
+    v("sensor_timeout_s", sensor_timeout,
+      "without a measurement for this long the EKF predicts on to now");
+    v("imu_yaw_relative", imu_yaw_relative,
+      "the first IMU heading is the odom frame's zero (false: the IMU heading is the odom "
+      "heading)");
+    v("q_position_m2_per_s", q_position_m2_per_s,
+      "process noise of x and y, added as Q·dt per prediction");
+    v("q_yaw_rad2_per_s", q_yaw_rad2_per_s, "process noise of the heading");
+    v("q_speed_m2_per_s3", q_speed_m2_per_s3, "process noise of the speed");
+    v("q_yaw_rate_rad2_per_s3", q_yaw_rate_rad2_per_s3, "process noise of the yaw rate");
+    v("initial_variance", initial_variance,
+      "the initial covariance's diagonal (the start pose is the odom origin)");
+    v("imu_yaw_variance_rad2", imu_yaw_variance_rad2,
+      "the variance each IMU message gives its heading");
+    v("imu_yaw_rate_variance_rad2_per_s2", imu_yaw_rate_variance_rad2_per_s2,
+      "the variance each IMU message gives its yaw rate");
+    v("wheel_speed_variance_m2_per_s2", wheel_speed_variance_m2_per_s2,
+      "the variance each wheel-speed message gives its speed");
+    v("use_pose_fix", use_pose_fix,
+      "fuse the external pose fix (`stack.pose_fix`), beyond the real car");
+    v("fuse_imu_yaw", fuse_imu_yaw, "fuse the IMU's heading (false: its yaw rate only)");
   }
   void Validate() const;
 };

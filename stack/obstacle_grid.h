@@ -74,14 +74,15 @@ struct ObstacleGridParams {
 
   template <class V>
   void Describe(V& v) {
-    v("X_base_camera", X_base_camera);
-    v("x_min_m", x_min_m);
-    v("x_max_m", x_max_m);
-    v("y_min_m", y_min_m);
-    v("y_max_m", y_max_m);
-    v("z_min_m", z_min_m);
-    v("z_max_m", z_max_m);
-    v("cell_size_m", cell_size_m);
+    v("X_base_camera", X_base_camera,
+      "the depth camera in base_link as the obstacle code holds it: a 3×4 [R t], row-major");
+    v("x_min_m", x_min_m, "the obstacle box in base_link: nearest x");
+    v("x_max_m", x_max_m, "farthest x");
+    v("y_min_m", y_min_m, "rightmost y");
+    v("y_max_m", y_max_m, "leftmost y");
+    v("z_min_m", z_min_m, "lowest z: points below are floor");
+    v("z_max_m", z_max_m, "highest z");
+    v("cell_size_m", cell_size_m, "the grid's cell size");
   }
   // Finite values, min < max, cell_size_m > 0, and the box's x and y extents are 18 and 13 cells
   // (Grid234's fixed shape).
@@ -138,9 +139,11 @@ struct ObstacleLayerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("lethal_above_count", lethal_above_count);
-    v("mark_at_cell_centre", mark_at_cell_centre);
-    v("transform_timeout_s", transform_timeout);
+    v("lethal_above_count", lethal_above_count, "a cell with more points than this is an obstacle");
+    v("mark_at_cell_centre", mark_at_cell_centre,
+      "mark a cell's centre (false: its lower corner, as the lab's layer does)");
+    v("transform_timeout_s", transform_timeout,
+      "how long a grid waits for the car's pose at its time before it is dropped");
   }
   // lethal_above_count in [0, 254] (255 would make no cell lethal); transform_timeout > 0
   void Validate() const;

@@ -96,18 +96,28 @@ struct RegulatedPurePursuitParams {
 
   template <class V>
   void Describe(V& v) {
-    v("desired_speed_mps", desired_speed_mps);
-    v("lookahead_dist_m", lookahead_dist_m);
-    v("min_lookahead_dist_m", min_lookahead_dist_m);
-    v("max_lookahead_dist_m", max_lookahead_dist_m);
-    v("lookahead_time_s", lookahead_time_s);
-    v("use_velocity_scaled_lookahead", use_velocity_scaled_lookahead);
-    v("use_regulated_speed_scaling", use_regulated_speed_scaling);
-    v("regulated_min_radius_m", regulated_min_radius_m);
-    v("regulated_min_speed_mps", regulated_min_speed_mps);
-    v("use_approach_speed_scaling", use_approach_speed_scaling);
-    v("min_approach_speed_mps", min_approach_speed_mps);
-    v("approach_min_dist_error_m", approach_min_dist_error_m);
+    v("desired_speed_mps", desired_speed_mps, "the speed it aims for");
+    v("lookahead_dist_m", lookahead_dist_m, "the carrot's distance ahead on the path");
+    v("min_lookahead_dist_m", min_lookahead_dist_m,
+      "`use_velocity_scaled_lookahead`: the shortest look-ahead");
+    v("max_lookahead_dist_m", max_lookahead_dist_m,
+      "`use_velocity_scaled_lookahead`: the longest look-ahead");
+    v("lookahead_time_s", lookahead_time_s,
+      "`use_velocity_scaled_lookahead`: look-ahead = speed × this");
+    v("use_velocity_scaled_lookahead", use_velocity_scaled_lookahead,
+      "scale the look-ahead with the speed (false: `lookahead_dist_m`)");
+    v("use_regulated_speed_scaling", use_regulated_speed_scaling,
+      "slow down in curves tighter than `regulated_min_radius_m`");
+    v("regulated_min_radius_m", regulated_min_radius_m, "curves tighter than this slow the car");
+    v("regulated_min_speed_mps", regulated_min_speed_mps,
+      "the curve slow-down never goes below this");
+    v("use_approach_speed_scaling", use_approach_speed_scaling,
+      "slow down as the carrot comes nearer than the look-ahead");
+    v("min_approach_speed_mps", min_approach_speed_mps,
+      "the approach slow-down never goes below this");
+    v("approach_min_dist_error_m", approach_min_dist_error_m,
+      "the approach slow-down starts when the carrot is this much nearer or farther than the "
+      "look-ahead");
   }
   void Validate() const;
 };
@@ -129,12 +139,15 @@ struct CollisionCheckParams {
 
   template <class V>
   void Describe(V& v) {
-    v("model", model);
-    v("horizon_s", horizon_s);
-    v("step_m", step_m);
-    v("footprint_half_length_m", footprint_half_length_m);
-    v("footprint_half_width_m", footprint_half_width_m);
-    v("footprint_sample_spacing_m", footprint_sample_spacing_m);
+    v("model", model,
+      "what is tested along the arc ahead: `centre`, the lab's centre point, or `footprint`, the "
+      "car's outline");
+    v("horizon_s", horizon_s, "how far ahead in time the arc is tested");
+    v("step_m", step_m, "the arc's step");
+    v("footprint_half_length_m", footprint_half_length_m, "`footprint`: half the car's length");
+    v("footprint_half_width_m", footprint_half_width_m, "`footprint`: half the car's width");
+    v("footprint_sample_spacing_m", footprint_sample_spacing_m,
+      "`footprint`: the tested points' spacing");
   }
   void Validate() const;
 };
@@ -185,12 +198,15 @@ struct PathFollowerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("pursuit", pursuit);
-    v("collision", collision);
-    v("goal_tolerance_m", goal_tolerance_m);
-    v("yaw_goal_tolerance_rad", yaw_goal_tolerance_rad);
-    v("max_robot_pose_search_dist_m", max_robot_pose_search_dist_m);
-    v("max_costmap_extent_m", max_costmap_extent_m);
+    v("pursuit", pursuit, "its pure pursuit and speed regulation");
+    v("collision", collision, "its check for a collision ahead");
+    v("goal_tolerance_m", goal_tolerance_m, "the goal is reached this close");
+    v("yaw_goal_tolerance_rad", yaw_goal_tolerance_rad,
+      "and, where a goal has a heading, this close to it");
+    v("max_robot_pose_search_dist_m", max_robot_pose_search_dist_m,
+      "how far along the path the car's nearest point is searched");
+    v("max_costmap_extent_m", max_costmap_extent_m,
+      "path points beyond this distance are not followed");
   }
   void Validate() const;
 };

@@ -44,6 +44,10 @@ void PrintPacing(const sim::RealTimeMetrics& m) {
 }  // namespace
 
 int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>& commands) {
+  // a mistake on the command line opens with "error: " as every other error does
+  app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
+    return "error: " + CLI::FailureMessage::simple(failed, e);
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,5 +1,6 @@
 // `autonomsim reference`: the scenario reference (docs/scenarios.md), generated from the loader's
-// Describe: every key with its type, unit and default, and each fault and expectation kind.
+// Describe: every key with its type, unit, default and meaning; the obstacle; the default track's
+// start poses, routes, lanes and intersections; each fault and expectation kind.
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -55,8 +56,9 @@ Command AddReferenceCommand(CLI::App& parent) {
   auto o = std::make_shared<Options>();
   CLI::App* reference = parent.add_subcommand(
       "reference",
-      "Print the scenario reference (every key with its type, unit and default; each fault and "
-      "expectation kind), as docs/scenarios.md has it");
+      "Print the scenario reference (every key with its type, allowed names, unit, default and "
+      "meaning; obstacles; the default track's start poses, routes, lanes and intersections; "
+      "what each fault and expectation kind does and its keys), as docs/scenarios.md has it");
   reference
       ->add_option("--out", o->out,
                    "Write it to FILE instead of standard output (refuses a file it did not write)")

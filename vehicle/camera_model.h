@@ -38,12 +38,12 @@ struct CameraMount {
 
   template <class V>
   void Describe(V& v) {
-    v("x_m", x_m);
-    v("y_m", y_m);
-    v("z_m", z_m);
-    v("roll_deg", roll_deg);
-    v("pitch_deg", pitch_deg);
-    v("yaw_deg", yaw_deg);
+    v("x_m", x_m, "forward of base_link");
+    v("y_m", y_m, "left of base_link");
+    v("z_m", z_m, "above the floor");
+    v("roll_deg", roll_deg, "roll about the camera's x");
+    v("pitch_deg", pitch_deg, "pitch, positive looks down");
+    v("yaw_deg", yaw_deg, "yaw, positive turns left");
   }
   void Validate() const;  // finite values, |angles| <= 180
   friend bool operator==(const CameraMount&, const CameraMount&) = default;
@@ -68,16 +68,16 @@ struct CameraParams {
 
   template <class V>
   void Describe(V& v) {
-    v("name", name);
-    v("width_px", width_px);
-    v("height_px", height_px);
-    v("K", K);
-    v("D", D);
-    v("P", P);
-    v("lens_distortion", lens_distortion);
-    v("mount", mount);
-    v("clip_near_m", clip_near_m);
-    v("clip_far_m", clip_far_m);
+    v("name", name, "names the camera in outputs");
+    v("width_px", width_px, "image width");
+    v("height_px", height_px, "image height");
+    v("K", K, "intrinsics, row-major 3×3 (ROS CameraInfo K)");
+    v("D", D, "plumb_bob distortion k1, k2, p1, p2, k3");
+    v("P", P, "projection of the rectified image, row-major 3×4");
+    v("lens_distortion", lens_distortion, "render through D (false: an ideal pinhole image)");
+    v("mount", mount, "where the camera sits on the car");
+    v("clip_near_m", clip_near_m, "nearer surfaces give no depth");
+    v("clip_far_m", clip_far_m, "farther surfaces are not drawn");
   }
   // Positive sizes (<= 8192), fx, fy > 0, K's last row [0 0 1], P's last row [0 0 1 0], finite
   // D, 0 < clip_near_m < clip_far_m <= 65.535 (the largest depth a uint16 of millimetres holds).

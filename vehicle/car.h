@@ -61,21 +61,21 @@ struct CarParams {
 
   template <class V>
   void Describe(V& v) {
-    v("length_m", length_m);
-    v("width_m", width_m);
-    v("height_m", height_m);
-    v("mass_kg", mass_kg);
-    v("wheelbase_m", wheelbase_m);
-    v("track_m", track_m);
-    v("wheel_radius_m", wheel_radius_m);
-    v("max_curvature_per_m", max_curvature_per_m);
-    v("steering_rate_rad_per_s", steering_rate_rad_per_s);
-    v("top_speed_mps", top_speed_mps);
-    v("motor_time_constant_s", motor_time_constant_s);
-    v("esc_neutral_band", esc_neutral_band);
-    v("tire_friction_coefficient", tire_friction_coefficient);
-    v("body_friction_coefficient", body_friction_coefficient);
-    v("body_restitution", body_restitution);
+    v("length_m", length_m, "the body's length");
+    v("width_m", width_m, "the body's width");
+    v("height_m", height_m, "the body's height, for the cameras");
+    v("mass_kg", mass_kg, "the car's mass");
+    v("wheelbase_m", wheelbase_m, "front to rear axle");
+    v("track_m", track_m, "left to right wheel");
+    v("wheel_radius_m", wheel_radius_m, "the wheels' radius");
+    v("max_curvature_per_m", max_curvature_per_m, "the tightest steering curvature");
+    v("steering_rate_rad_per_s", steering_rate_rad_per_s, "how fast the steering turns");
+    v("top_speed_mps", top_speed_mps, "the speed at full throttle");
+    v("motor_time_constant_s", motor_time_constant_s, "the motor's lag to a throttle step");
+    v("esc_neutral_band", esc_neutral_band, "throttle below this (0..1) drives nothing");
+    v("tire_friction_coefficient", tire_friction_coefficient, "the tyres' grip on the floor");
+    v("body_friction_coefficient", body_friction_coefficient, "friction of the body in a contact");
+    v("body_restitution", body_restitution, "bounce of the body in a contact");
   }
   void Validate() const;  // throws std::invalid_argument naming the key and the bad value
 };

@@ -73,18 +73,23 @@ struct ImuParams {
 
   template <class V>
   void Describe(V& v) {
-    v("mount_x_m", mount_x_m);
-    v("mount_y_m", mount_y_m);
-    v("mount_z_m", mount_z_m);
-    v("gyro_noise_stddev_rad_per_s", gyro_noise_stddev_rad_per_s);
-    v("gyro_bias_stddev_rad_per_s", gyro_bias_stddev_rad_per_s);
-    v("accel_noise_stddev_mps2", accel_noise_stddev_mps2);
-    v("accel_bias_stddev_mps2", accel_bias_stddev_mps2);
-    v("yaw_noise_stddev_rad", yaw_noise_stddev_rad);
-    v("heading_source", heading_source);
-    v("magnetic_distortion_rad", magnetic_distortion_rad);
-    v("magnetic_distortion_wavelength_m", magnetic_distortion_wavelength_m);
-    v("gravity_mps2", gravity_mps2);
+    v("mount_x_m", mount_x_m, "forward of base_link");
+    v("mount_y_m", mount_y_m, "left of base_link");
+    v("mount_z_m", mount_z_m, "above the floor");
+    v("gyro_noise_stddev_rad_per_s", gyro_noise_stddev_rad_per_s, "the gyro's white noise");
+    v("gyro_bias_stddev_rad_per_s", gyro_bias_stddev_rad_per_s,
+      "the spread of the gyro's constant bias, drawn per car");
+    v("accel_noise_stddev_mps2", accel_noise_stddev_mps2, "the accelerometer's white noise");
+    v("accel_bias_stddev_mps2", accel_bias_stddev_mps2, "the spread of the accelerometer's bias");
+    v("yaw_noise_stddev_rad", yaw_noise_stddev_rad, "the reported heading's jitter");
+    v("heading_source", heading_source,
+      "`magnetometer` (the lab's BNO055 mode: no drift, local distortion) or `gyro` (integrated: "
+      "drifts with the bias)");
+    v("magnetic_distortion_rad", magnetic_distortion_rad,
+      "`magnetometer`: the heading error's amplitude from the local field");
+    v("magnetic_distortion_wavelength_m", magnetic_distortion_wavelength_m,
+      "`magnetometer`: its wavelength over the floor");
+    v("gravity_mps2", gravity_mps2, "what a resting IMU reads on z");
   }
   // finite mount, standard deviations and distortion >= 0, wavelength > 0, gravity > 0
   void Validate() const;

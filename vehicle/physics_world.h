@@ -31,9 +31,9 @@ struct PhysicsParams {
 
   template <class V>
   void Describe(V& v) {
-    v("step_s", step);
-    v("velocity_iterations", velocity_iterations);
-    v("position_iterations", position_iterations);
+    v("step_s", step, "Box2D advances the cars this often (valid: (0, 0.02] s)");
+    v("velocity_iterations", velocity_iterations, "Box2D's velocity solver iterations per step");
+    v("position_iterations", position_iterations, "Box2D's position solver iterations per step");
   }
   void Validate() const;
 };

@@ -104,11 +104,10 @@ Bgr SceneAppearance::car_body(int car_id) const {
 }
 
 void CameraNoiseParams::Validate() const {
-  Require(depth_stddev_per_m >= 0.0 && depth_stddev_per_m <= 0.1, [&] {
-    return "depth_stddev_per_m must be in [0, 0.1], got " + std::to_string(depth_stddev_per_m);
-  });
+  Require(depth_stddev_per_m >= 0.0 && depth_stddev_per_m <= 0.1,
+          [&] { return "depth_stddev_per_m must be in [0, 0.1], got " + Num(depth_stddev_per_m); });
   Require(color_stddev >= 0.0 && color_stddev <= 64.0,
-          [&] { return "color_stddev must be in [0, 64], got " + std::to_string(color_stddev); });
+          [&] { return "color_stddev must be in [0, 64], got " + Num(color_stddev); });
 }
 
 namespace {
@@ -221,7 +220,7 @@ CameraRays::CameraRays(const CameraModel& camera)
   origin_base_ = camera_.X_base_camera().translation();
   Require(origin_base_.z() > 0.0, [&] {
     return camera_.params().name + ": the camera must be above the floor (mount.z_m > 0), got " +
-           std::to_string(origin_base_.z());
+           Num(origin_base_.z());
   });
   ComputePixelRays();
   ComputeRuns();

@@ -82,9 +82,9 @@ struct SceneAppearance {
 
   template <class V>
   void Describe(V& v) {
-    v("surround_rgb", surround_rgb);
-    v("obstacle_rgb", obstacle_rgb);
-    v("car_body_rgb", car_body_rgb);
+    v("surround_rgb", surround_rgb, "the colour beyond the floor (the lab's wall)");
+    v("obstacle_rgb", obstacle_rgb, "the obstacles' colour");
+    v("car_body_rgb", car_body_rgb, "the cars' body colours; car id takes entry id % count");
   }
   void Validate() const;  // every channel in [0, 255], at least one car colour
 
@@ -105,9 +105,9 @@ struct CameraNoiseParams {
 
   template <class V>
   void Describe(V& v) {
-    v("enabled", enabled);
-    v("depth_stddev_per_m", depth_stddev_per_m);
-    v("color_stddev", color_stddev);
+    v("enabled", enabled, "add seeded noise to the images");
+    v("depth_stddev_per_m", depth_stddev_per_m, "depth noise σ = this × depth²");
+    v("color_stddev", color_stddev, "colour noise per channel, in counts of 255");
   }
   void Validate() const;  // depth_stddev_per_m in [0, 0.1], color_stddev in [0, 64]
   // Whether AddCameraNoise changes the depth image, the colour image.

@@ -32,13 +32,13 @@ struct UltrasonicParams {
 
   template <class V>
   void Describe(V& v) {
-    v("mount_x_m", mount_x_m);
-    v("mount_y_m", mount_y_m);
-    v("mount_yaw_deg", mount_yaw_deg);
-    v("field_of_view_deg", field_of_view_deg);
-    v("min_range_m", min_range_m);
-    v("max_range_m", max_range_m);
-    v("noise_stddev_m", noise_stddev_m);
+    v("mount_x_m", mount_x_m, "forward of base_link");
+    v("mount_y_m", mount_y_m, "left of base_link");
+    v("mount_yaw_deg", mount_yaw_deg, "its heading, positive left");
+    v("field_of_view_deg", field_of_view_deg, "the cone's full angle");
+    v("min_range_m", min_range_m, "nearer echoes read -inf");
+    v("max_range_m", max_range_m, "with nothing nearer than this it reads +inf");
+    v("noise_stddev_m", noise_stddev_m, "the range's noise");
   }
   void Validate() const;  // 0 < field of view < 180°, 0 <= min < max, finite mount, noise >= 0
 };

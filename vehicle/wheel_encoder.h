@@ -28,10 +28,12 @@ struct WheelEncoderParams {
 
   template <class V>
   void Describe(V& v) {
-    v("pulses_per_revolution", pulses_per_revolution);
-    v("metres_per_revolution", metres_per_revolution);
-    v("counter_clock_hz", counter_clock_hz);
-    v("standstill_timeout_s", standstill_timeout);
+    v("pulses_per_revolution", pulses_per_revolution, "Hall pulses per wheel turn");
+    v("metres_per_revolution", metres_per_revolution,
+      "distance per wheel turn, as the car's code takes it (m)");
+    v("counter_clock_hz", counter_clock_hz, "the clock that times the pulse intervals");
+    v("standstill_timeout_s", standstill_timeout,
+      "without a pulse for this long the speed reads 0 (0: never)");
   }
   void Validate() const;
 

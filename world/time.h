@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "world/validation.h"
+
 namespace autonomsim {
 
 using Duration = std::chrono::nanoseconds;
@@ -23,7 +25,7 @@ inline constexpr double kMaxTimeSeconds = 9.2e9;
 // Seconds (finite, within ±kMaxTimeSeconds) to nanoseconds, rounded to the nearest nanosecond.
 inline Duration FromSeconds(double s) {
   if (!std::isfinite(s) || std::abs(s) > kMaxTimeSeconds) {
-    throw std::invalid_argument("time value out of range: " + std::to_string(s) + " s");
+    throw std::invalid_argument("time value out of range: " + Num(s) + " s");
   }
   return Duration{static_cast<std::int64_t>(std::llround(s * 1e9))};
 }

@@ -73,8 +73,12 @@ struct TrafficLightServerParams {
 
   template <class V>
   void Describe(V& v) {
-    v("policy", policy);
-    v("lease_s", lease);
+    v("policy", policy,
+      "the server: `fifo`, ours (a queue per intersection, leases), or `original`, the lab's "
+      "vtl.py (first come, no queue, no lease)");
+    v("lease_s", lease,
+      "`fifo` only: a holder silent this long loses its grant (longer than the cars' retry and "
+      "keepalive periods)");
   }
   void Validate() const;
 };

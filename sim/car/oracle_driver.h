@@ -30,11 +30,13 @@ struct OracleDriverParams {
 
   template <class V>
   void Describe(V& v) {
-    v("period_s", period);
-    v("speed_mps", speed_mps);
-    v("lookahead_m", lookahead_m);
-    v("speed_gain_per_mps", speed_gain_per_mps);
-    v("obstacle_stop_gap_m", obstacle_stop_gap_m);
+    v("period_s", period, "how often the oracle steers");
+    v("speed_mps", speed_mps, "the speed it drives at");
+    v("lookahead_m", lookahead_m, "pure pursuit look-ahead along the lane, from the rear axle");
+    v("speed_gain_per_mps", speed_gain_per_mps,
+      "throttle per m/s of speed error, on top of the feed-forward");
+    v("obstacle_stop_gap_m", obstacle_stop_gap_m,
+      "it stops when the gap from its front to an obstacle on its lane closes to this");
   }
   void Validate() const;
 };

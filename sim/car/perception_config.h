@@ -16,9 +16,12 @@ struct PerceptionConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("enabled", enabled);
-    v("obstacle_grid", obstacle_grid);
-    v("lane_detection", lane_detection);
+    v("enabled", enabled,
+      "run the perception nodes on the car's board (point cloud, obstacles, lanes); `driver: "
+      "stack` needs it");
+    v("obstacle_grid", obstacle_grid,
+      "the obstacle detection's grid from the depth camera's points");
+    v("lane_detection", lane_detection, "the lane detection on the colour camera");
   }
   void Validate() const {}  // the parts validate themselves
 };

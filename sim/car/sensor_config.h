@@ -30,13 +30,13 @@ struct CameraStreamParams {
 
   template <class V>
   void Describe(V& v) {
-    v("camera", camera);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
-    v("info_topic", info_topic);
-    v("publish_color", publish_color);
-    v("publish_depth", publish_depth);
-    v("noise", noise);
+    v("camera", camera, "the camera's model");
+    v("rate_hz", rate_hz, "frames per second");
+    v("topic", topic, "the topic its images go out on");
+    v("info_topic", info_topic, "the topic of its CameraInfo; empty: none");
+    v("publish_color", publish_color, "the topic carries the colour image");
+    v("publish_depth", publish_depth, "the topic carries the depth image");
+    v("noise", noise, "seeded image noise");
   }
   void Validate() const;
 };
@@ -51,9 +51,9 @@ struct ImuStreamParams {
 
   template <class V>
   void Describe(V& v) {
-    v("imu", imu);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
+    v("imu", imu, "the IMU's model (BNO055)");
+    v("rate_hz", rate_hz, "messages per second");
+    v("topic", topic, "the topic its messages go out on");
   }
   void Validate() const;
 };
@@ -66,9 +66,9 @@ struct WheelSpeedStreamParams {
 
   template <class V>
   void Describe(V& v) {
-    v("encoder", encoder);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
+    v("encoder", encoder, "the Hall encoder's model");
+    v("rate_hz", rate_hz, "messages per second");
+    v("topic", topic, "the topic its speed goes out on");
   }
   void Validate() const;
 };
@@ -80,9 +80,9 @@ struct UltrasonicStreamParams {
 
   template <class V>
   void Describe(V& v) {
-    v("sensor", sensor);
-    v("rate_hz", rate_hz);
-    v("topic", topic);
+    v("sensor", sensor, "the ranger's model");
+    v("rate_hz", rate_hz, "readings per second");
+    v("topic", topic, "the topic its range goes out on");
   }
   void Validate() const;
 };
@@ -97,11 +97,11 @@ struct SensorSuiteParams {
 
   template <class V>
   void Describe(V& v) {
-    v("color_camera", color_camera);
-    v("depth_camera", depth_camera);
-    v("imu", imu);
-    v("wheel_speed", wheel_speed);
-    v("ultrasonic", ultrasonic);
+    v("color_camera", color_camera, "the colour camera (See3CAM), for lane detection");
+    v("depth_camera", depth_camera, "the depth camera (Astra), for obstacles");
+    v("imu", imu, "the IMU");
+    v("wheel_speed", wheel_speed, "the wheel-speed sensor");
+    v("ultrasonic", ultrasonic, "the front ultrasonic ranger");
   }
   void Validate() const;  // each part, and the two cameras' names differ
 };

@@ -17,7 +17,24 @@
 #include "stack/localization_ekf.h"
 #include "stack/obstacle_grid.h"
 #include "stack/path_follower.h"
+#include "world/enum_names.h"
 #include "world/time.h"
+
+namespace autonomsim::sim {
+
+// `stack.preset`: the lab's stack as published, or every fix this simulator offers
+// (sim/scenario/stack_presets.h).
+enum class StackPreset { kLab, kSafe };
+
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::StackPreset> {
+  static constexpr std::array<std::pair<sim::StackPreset, std::string_view>, 2> kEntries{
+      {{sim::StackPreset::kLab, "lab"}, {sim::StackPreset::kSafe, "safe"}}};
+};
+}  // namespace autonomsim
 
 namespace autonomsim::sim {
 
@@ -32,9 +49,9 @@ struct PoseFixConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("rate_hz", rate_hz);
-    v("position_stddev_m", position_stddev_m);
-    v("yaw_stddev_rad", yaw_stddev_rad);
+    v("rate_hz", rate_hz, "how often the fix is published");
+    v("position_stddev_m", position_stddev_m, "its noise per axis");
+    v("yaw_stddev_rad", yaw_stddev_rad, "its heading noise");
   }
   void Validate() const;
 };
@@ -57,8 +74,12 @@ struct ControllerSelectorConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("zone_margin_m", zone_margin_m);
-    v("follow_path_without_line", follow_path_without_line);
+    v("zone_margin_m", zone_margin_m,
+      "FollowPath (not the LaneController) drives within this margin around the intersections' "
+      "boxes too (lab: 0)");
+    v("follow_path_without_line", follow_path_without_line,
+      "FollowPath drives the car on its plan while the lane camera sees no line (lab: false, the "
+      "car stops)");
   }
   void Validate() const;  // in [0, 1] m
 };
@@ -84,28 +105,38 @@ struct StackConfig {
   stack::CruiseControlParams cruise_control;
   // Beyond the lab's stack: the ultrasonic ranger stops the car (stack/emergency_stop.h).
   stack::EmergencyStopParams emergency_stop;
-  // "lab" or "safe": fills every option that departs from the lab's code (the struct's and the
-  // car's intersection_client) that the scenario does not set (sim/scenario/stack_presets.h).
-  std::optional<std::string> preset;
+  // Fills every option that departs from the lab's code (the struct's and the car's
+  // intersection_client) that the scenario does not set (sim/scenario/stack_presets.h).
+  std::optional<StackPreset> preset;
 
   template <class V>
   void Describe(V& v) {
-    v("preset", preset);
-    v("localization", localization);
-    v("pose_fix", pose_fix);
-    v("behavior", behavior);
-    v("global_costmap", global_costmap);
-    v("planner", planner);
-    v("planner_period_s", planner_period);
-    v("local_costmap", local_costmap);
-    v("obstacle_layer", obstacle_layer);
-    v("controller_period_s", controller_period);
-    v("lane_controller", lane_controller);
-    v("follow_path", follow_path);
-    v("controller_selector", controller_selector);
-    v("progress_checker", progress_checker);
-    v("cruise_control", cruise_control);
-    v("emergency_stop", emergency_stop);
+    v("preset", preset,
+      "the lab's stack as published or every fix, for this car's options the scenario leaves out "
+      "([the lab's stack](lab-stack.md)); overrides the top-level `stack.preset`");
+    v("localization", localization,
+      "the EKF (robot_localization) that fuses IMU, wheel speed and the optional pose fix");
+    v("pose_fix", pose_fix,
+      "an external absolute pose, beyond the real car (with `localization.use_pose_fix`)");
+    v("behavior", behavior,
+      "the behaviour tree: goals along the route, the intersection gate, recoveries");
+    v("global_costmap", global_costmap, "the planner's costmap over the track's static map");
+    v("planner", planner, "the global planner (Nav2 Smac 2D, A* and smoother)");
+    v("planner_period_s", planner_period, "how often the path is planned again");
+    v("local_costmap", local_costmap,
+      "the controller's rolling costmap around the car (obstacles from the depth camera)");
+    v("obstacle_layer", obstacle_layer, "how the obstacle grid marks the local costmap");
+    v("controller_period_s", controller_period, "how often the controller server runs");
+    v("lane_controller", lane_controller, "the controller that follows the lane the camera sees");
+    v("follow_path", follow_path,
+      "the controller that follows the planned path (inside intersections)");
+    v("controller_selector", controller_selector,
+      "where FollowPath drives instead of the LaneController");
+    v("progress_checker", progress_checker,
+      "when the controller server gives up for lack of progress");
+    v("cruise_control", cruise_control, "the car's speed PID and steering (carcontroller)");
+    v("emergency_stop", emergency_stop,
+      "the ultrasonic ranger stops the car, beyond the lab's stack");
   }
   void Validate() const;
 };

@@ -71,6 +71,9 @@ std::vector<std::string> ParseOverridePath(const std::string& key);
 // mapping without it ("car_stall needs car"); the writer and the reference treat it as any key.
 struct RequiredKey {};
 inline constexpr RequiredKey kRequired{};
+// A key's meaning, in a line, is the last argument of its `v(...)`:
+// `v("loss", loss, "probability that one message is lost");` The reference (docs/scenarios.md)
+// prints it beside the key; the reader and the writer pass it by.
 
 // A closed set of kinds read as a one-key mapping, the key naming the kind: a `std::variant` of
 // structs each with `static constexpr E kKind` (E a NamedEnum, sim/core/../world/enum_names.h),
@@ -145,13 +148,13 @@ class YamlFieldReader {
       : node_(node), path_(path), source_(source) {}
 
   template <class T>
-  void operator()(const char* key, T& value) {
+  void operator()(const char* key, T& value, const char* /*meaning*/ = "") {
     known_.emplace_back(key);
     const YAML::Node child = node_[key];
     if (child) Read(child, value, JoinPath(path_, key), source_);
   }
   template <class T>
-  void operator()(const char* key, T& value, RequiredKey) {
+  void operator()(const char* key, T& value, RequiredKey, const char* /*meaning*/ = "") {
     if (!node_[key]) Fail(node_, path_, source_, LastKey(path_) + " needs " + key);
     (*this)(key, value);
   }
@@ -168,8 +171,12 @@ class YamlFieldReader {
 class KeyLister {
  public:
   template <class T>
-  void operator()(const char* key, T&, RequiredKey = {}) {
+  void operator()(const char* key, T&, const char* /*meaning*/ = "") {
     keys.emplace_back(key);
+  }
+  template <class T>
+  void operator()(const char* key, T& value, RequiredKey, const char* /*meaning*/ = "") {
+    (*this)(key, value);
   }
   std::vector<std::string> keys;
 };
@@ -306,14 +313,14 @@ nlohmann::json ToJsonValue(const T& value);
 class JsonFieldWriter {
  public:
   template <class T>
-  void operator()(const char* key, const T& value) {
+  void operator()(const char* key, const T& value, const char* /*meaning*/ = "") {
     if constexpr (IsOptional<T>::value) {
       if (!value) return;
     }
     json_[key] = ToJsonValue(value);
   }
   template <class T>
-  void operator()(const char* key, const T& value, RequiredKey) {
+  void operator()(const char* key, const T& value, RequiredKey, const char* /*meaning*/ = "") {
     (*this)(key, value);
   }
   nlohmann::json take() { return std::move(json_); }

@@ -33,13 +33,17 @@ struct MqttLinkConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("broker", broker);
-    v("username", username);
-    v("password_file", password_file);
-    v("cafile", cafile);
-    v("certfile", certfile);
-    v("keyfile", keyfile);
-    v("timeout_s", timeout);
+    v("broker", broker,
+      "HOST:PORT of a running broker with its server; empty: the run starts its own mosquitto and "
+      "`tlserver --sim-clock`");
+    v("username", username, "our user on a given broker");
+    v("password_file", password_file, "a file whose first line is the password on a given broker");
+    v("cafile", cafile, "TLS to a given broker: the CA that signed its certificate");
+    v("certfile", certfile, "TLS: our certificate, if the broker asks for one");
+    v("keyfile", keyfile, "TLS: our certificate's key");
+    v("timeout_s", timeout,
+      "wall-clock seconds the run waits for the server to answer one message, or for broker and "
+      "server to start, before it stops with an error");
   }
   // Throws std::invalid_argument naming the key and the bad value.
   void Validate() const;

@@ -259,16 +259,22 @@ Platform::Platform(Kernel& kernel, PlatformProfile profile, RunMetrics* metrics)
       chunk_pools_(std::make_shared<ChunkPools>(profile_.zero_copy.mempools)) {}
 
 double DrawCostSeconds(const CostDistributionConfig& d, Rng& rng) {
-  if (d.distribution == "fixed") return *d.value_s;
-  if (d.distribution == "uniform") return rng.Uniform(*d.min_s, *d.max_s);
-  if (d.distribution == "normal") return std::max(0.0, rng.Normal(*d.mean_s, *d.stddev_s));
-  if (d.distribution == "lognormal") {
-    // mean m and standard deviation s of the cost: sigma^2 = ln(1 + s^2/m^2), mu = ln m - sigma^2/2
-    const double ratio = *d.stddev_s / *d.mean_s;
-    const double sigma2 = std::log1p(ratio * ratio);
-    return std::exp(rng.Normal(std::log(*d.mean_s) - 0.5 * sigma2, std::sqrt(sigma2)));
+  switch (d.distribution) {
+    case CostDistribution::kFixed:
+      return *d.value_s;
+    case CostDistribution::kUniform:
+      return rng.Uniform(*d.min_s, *d.max_s);
+    case CostDistribution::kNormal:
+      return std::max(0.0, rng.Normal(*d.mean_s, *d.stddev_s));
+    case CostDistribution::kLognormal: {
+      // mean m and standard deviation s of the cost: sigma^2 = ln(1 + s^2/m^2),
+      // mu = ln m - sigma^2/2
+      const double ratio = *d.stddev_s / *d.mean_s;
+      const double sigma2 = std::log1p(ratio * ratio);
+      return std::exp(rng.Normal(std::log(*d.mean_s) - 0.5 * sigma2, std::sqrt(sigma2)));
+    }
   }
-  throw std::logic_error("DrawCostSeconds: unknown distribution '" + d.distribution + "'");
+  throw std::logic_error("DrawCostSeconds: not a distribution");
 }
 
 PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config) {

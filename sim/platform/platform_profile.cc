@@ -164,37 +164,41 @@ void TopicTransportConfig::Validate() const {
 }
 
 void CostDistributionConfig::Validate() const {
-  auto need = [this](const std::optional<double>& value, const char* key) {
-    Require(value.has_value(), "distribution '" + distribution + "' needs " + key);
+  const std::string name(ToName(distribution));
+  auto need = [&name](const std::optional<double>& value, const char* key) {
+    Require(value.has_value(), "distribution '" + name + "' needs " + key);
     Require(std::isfinite(*value) && *value >= 0.0,
             std::string(key) + " must be finite and >= 0, got " + Num(*value));
   };
-  auto forbid = [this](const std::optional<double>& value, const char* key) {
-    Require(!value.has_value(), "distribution '" + distribution + "' takes no " + key);
+  auto forbid = [&name](const std::optional<double>& value, const char* key) {
+    Require(!value.has_value(), "distribution '" + name + "' takes no " + key);
   };
-  if (distribution == "fixed") {
-    need(value_s, "value_s");
-    forbid(min_s, "min_s");
-    forbid(max_s, "max_s");
-    forbid(mean_s, "mean_s");
-    forbid(stddev_s, "stddev_s");
-  } else if (distribution == "uniform") {
-    need(min_s, "min_s");
-    need(max_s, "max_s");
-    Require(*min_s <= *max_s, "min_s must be <= max_s, got " + Num(*min_s) + " > " + Num(*max_s));
-    forbid(value_s, "value_s");
-    forbid(mean_s, "mean_s");
-    forbid(stddev_s, "stddev_s");
-  } else if (distribution == "normal" || distribution == "lognormal") {
-    need(mean_s, "mean_s");
-    need(stddev_s, "stddev_s");
-    Require(distribution == "normal" || *mean_s > 0.0, "lognormal needs mean_s > 0");
-    forbid(value_s, "value_s");
-    forbid(min_s, "min_s");
-    forbid(max_s, "max_s");
-  } else {
-    Require(false,
-            "distribution must be fixed, uniform, normal or lognormal, got '" + distribution + "'");
+  switch (distribution) {
+    case CostDistribution::kFixed:
+      need(value_s, "value_s");
+      forbid(min_s, "min_s");
+      forbid(max_s, "max_s");
+      forbid(mean_s, "mean_s");
+      forbid(stddev_s, "stddev_s");
+      return;
+    case CostDistribution::kUniform:
+      need(min_s, "min_s");
+      need(max_s, "max_s");
+      Require(*min_s <= *max_s, "min_s must be <= max_s, got " + Num(*min_s) + " > " + Num(*max_s));
+      forbid(value_s, "value_s");
+      forbid(mean_s, "mean_s");
+      forbid(stddev_s, "stddev_s");
+      return;
+    case CostDistribution::kNormal:
+    case CostDistribution::kLognormal:
+      need(mean_s, "mean_s");
+      need(stddev_s, "stddev_s");
+      Require(distribution == CostDistribution::kNormal || *mean_s > 0.0,
+              "lognormal needs mean_s > 0");
+      forbid(value_s, "value_s");
+      forbid(min_s, "min_s");
+      forbid(max_s, "max_s");
+      return;
   }
 }
 

@@ -303,9 +303,9 @@ struct NodeMappingConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("target", target);
-    v("slot", slot);
-    v("cost", cost);
+    v("target", target, "where the node runs: `sw` on the CPU cores, `hw` in an FPGA slot");
+    v("slot", slot, "`hw`: the FPGA slot");
+    v("cost", cost, "the profile's `components` entry to cost it by (default: the node's name)");
   }
   void Validate() const;
 };
@@ -325,13 +325,15 @@ struct TopicTransportConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("transport", transport);
-    v("depth", depth);
-    v("reliability", reliability);
-    v("history", history);
-    v("receive_buffer_bytes", receive_buffer_bytes);
-    v("fragment_bytes", fragment_bytes);
-    v("max_message_bytes", max_message_bytes);
+    v("transport", transport,
+      "how the topic is carried: `dds` (loopback sockets) or `zero_copy` (Iceoryx shared memory)");
+    v("depth", depth, "its keep-last history depth");
+    v("reliability", reliability, "`dds`: the QoS reliability (default: the profile's)");
+    v("history", history, "`dds`: the QoS history (default: the profile's)");
+    v("receive_buffer_bytes", receive_buffer_bytes,
+      "`dds`: the receive buffer its subscribers' sockets ask for");
+    v("fragment_bytes", fragment_bytes, "`dds`: Cyclone's fragment size");
+    v("max_message_bytes", max_message_bytes, "`dds`: Cyclone's largest datagram payload");
   }
   void Validate() const;
 };
@@ -340,8 +342,26 @@ struct TopicTransportConfig {
 // "fixed" (value_s), "uniform" (min_s, max_s), "normal" (mean_s, stddev_s; a draw below 0 counts
 // as 0) or "lognormal" (mean_s and stddev_s of the cost itself, not of its logarithm). Seconds are
 // core-seconds of work for a software node and fabric seconds for a hardware node.
+enum class CostDistribution { kFixed, kUniform, kNormal, kLognormal };
+
+}  // namespace autonomsim::sim
+
+namespace autonomsim {
+template <>
+struct NameTable<sim::CostDistribution> {
+  using K = sim::CostDistribution;
+  static constexpr std::array<std::pair<K, std::string_view>, 4> kEntries{
+      {{K::kFixed, "fixed"},
+       {K::kUniform, "uniform"},
+       {K::kNormal, "normal"},
+       {K::kLognormal, "lognormal"}}};
+};
+}  // namespace autonomsim
+
+namespace autonomsim::sim {
+
 struct CostDistributionConfig {
-  std::string distribution{"fixed"};
+  CostDistribution distribution{CostDistribution::kFixed};
   std::optional<double> value_s;
   std::optional<double> min_s;
   std::optional<double> max_s;
@@ -350,12 +370,14 @@ struct CostDistributionConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("distribution", distribution);
-    v("value_s", value_s);
-    v("min_s", min_s);
-    v("max_s", max_s);
-    v("mean_s", mean_s);
-    v("stddev_s", stddev_s);
+    v("distribution", distribution,
+      "each job's cost drawn from: `fixed` (value_s), `uniform` (min_s, max_s), `normal` or "
+      "`lognormal` (mean_s, stddev_s)");
+    v("value_s", value_s, "`fixed`: the cost");
+    v("min_s", min_s, "`uniform`: the least cost");
+    v("max_s", max_s, "`uniform`: the largest cost");
+    v("mean_s", mean_s, "`normal`, `lognormal`: the cost's mean");
+    v("stddev_s", stddev_s, "`normal`, `lognormal`: the cost's standard deviation");
   }
   void Validate() const;
 };
@@ -387,19 +409,30 @@ struct PlatformConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("profile", profile);
-    v("mapping", mapping);
-    v("transport", transport);
-    v("cores", cores);
-    v("host_rmem_max_bytes", host_rmem_max_bytes);
-    v("cost_scale", cost_scale);
-    v("cost_override", cost_override);
-    v("background_loads", background_loads);
-    v("load_bin_s", load_bin);
-    v("trace", trace);
-    v("trace_max_events", trace_max_events);
-    v("trace_receive_threads", trace_receive_threads);
-    v("trace_busy_period_s", trace_busy_period);
+    v("profile", profile,
+      "the board's profile file (relative to the scenario, else the shipped one): costs, cores, "
+      "transports");
+    v("mapping", mapping,
+      "by node name: where the node runs; nodes not named keep the default (a wrong name lists the "
+      "board's nodes)");
+    v("transport", transport,
+      "by topic name: how the topic is carried; topics not named keep the default");
+    v("cores", cores, "the CPU's cores instead of the profile's");
+    v("host_rmem_max_bytes", host_rmem_max_bytes,
+      "the host's net.core.rmem_max instead of the profile's: the cap on every DDS socket's "
+      "receive buffer");
+    v("cost_scale", cost_scale, "by node name: a factor on each job's compute cost");
+    v("cost_override", cost_override,
+      "by node name: each job's compute cost drawn from a distribution instead of the profile's");
+    v("background_loads", background_loads, "add the profile's background CPU loads");
+    v("load_bin_s", load_bin, "CPU load over time: one value per bin");
+    v("trace", trace, "record trace.json");
+    v("trace_max_events", trace_max_events,
+      "stop recording the trace after this many events (noted in it)");
+    v("trace_receive_threads", trace_receive_threads,
+      "also record each DDS receive thread's spans in the trace");
+    v("trace_busy_period_s", trace_busy_period,
+      "the trace's busy-cores counter: its mean over each period; 0: a value at every change");
   }
   void Validate() const;
 };

@@ -78,18 +78,19 @@ std::size_t TrajectoryStride(const RunRecord& record) {
 
 json MetaJson(const FinishedRun& run) {
   const RunSummary& s = run.summary;
-  json meta = {{"scenario", s.scenario},
-               {"scenario_file", s.scenario_file},
-               {"run_dir", run.dir.filename().string()},
-               {"seed", s.seed},
-               {"sim_seconds", s.sim_seconds},
-               {"wall_seconds", s.wall_seconds},
-               {"passed", s.passed},
-               {"result_sha256", s.result_sha256},
-               {"scenario_sha256", s.scenario_sha256},
-               {"kernel_events", s.kernel_events},
-               {"autonomsim", s.versions.autonomsim},
-               {"preset", run.scenario.stack.preset ? json(*run.scenario.stack.preset) : json()}};
+  json meta = {
+      {"scenario", s.scenario},
+      {"scenario_file", s.scenario_file},
+      {"run_dir", run.dir.filename().string()},
+      {"seed", s.seed},
+      {"sim_seconds", s.sim_seconds},
+      {"wall_seconds", s.wall_seconds},
+      {"passed", s.passed},
+      {"result_sha256", s.result_sha256},
+      {"scenario_sha256", s.scenario_sha256},
+      {"kernel_events", s.kernel_events},
+      {"autonomsim", s.versions.autonomsim},
+      {"preset", run.scenario.stack.preset ? json(ToName(*run.scenario.stack.preset)) : json()}};
   if (s.real_time_factor) meta["real_time_factor"] = *s.real_time_factor;
   meta["trajectory_stride"] = TrajectoryStride(run.record);
   return meta;
@@ -142,7 +143,7 @@ json CarsJson(const FinishedRun& run) {
               {"route", car.route ? json(*car.route) : json()},
               {"driver", ToName(car.driver)},
               {"has_board", car.has_board()},
-              {"preset", car.stack.preset ? json(*car.stack.preset) : json()}};
+              {"preset", car.stack.preset ? json(ToName(*car.stack.preset)) : json()}};
     for (const CarMetrics& m : run.summary.cars) {
       if (m.id != car.id) continue;
       c["laps"] = m.laps;

@@ -13,12 +13,16 @@ namespace {
 class NamePartsWriter {
  public:
   template <class T>
-  void operator()(const char* key, const T& value, RequiredKey = {}) {
+  void operator()(const char* key, const T& value, const char* /*meaning*/ = "") {
     if constexpr (detail::IsOptional<T>::value) {
       if (value) parts.push_back(fmt::format("{}={}", key, *value));
     } else {
       parts.push_back(fmt::format("{}={}", key, value));
     }
+  }
+  template <class T>
+  void operator()(const char* key, const T& value, RequiredKey, const char* /*meaning*/ = "") {
+    (*this)(key, value);
   }
   std::vector<std::string> parts;
 };

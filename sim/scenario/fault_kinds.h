@@ -1,6 +1,7 @@
-// The faults a scenario can strike (`faults:`), one struct per kind: its keys (Describe), its
-// checks (Validate), and its arguments in words for the fault_begin event (Detail). A `faults:`
-// entry is a FaultClause, read as a one-key mapping naming the kind (sim/core/config.h), e.g.
+// The faults a scenario can strike (`faults:`), one struct per kind: what it does (kMeaning, for
+// the scenario reference), its keys (Describe), its checks (Validate), and its arguments in words
+// for the fault_begin event (Detail). A `faults:` entry is a FaultClause, read as a one-key mapping
+// naming the kind (sim/core/config.h), e.g.
 // `- car_stall: {car: 1, at_s: 20}`. What each kind does, and how it is scheduled, is in
 // sim/loop/faults.h; adding a kind is one struct here, its name in sim/core/vocabulary.h and
 // its Schedule overload in sim/loop/faults.cc, which the compiler asks for.
@@ -48,6 +49,9 @@ void ValidateFaultTiming(double at_s, const std::optional<double>& for_s);
 // {car?, direction: up|down|both (default both), for_s?}
 struct V2iPartitionFault {
   static constexpr FaultKind kKind = FaultKind::kV2iPartition;
+  static constexpr std::string_view kMeaning =
+      "The car's messages to and from the traffic-light server (as `direction` says) are lost, "
+      "those in flight included";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -56,10 +60,10 @@ struct V2iPartitionFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car);
-    v("direction", direction);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, "the car whose link it cuts (default: every car)");
+    v("direction", direction, "`up` (car to server), `down` or `both` (default both)");
   }
   void Validate() const { ValidateFaultTiming(at_s, for_s); }
   std::string Detail() const;
@@ -68,6 +72,9 @@ struct V2iPartitionFault {
 // {car?, loss in (0, 1], for_s?}
 struct V2iLossBurstFault {
   static constexpr FaultKind kKind = FaultKind::kV2iLossBurst;
+  static constexpr std::string_view kMeaning =
+      "Each of the car's messages is lost with probability `loss`, on top of `v2i.loss`; delays "
+      "are unchanged";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -76,10 +83,11 @@ struct V2iLossBurstFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car);
-    v("loss", loss, kRequired);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, "the car whose link it strikes (default: every car)");
+    v("loss", loss, kRequired,
+      "probability that a message is lost, on top of `v2i.loss`, in (0, 1]");
   }
   void Validate() const;
   std::string Detail() const;
@@ -90,14 +98,22 @@ struct V2iLossBurstFault {
 template <FaultKind Kind, bool LastsWithoutEndOfRun>
 struct FleetFault {
   static constexpr FaultKind kKind = Kind;
+  static constexpr std::string_view kMeaning =
+      Kind == FaultKind::kServerRestart
+          ? "The traffic-light server forgets every holder, queue and lease, as the lab's vtl.py "
+            "does; with `for_s` it is down that long first and what reaches it is lost"
+          : "Every message of every car is lost, both ways; the `fifo` server, cut off too, "
+            "pauses its leases and gives each holder and queued car a full lease when the broker "
+            "is back";
   static constexpr bool kLastsWithoutEnd = LastsWithoutEndOfRun;
   double at_s{0.0};
   std::optional<double> for_s;
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s,
+      "how long it lasts (default: `server_restart` at once, `broker_outage` to the run's end)");
   }
   void Validate() const { ValidateFaultTiming(at_s, for_s); }
   std::string Detail() const;
@@ -108,6 +124,9 @@ using BrokerOutageFault = FleetFault<FaultKind::kBrokerOutage, true>;
 // {car, for_s?}
 struct CarStallFault {
   static constexpr FaultKind kKind = FaultKind::kCarStall;
+  static constexpr std::string_view kMeaning =
+      "The car's motor is dead: no throttle whatever the driver commands (steering works), so it "
+      "rolls to a stop; its board and client run on";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -115,9 +134,9 @@ struct CarStallFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car, kRequired);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, kRequired, "the car it strikes");
   }
   void Validate() const { ValidateFaultTiming(at_s, for_s); }
   std::string Detail() const;
@@ -126,6 +145,9 @@ struct CarStallFault {
 // {car, node}: a crashed node stays down (node_hang has for_s).
 struct NodeCrashFault {
   static constexpr FaultKind kKind = FaultKind::kNodeCrash;
+  static constexpr std::string_view kMeaning =
+      "The node dies for the rest of the run: its running job publishes nothing, nothing reaches "
+      "it";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   int car{0};
@@ -133,9 +155,9 @@ struct NodeCrashFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("car", car, kRequired);
-    v("node", node, kRequired);
+    v("at_s", at_s, "when it strikes");
+    v("car", car, kRequired, "the car it strikes");
+    v("node", node, kRequired, "a node on the car's board (a wrong name lists them)");
   }
   void Validate() const;
   std::string Detail() const;
@@ -144,6 +166,9 @@ struct NodeCrashFault {
 // {car, node, for_s?}
 struct NodeHangFault {
   static constexpr FaultKind kKind = FaultKind::kNodeHang;
+  static constexpr std::string_view kMeaning =
+      "The node's executor blocks: its outputs wait, messages pile up in its queues, timer ticks "
+      "are overruns; it catches up when the hang ends";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -152,10 +177,10 @@ struct NodeHangFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car, kRequired);
-    v("node", node, kRequired);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, kRequired, "the car it strikes");
+    v("node", node, kRequired, "a node on the car's board (a wrong name lists them)");
   }
   void Validate() const;
   std::string Detail() const;
@@ -165,6 +190,10 @@ struct NodeHangFault {
 template <FaultKind Kind>
 struct CameraFault {
   static constexpr FaultKind kKind = Kind;
+  static constexpr std::string_view kMeaning =
+      Kind == FaultKind::kCameraFreeze
+          ? "The camera publishes its last picture again and again under new stamps"
+          : "The camera publishes black frames (the depth camera: no return)";
   static constexpr bool kLastsWithoutEnd = true;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -173,10 +202,10 @@ struct CameraFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car, kRequired);
-    v("camera", camera);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, kRequired, "the car it strikes");
+    v("camera", camera, "`color` or `depth`");
   }
   void Validate() const { ValidateFaultTiming(at_s, for_s); }
   std::string Detail() const;
@@ -187,6 +216,10 @@ using CameraBlackoutFault = CameraFault<FaultKind::kCameraBlackout>;
 // {car, gyro_bias_rad_per_s (finite, not 0), for_s?}: without for_s the bias stays.
 struct ImuBiasStepFault {
   static constexpr FaultKind kKind = FaultKind::kImuBiasStep;
+  static constexpr std::string_view kMeaning =
+      "The gyro's bias steps by `gyro_bias_rad_per_s`, so its yaw rate reads that much more; the "
+      "heading drifts with it only where the IMU integrates its gyro "
+      "(`sensors.imu.imu.heading_source: gyro`)";
   static constexpr bool kLastsWithoutEnd = false;
   double at_s{0.0};
   std::optional<double> for_s;
@@ -195,10 +228,11 @@ struct ImuBiasStepFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("for_s", for_s);
-    v("car", car, kRequired);
-    v("gyro_bias_rad_per_s", gyro_bias_rad_per_s, kRequired);
+    v("at_s", at_s, "when it strikes");
+    v("for_s", for_s, "how long it lasts (default: to the run's end)");
+    v("car", car, kRequired, "the car it strikes");
+    v("gyro_bias_rad_per_s", gyro_bias_rad_per_s, kRequired,
+      "the step in the gyro's z bias (finite, not 0)");
   }
   void Validate() const;
   std::string Detail() const;
@@ -207,6 +241,8 @@ struct ImuBiasStepFault {
 // {car, dx_m?, dy_m?, dyaw_deg?}: the estimate's jump, map frame; instantaneous.
 struct LocalizationJumpFault {
   static constexpr FaultKind kKind = FaultKind::kLocalizationJump;
+  static constexpr std::string_view kMeaning =
+      "The EKF's estimate jumps by `dx_m`, `dy_m` and `dyaw_deg` (map frame), at once";
   static constexpr bool kLastsWithoutEnd = false;
   double at_s{0.0};
   int car{0};
@@ -216,11 +252,11 @@ struct LocalizationJumpFault {
 
   template <class V>
   void Describe(V& v) {
-    v("at_s", at_s);
-    v("car", car, kRequired);
-    v("dx_m", dx_m);
-    v("dy_m", dy_m);
-    v("dyaw_deg", dyaw_deg);
+    v("at_s", at_s, "when it strikes");
+    v("car", car, kRequired, "the car it strikes");
+    v("dx_m", dx_m, "the estimate's jump east");
+    v("dy_m", dy_m, "its jump north");
+    v("dyaw_deg", dyaw_deg, "its turn, counter-clockwise");
   }
   void Validate() const;
   std::string Detail() const;

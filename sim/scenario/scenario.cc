@@ -65,9 +65,11 @@ void CarConfig::Validate() const {
 
 void ObstacleConfig::Validate() const {
   Require(!name.empty(), "obstacle needs a name");
-  Require(length_m > 0 && width_m > 0 && height_m > 0,
-          "length_m, width_m and height_m must be > 0, got " + Num(length_m) + ", " + Num(width_m) +
-              ", " + Num(height_m));
+  // one check per key, each message opening with its key: the reader reports it at that key's line
+  for (const auto& [key, value] : {std::pair{"length_m", length_m}, std::pair{"width_m", width_m},
+                                   std::pair{"height_m", height_m}}) {
+    Require(value > 0, std::string(key) + " must be > 0, got " + Num(value));
+  }
   // instants within a run's longest duration (24 h) and then some; beyond, they never come
   constexpr double kLatest_s = 1e6;
   Require(appear_s >= 0.0 && appear_s <= kLatest_s,
@@ -101,14 +103,6 @@ void Scenario::Validate() const {
   Require(duration > kZeroTime && duration <= std::chrono::hours(24),
           "duration_s must be in (0, 86400] s, got " + Num(ToSeconds(duration)));
   Require(!cars.empty(), "cars must not be empty");
-  std::set<int> ids;
-  for (const CarConfig& car : cars) {
-    Require(ids.insert(car.id).second, "duplicate car id " + std::to_string(car.id));
-  }
-  std::set<std::string> names;
-  for (const ObstacleConfig& obstacle : obstacles) {
-    Require(names.insert(obstacle.name).second, "duplicate obstacle name '" + obstacle.name + "'");
-  }
 }
 
 namespace {
@@ -128,13 +122,28 @@ std::filesystem::path ResolveScenarioFile(const std::filesystem::path& folder,
   const fs::path given(name);
   const fs::path local = folder / given;
   if (given.is_absolute() || fs::exists(local)) return local;
-  const fs::path shipped = fs::path(AUTONOMSIM_SCENARIOS_DIR) / given;
+  const fs::path shipped = ShippedScenarioFile(name);
   if (!name.empty() && fs::exists(shipped)) return shipped;
   throw ConfigError(local.string() + ": no such file (nor " + shipped.string() +
                     " among the shipped ones)");
 }
 
 }  // namespace
+
+std::filesystem::path ShippedScenarioFile(const std::string& name) {
+  return std::filesystem::path(AUTONOMSIM_SCENARIOS_DIR) / name;
+}
+
+bool StartPlacement::on() const {
+  return distance_m <= 0.1 && std::abs(heading_error_rad) <= std::numbers::pi / 6;
+}
+
+StartPlacement PlaceStart(const world::Pose2& pose, const world::Route& route) {
+  const world::Polyline::Projection on = route.path.Project(pose.position());
+  return {.s_m = on.s_m,
+          .distance_m = on.distance_m,
+          .heading_error_rad = world::WrapAngle(route.path.HeadingAt(on.s_m) - pose.yaw_rad)};
+}
 
 std::filesystem::path ResolveShippedFile(const std::string& given) {
   namespace fs = std::filesystem;
@@ -161,6 +170,23 @@ world::Track LoadScenarioTrack(const Scenario& scenario, const std::filesystem::
   }
 }
 
+// "unknown start pose 'real_cra' (did you mean 'real_car'?); known start poses: gazebo, real_car":
+// what the track offers in place of a name it lacks, `kind` naming what the name is of.
+template <class Value>
+std::string UnknownName(const std::string& kind, const std::string& name,
+                        const std::map<std::string, Value>& known) {
+  std::vector<std::string> names;
+  std::string list;
+  for (const auto& [known_name, value] : known) {
+    names.push_back(known_name);
+    list += (list.empty() ? "" : ", ") + known_name;
+  }
+  const std::string closest = detail::ClosestName(name, names);
+  return fmt::format("unknown {} '{}'{}; known {}s: {}", kind, name,
+                     closest.empty() ? "" : " (did you mean '" + closest + "'?)", kind,
+                     list.empty() ? "(none)" : list);
+}
+
 // Where car `i` starts on its route: its named start pose (which must lie on the route, heading
 // along it) or its distance along the route.
 std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i,
@@ -171,17 +197,16 @@ std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i
     const std::optional<world::Pose2> named = track.StartPose(*car.start);
     if (!named) {
       FailAt(site.root, site.source, {"cars", i, "start"},
-             "unknown start pose '" + *car.start + "'");
+             UnknownName("start pose", *car.start, track.spec().start_poses));
     }
-    const world::Polyline::Projection on = path.Project(named->position());
-    const double heading_error = world::WrapAngle(path.HeadingAt(on.s_m) - named->yaw_rad);
-    if (on.distance_m > 0.1 || std::abs(heading_error) > std::numbers::pi / 6) {
+    const StartPlacement placed = PlaceStart(*named, route);
+    if (!placed.on()) {
       FailAt(site.root, site.source, {"cars", i, "start"},
-             "start pose '" + *car.start + "' is not on route (" + Num(on.distance_m) +
-                 " m away, heading off by " + Num(heading_error * 180 / std::numbers::pi) +
-                 " deg)");
+             "start pose '" + *car.start + "' is not on route (" + Num(placed.distance_m) +
+                 " m away, heading off by " +
+                 Num(placed.heading_error_rad * 180 / std::numbers::pi) + " deg)");
     }
-    return {on.s_m, *named};
+    return {placed.s_m, *named};
   }
   const double s = car.start_s_m.value_or(0.0);
   if (s < 0.0 || s >= path.length_m()) {
@@ -198,6 +223,10 @@ LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track
                      const std::filesystem::path& folder, const ScenarioSite& site) {
   const CarConfig& car = scenario.cars[i];
   LoadedCar resolved{.config = &car};
+  if (car.route && track.spec().routes.count(*car.route) == 0) {
+    FailAt(site.root, site.source, {"cars", i, "route"},
+           UnknownName("route", *car.route, track.spec().routes));
+  }
   try {
     resolved.route = car.route ? track.RouteByName(*car.route)
                                : world::MakeRoute(track.road_graph(),
@@ -223,6 +252,32 @@ LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track
     }
   }
   return resolved;
+}
+
+// No two cars share an id and no two obstacles a name, reported at the second one's key, naming
+// the first. Returns the cars' ids.
+std::set<int> CheckNamesUnique(const Scenario& scenario, const ScenarioSite& site) {
+  std::map<int, std::size_t> car_of_id;
+  for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
+    const auto [first, inserted] = car_of_id.emplace(scenario.cars[i].id, i);
+    if (!inserted) {
+      FailAt(site.root, site.source, {"cars", i, "id"},
+             fmt::format("duplicate car id {}: cars[{}] has it too (each car needs its own id)",
+                         scenario.cars[i].id, first->second));
+    }
+  }
+  std::map<std::string, std::size_t> obstacle_of_name;
+  for (std::size_t i = 0; i < scenario.obstacles.size(); ++i) {
+    const auto [first, inserted] = obstacle_of_name.emplace(scenario.obstacles[i].name, i);
+    if (!inserted) {
+      FailAt(site.root, site.source, {"obstacles", i, "name"},
+             fmt::format("duplicate obstacle name '{}': obstacles[{}] has it too",
+                         scenario.obstacles[i].name, first->second));
+    }
+  }
+  std::set<int> ids;
+  for (const auto& [id, index] : car_of_id) ids.insert(id);
+  return ids;
 }
 
 // A car without a board (perception off) runs no nodes: platform settings naming nodes or topics
@@ -567,9 +622,8 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   LoadedScenario loaded(file, std::move(read), std::move(track));
   const Scenario& scenario = loaded.scenario;
 
-  std::set<int> car_ids;
+  const std::set<int> car_ids = CheckNamesUnique(scenario, site);
   for (std::size_t i = 0; i < scenario.cars.size(); ++i) {
-    car_ids.insert(scenario.cars[i].id);
     loaded.cars.push_back(ResolveCar(scenario, i, loaded.track, file.parent_path(), site));
   }
   CheckSizes(loaded, site);

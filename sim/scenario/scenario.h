@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -80,27 +81,35 @@ struct CarConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("id", id);
-    v("route", route);
-    v("lanes", lanes);
-    v("start", start);
-    v("start_s_m", start_s_m);
-    v("laps", laps);
-    v("driver", driver);
-    v("oracle", oracle);
-    v("stack", stack);
-    v("intersection_client", intersection_client);
-    v("vehicle", vehicle);
-    v("sensors", sensors);
-    v("perception", perception);
-    v("platform", platform);
+    v("id", id, "the car's id, 0..9 (one digit in the /vtl/ protocol)");
+    v("route", route, "the route it drives, by name ([routes](#routes)); or give `lanes`");
+    v("lanes", lanes, "the lane segments it drives, in order ([lanes](#lanes)); or give `route`");
+    v("start", start,
+      "a named start pose on its route ([start poses](#start-poses)); or give `start_s_m`");
+    v("start_s_m", start_s_m, "where it starts, as the distance along its route (default 0)");
+    v("laps", laps, "on a loop: park after this many laps (default: drive on)");
+    v("driver", driver,
+      "who drives: `oracle`, ideal lane following on ground truth, or `stack`, the AutonomROS "
+      "stack on its board");
+    v("oracle", oracle, "the oracle driver's settings (`driver: oracle`)");
+    v("stack", stack, "the AutonomROS stack's settings (`driver: stack`)");
+    v("intersection_client", intersection_client,
+      "the car's /vtl/ client: when it asks for, holds and frees an intersection");
+    v("vehicle", vehicle, "the car's body, steering and motor");
+    v("sensors", sensors, "the car's sensors: rates, topics, models");
+    v("perception", perception, "the perception nodes on the car's board");
+    v("platform", platform,
+      "the car's compute board: where each node runs and how each topic is carried");
   }
   void Validate() const;
 };
 
-// A box on the floor that cars can hit (and, later, see). It is present from appear_s until
-// disappear_s (if given).
+// A box on the floor, the one kind of obstacle (kMeaning says it for the scenario reference).
 struct ObstacleConfig {
+  static constexpr std::string_view kMeaning =
+      "An obstacle is a box standing on the floor from `appear_s` until `disappear_s`: cars "
+      "collide with it, their cameras and ultrasonic rangers see it";
+
   // Whether it stands on the floor at t.
   bool PresentAt(Time t) const {
     return FromSeconds(appear_s) <= t && !(disappear_s && FromSeconds(*disappear_s) <= t);
@@ -118,15 +127,15 @@ struct ObstacleConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("name", name);
-    v("x_m", x_m);
-    v("y_m", y_m);
-    v("yaw_deg", yaw_deg);
-    v("length_m", length_m);
-    v("width_m", width_m);
-    v("height_m", height_m);
-    v("appear_s", appear_s);
-    v("disappear_s", disappear_s);
+    v("name", name, "names it in events and contacts; unique");
+    v("x_m", x_m, "its centre on the floor, map frame (x east)");
+    v("y_m", y_m, "its centre (y north)");
+    v("yaw_deg", yaw_deg, "its heading, counter-clockwise from east");
+    v("length_m", length_m, "its size along its heading");
+    v("width_m", width_m, "its size across");
+    v("height_m", height_m, "its height, for the cameras");
+    v("appear_s", appear_s, "when it appears");
+    v("disappear_s", disappear_s, "when it goes (default: it stays)");
   }
   void Validate() const;
 };
@@ -150,11 +159,13 @@ struct V2IConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("link", link);
-    v("latency_s", latency);
-    v("jitter_s", jitter);
-    v("loss", loss);
-    v("mqtt", mqtt);
+    v("link", link,
+      "how cars reach the traffic-light server: `embedded` (in process), `mqtt` (a real broker and "
+      "`tlserver`, same result), `realtime` (a lab server over a real broker, wall-clock paced)");
+    v("latency_s", latency, "one-way delay of each message (not with `realtime`)");
+    v("jitter_s", jitter, "extra delay, uniform in [0, this]");
+    v("loss", loss, "probability that one message is lost");
+    v("mqtt", mqtt, "the broker, for `mqtt` and `realtime`");
   }
   void Validate() const;
 };
@@ -164,7 +175,7 @@ struct OutputConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("trajectory_period_s", trajectory_period);
+    v("trajectory_period_s", trajectory_period, "one trajectory.csv row per car this often");
   }
   void Validate() const;
 };
@@ -183,8 +194,9 @@ struct LimitsConfig {
 
   template <class V>
   void Describe(V& v) {
-    v("grid_cells", grid_cells);
-    v("trajectory_rows", trajectory_rows);
+    v("grid_cells", grid_cells,
+      "the most cells any one grid may have (floor raster, planner map, costmaps, camera images)");
+    v("trajectory_rows", trajectory_rows, "the most rows trajectory.csv may have");
   }
   void Validate() const;  // both >= 1
 };
@@ -220,23 +232,28 @@ struct Scenario {
 
   template <class V>
   void Describe(V& v) {
-    v("name", name);
-    v("description", description);
-    v("seed", seed);
-    v("duration_s", duration);
-    v("track", track);
-    v("physics", physics);
-    v("traffic_lights", traffic_lights);
-    v("v2i", v2i);
-    v("stack", stack);
-    v("cars", cars);
-    v("obstacles", obstacles);
-    v("expect", expect);
-    v("faults", faults);
-    v("output", output);
-    v("appearance", appearance);
-    v("camera_backend", camera_backend);
-    v("limits", limits);
+    v("name", name, "the run's name (default: the file's)");
+    v("description", description, "what the scenario is for");
+    v("seed", seed, "the seed of every random draw");
+    v("duration_s", duration, "how long the run lasts, simulated (at most a day)");
+    v("track", track,
+      "the track file, relative to the scenario (else the shipped one); its start poses and "
+      "routes: [the lab track](#the-lab-track)");
+    v("physics", physics, "the physics engine (Box2D): its step and solver");
+    v("traffic_lights", traffic_lights, "the traffic-light server");
+    v("v2i", v2i, "the cars' link to the server");
+    v("stack", stack, "the fleet's stack preset");
+    v("cars", cars, "the cars, at least one");
+    v("obstacles", obstacles, "boxes on the floor ([obstacles](#obstacles))");
+    v("expect", expect,
+      "what must hold, judged on the finished run ([expectations](#expectations))");
+    v("faults", faults, "what goes wrong on purpose, and when ([faults](#faults))");
+    v("output", output, "what the run writes");
+    v("appearance", appearance, "the colours the cameras see");
+    v("camera_backend", camera_backend,
+      "what renders the camera images: `raycast`, the ray caster, or `gl`, OpenGL ES (its "
+      "cross-check)");
+    v("limits", limits, "the sizes a scenario may ask for, against typos");
   }
   void Validate() const;
 };
@@ -292,6 +309,22 @@ std::vector<std::string> StackMixWarnings(const Scenario& scenario);
 LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides = {},
                             std::optional<std::uint64_t> seed = std::nullopt);
+
+// How a named start pose sits against a route: the distance along the route nearest to it, how far
+// it lies off the route there and how far its heading is off the route's. A car may start at the
+// pose only on a route it lies on (`on`).
+struct StartPlacement {
+  double s_m{0.0};
+  double distance_m{0.0};
+  double heading_error_rad{0.0};
+  // within 0.1 m of the route, heading within 30° of its direction
+  bool on() const;
+};
+StartPlacement PlaceStart(const world::Pose2& pose, const world::Route& route);
+
+// A file of the shipped scenarios/ folder (fixed at build time), e.g. "tracks/lab.yaml": where a
+// scenario that names it finds it when its own folder has no such file.
+std::filesystem::path ShippedScenarioFile(const std::string& name);
 
 // A file a command takes by name (`table1 --profile`, `transport --profile`): as given when it
 // exists (or is absolute); else the checkout's own (scenarios/platforms/zcu104.yaml from any

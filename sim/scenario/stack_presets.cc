@@ -8,9 +8,9 @@ namespace autonomsim::sim {
 namespace {
 
 const char* Pick(const std::string& name, const char* lab, const char* safe) {
-  if (name == "lab") return lab;
-  if (name == "safe") return safe;
-  throw std::invalid_argument("unknown stack preset '" + name + "' (lab or safe)");
+  const std::optional<StackPreset> preset = FromName<StackPreset>(name);
+  if (!preset) throw std::invalid_argument("unknown stack preset '" + name + "' (lab or safe)");
+  return *preset == StackPreset::kLab ? lab : safe;
 }
 
 // Each option's value in the lab's code (reference §5-§7) and with every fix, by its key path in
@@ -129,12 +129,10 @@ std::optional<std::string> PresetAt(const YAML::Node& node, const std::string& p
 
 }  // namespace
 
-void FleetStackConfig::Validate() const {
-  if (preset) Pick(*preset, "", "");
-}
+void FleetStackConfig::Validate() const {}
 
 const std::vector<std::string>& StackPresetNames() {
-  static const std::vector<std::string> names{"lab", "safe"};
+  static const std::vector<std::string> names = NamesOf<StackPreset>();
   return names;
 }
 

@@ -15,22 +15,26 @@
 #include <string>
 #include <vector>
 
+#include "sim/car/stack_config.h"
 #include "sim/core/config.h"
 
 namespace autonomsim::sim {
 
 // The scenario's top-level `stack:` entry.
 struct FleetStackConfig {
-  std::optional<std::string> preset;  // "lab" or "safe"; none: each option at its default
+  std::optional<StackPreset> preset;  // none: each option at its default
 
   template <class V>
   void Describe(V& v) {
-    v("preset", preset);
+    v("preset", preset,
+      "the lab's stack as published (`lab`) or every fix (`safe`), for every car and the server, "
+      "filling only what the scenario leaves out ([the lab's stack](lab-stack.md))");
   }
   void Validate() const;
 };
 
-// The names a preset may have, in the order docs/lab-stack.md#presets lists them.
+// The names a preset may have (NameTable<StackPreset>), in the order docs/lab-stack.md#presets
+// lists them.
 const std::vector<std::string>& StackPresetNames();
 
 // The option values a preset sets, as the YAML a car entry (`car`) or the scenario's root

@@ -51,7 +51,7 @@ TEST(CruiseControlParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.watchdog_timeout, std::chrono::seconds(1));
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("p_gain", "i_gain_per_s", "d_gain_s", "i_clamp_min", "i_clamp_max",
                                 "antiwindup", "throttle_limit", "watchdog_timeout_s", "period_s",

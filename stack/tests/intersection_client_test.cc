@@ -77,7 +77,7 @@ TEST(IntersectionClientParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.keepalive_period, std::chrono::seconds(1));
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("tick_period_s", "retry_period_s", "keepalive_period_s",
                                 "release_margin_m", "exit_margin_m", "re_request", "latch_wait",

@@ -52,7 +52,7 @@ TEST(LaneControllerParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.pursuit.regulated_min_radius_m, 0.9);
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("pursuit", "collision"));
   params.pursuit.desired_speed_mps = 0.0;

@@ -261,18 +261,18 @@ TEST(LaneMasks, BitIdenticalOnNoiseForBothThresholdSets) {
   bgr(cv::Rect(100, 300, 200, 100)).setTo(cv::Scalar(255, 255, 255));
   bgr(cv::Rect(300, 280, 250, 120)).setTo(cv::Scalar(0, 235, 235));
   const vehicle::CameraModel camera(vehicle::ColorCameraParams());
-  for (const char* set : {"simulation", "real_car"}) {
+  for (const LaneThresholdSet set : {LaneThresholdSet::kSimulation, LaneThresholdSet::kRealCar}) {
     LaneDetectionParams params;
     params.thresholds = set;
     LaneDetector detector(params, CalibrationOf(camera));
     BirdsEyeMasks reference, fast;
     LaneMasksReference(bgr, detector.thresholds(), detector.image_to_birds_eye(), &reference);
     detector.ComputeMasks(bgr, &fast);
-    EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << set;
-    EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << set;
+    EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << ToName(set);
+    EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << ToName(set);
     BirdsEyeRowSums sums;
     detector.ComputeRowSums(bgr, &sums);
-    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << set;
+    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << ToName(set);
   }
 }
 
@@ -280,7 +280,7 @@ TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
   // The dark fast path (eight pixels at a time): dark values up to just below each set's V bound,
   // single line pixels and pixels at exactly the bound scattered among them, in every channel.
   const vehicle::CameraModel camera(vehicle::ColorCameraParams());
-  for (const char* set : {"simulation", "real_car"}) {
+  for (const LaneThresholdSet set : {LaneThresholdSet::kSimulation, LaneThresholdSet::kRealCar}) {
     LaneDetectionParams params;
     params.thresholds = set;
     LaneDetector detector(params, CalibrationOf(camera));
@@ -312,13 +312,14 @@ TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
     BirdsEyeMasks reference, fast;
     LaneMasksReference(bgr, t, detector.image_to_birds_eye(), &reference);
     detector.ComputeMasks(bgr, &fast);
-    EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << set;
-    EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << set;
+    EXPECT_EQ(cv::norm(reference.yellow, fast.yellow, cv::NORM_INF), 0.0) << ToName(set);
+    EXPECT_EQ(cv::norm(reference.white, fast.white, cv::NORM_INF), 0.0) << ToName(set);
     BirdsEyeRowSums sums;
     detector.ComputeRowSums(bgr, &sums);
-    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << set;
+    EXPECT_EQ(sums, RowSumsOfMasks(reference)) << ToName(set);
     // the line pixels were seen (pure white is no line to the real car's thresholds; yellow is)
-    EXPECT_GT(cv::countNonZero(reference.white) + cv::countNonZero(reference.yellow), 1000) << set;
+    EXPECT_GT(cv::countNonZero(reference.white) + cv::countNonZero(reference.yellow), 1000)
+        << ToName(set);
   }
 }
 
@@ -621,16 +622,18 @@ TEST(LaneThresholds, OurRenderedColoursPickTheSimulationSet) {
     }
     return true;
   };
-  const LaneThresholds sim = LaneThresholdsByName("simulation");
-  const LaneThresholds real = LaneThresholdsByName("real_car");
+  const LaneThresholds sim = LaneThresholdsOf(LaneThresholdSet::kSimulation);
+  const LaneThresholds real = LaneThresholdsOf(LaneThresholdSet::kRealCar);
   EXPECT_TRUE(in(sim.white, 0));
   EXPECT_TRUE(in(sim.yellow, 1));
   EXPECT_FALSE(in(sim.white, 2));
   EXPECT_FALSE(in(sim.yellow, 2));
   EXPECT_FALSE(in(real.white, 0));  // pure white has H = 0, outside the real car's 70–90
   EXPECT_TRUE(in(real.yellow, 1));
-  EXPECT_EQ(LaneDetectionParams{}.thresholds, "simulation");
-  EXPECT_THROW(LaneThresholdsByName("gazebo"), std::invalid_argument);
+  EXPECT_EQ(LaneDetectionParams{}.thresholds, LaneThresholdSet::kSimulation);
+  // the config reader reads the set by its name and refuses any other
+  EXPECT_EQ(FromName<LaneThresholdSet>("real_car"), LaneThresholdSet::kRealCar);
+  EXPECT_EQ(FromName<LaneThresholdSet>("gazebo"), std::nullopt);
 }
 
 TEST(LaneThresholds, HsvMatchesOpenCvOnEveryColour) {
@@ -782,9 +785,6 @@ TEST(LaneParams, ValidateNamesTheBadKey) {
     return std::string();
   };
   LaneDetectionParams bad = params;
-  bad.thresholds = "gazebo";
-  EXPECT_NE(message(bad).find("thresholds"), std::string::npos);
-  bad = params;
   std::swap(bad.warp_source_px[0], bad.warp_source_px[1]);
   EXPECT_NE(message(bad).find("warp_source_px"), std::string::npos);
   bad = params;

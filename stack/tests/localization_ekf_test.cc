@@ -105,7 +105,7 @@ TEST(LocalizationEkfParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.imu_yaw_rate_variance_rad2_per_s2, 0.04);
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("period_s", "sensor_timeout_s", "imu_yaw_relative",
                                 "q_position_m2_per_s", "q_yaw_rad2_per_s", "q_speed_m2_per_s3",

@@ -100,17 +100,21 @@ TEST(PathFollowerParamsTest, DefaultsKeysAndValidation) {
   EXPECT_EQ(params.collision.footprint_half_width_m, 0.135);
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys,
               ElementsAre("pursuit", "collision", "goal_tolerance_m", "yaw_goal_tolerance_rad",
                           "max_robot_pose_search_dist_m", "max_costmap_extent_m"));
   std::vector<std::string> pursuit_keys;
-  auto visit_pursuit = [&](const std::string& key, auto&) { pursuit_keys.push_back(key); };
+  auto visit_pursuit = [&](const std::string& key, auto&, auto&&...) {
+    pursuit_keys.push_back(key);
+  };
   params.pursuit.Describe(visit_pursuit);
   EXPECT_EQ(pursuit_keys.size(), 12u);
   std::vector<std::string> collision_keys;
-  auto visit_collision = [&](const std::string& key, auto&) { collision_keys.push_back(key); };
+  auto visit_collision = [&](const std::string& key, auto&, auto&&...) {
+    collision_keys.push_back(key);
+  };
   params.collision.Describe(visit_collision);
   EXPECT_THAT(collision_keys, ElementsAre("model", "horizon_s", "step_m", "footprint_half_length_m",
                                           "footprint_half_width_m", "footprint_sample_spacing_m"));

@@ -307,7 +307,13 @@ TEST(CliTest, UnusableInputExitsTwo) {
 TEST(CliTest, ANegativeSeedOrAFolderAsScenarioIsUnusableInput) {
   Result r = Cli("run scenarios/lab_two_cars_oracle.yaml --seed -1");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("a seed is a whole number >= 0, got '-1'"));
+  // issue 34: a command-line mistake opens with "error: " as every other error does
+  EXPECT_THAT(r.output, ::testing::StartsWith("error: --seed: a seed is a whole number >= 0, got "
+                                              "'-1'\nRun with --help for more information."));
+  r = Cli("run scenarios/lab_two_cars_oracle.yaml --bogus");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, ::testing::StartsWith("error: The following argument was not expected: "
+                                              "--bogus"));
   r = Cli("run scenarios/tracks");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_THAT(r.output, HasSubstr("scenarios/tracks: is a folder, not a file"));

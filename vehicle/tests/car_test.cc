@@ -140,7 +140,7 @@ TEST(CarParamsTest, RejectsNonsenseNamingTheKey) {
 TEST(CarParamsTest, DescribeListsEveryKeyOnce) {
   CarParams params;
   std::vector<std::string> keys;
-  auto visit = [&keys](const char* key, auto&) { keys.emplace_back(key); };
+  auto visit = [&keys](const char* key, auto&, auto&&...) { keys.emplace_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ::testing::Contains("top_speed_mps"));
   EXPECT_THAT(keys, ::testing::Contains("motor_time_constant_s"));

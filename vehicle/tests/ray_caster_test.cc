@@ -706,6 +706,26 @@ TEST(RayCasterTest, OutsideTheRasterIsBareFloorAndAboveTheHorizonTheSurround) {
             (Bgr{10, 20, 30}));
 }
 
+// Issue 34: these messages said "got 0.000000"; a number reads as the user wrote it.
+TEST(RayCasterTest, ACameraOnTheFloorIsRefusedNamingTheHeightAsWritten) {
+  CameraParams params = DepthCameraParams();
+  params.mount.z_m = 0.0;
+  try {
+    CameraRays rays{CameraModel(params)};
+    FAIL() << "a camera at z 0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), ::testing::EndsWith("(mount.z_m > 0), got 0"));
+  }
+  CameraNoiseParams noise;
+  noise.color_stddev = 65.0;
+  try {
+    noise.Validate();
+    FAIL() << "color_stddev 65 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "color_stddev must be in [0, 64], got 65");
+  }
+}
+
 TEST(CameraNoiseTest, OffIsExactOnIsSeededAndScaledByDistanceSquared) {
   const CameraParams params = DepthCameraParams();
   world::FloorRaster raster = BlackFloor();

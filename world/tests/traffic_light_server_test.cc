@@ -36,7 +36,7 @@ TEST(TrafficLightServerParamsTest, DefaultsAndKeys) {
   EXPECT_EQ(params.lease, std::chrono::seconds(5));
   EXPECT_NO_THROW(params.Validate());
   std::vector<std::string> keys;
-  auto visit = [&](const std::string& key, auto&) { keys.push_back(key); };
+  auto visit = [&](const std::string& key, auto&, auto&&...) { keys.push_back(key); };
   params.Describe(visit);
   EXPECT_THAT(keys, ElementsAre("policy", "lease_s"));
 }

@@ -76,7 +76,8 @@ TEST(PlatformKnobs, CostScaleMultipliesSoftwareWorkAndHardwareFabricTime) {
 
 TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
   PlatformConfig fixed;
-  fixed.cost_override["work"] = CostDistributionConfig{.distribution = "fixed", .value_s = 0.012};
+  fixed.cost_override["work"] =
+      CostDistributionConfig{.distribution = CostDistribution::kFixed, .value_s = 0.012};
   EXPECT_NEAR(WorkTurnarounds(fixed).min, 12.0, 1e-6);
   EXPECT_NEAR(WorkTurnarounds(fixed).max, 12.0, 1e-6);
   fixed.cost_scale["work"] = 2.0;  // applies on top of the override
@@ -84,8 +85,8 @@ TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
   EXPECT_NEAR(WorkTurnarounds(fixed).max, 24.0, 1e-6);
 
   PlatformConfig uniform;
-  uniform.cost_override["work"] =
-      CostDistributionConfig{.distribution = "uniform", .min_s = 0.010, .max_s = 0.020};
+  uniform.cost_override["work"] = CostDistributionConfig{
+      .distribution = CostDistribution::kUniform, .min_s = 0.010, .max_s = 0.020};
   const Stats a = WorkTurnarounds(uniform, 7);
   ASSERT_EQ(a.count, 51u);
   EXPECT_GE(a.min, 10.0 - 1e-6);
@@ -97,8 +98,8 @@ TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
   EXPECT_NE(a.mean, WorkTurnarounds(uniform, 8).mean);
 
   PlatformConfig lognormal;
-  lognormal.cost_override["work"] =
-      CostDistributionConfig{.distribution = "lognormal", .mean_s = 0.020, .stddev_s = 0.005};
+  lognormal.cost_override["work"] = CostDistributionConfig{
+      .distribution = CostDistribution::kLognormal, .mean_s = 0.020, .stddev_s = 0.005};
   const Stats l = WorkTurnarounds(lognormal, 3);
   EXPECT_GT(l.min, 0.0);
   EXPECT_NEAR(l.mean, 20.0, 2.5);  // 51 draws: the sample mean within ~3 standard errors
@@ -106,7 +107,8 @@ TEST(PlatformKnobs, CostOverrideReplacesTheCostWithASeededDraw) {
 
 TEST(PlatformKnobs, DrawsFollowTheirDistributions) {
   Rng rng(11);
-  const CostDistributionConfig normal{.distribution = "normal", .mean_s = 0.0, .stddev_s = 1.0};
+  const CostDistributionConfig normal{
+      .distribution = CostDistribution::kNormal, .mean_s = 0.0, .stddev_s = 1.0};
   int zeros = 0;
   for (int i = 0; i < 1000; ++i) {
     const double x = DrawCostSeconds(normal, rng);
@@ -115,7 +117,8 @@ TEST(PlatformKnobs, DrawsFollowTheirDistributions) {
   }
   EXPECT_GT(zeros, 400);
   EXPECT_LT(zeros, 600);
-  const CostDistributionConfig logn{.distribution = "lognormal", .mean_s = 2.0, .stddev_s = 1.0};
+  const CostDistributionConfig logn{
+      .distribution = CostDistribution::kLognormal, .mean_s = 2.0, .stddev_s = 1.0};
   double sum = 0.0, sum2 = 0.0;
   const int n = 20000;
   for (int i = 0; i < n; ++i) {
@@ -169,6 +172,10 @@ TEST(PlatformKnobs, BadValuesAreConfigErrorsNamingTheKey) {
       {"{cost_scale: {a: 0}}", "cost_scale.a must be finite and > 0"},
       {"{cost_override: {a: {distribution: uniform, min_s: 2, max_s: 1}}}", "min_s must be <="},
       {"{cost_override: {a: {distribution: gamma, value_s: 1}}}", "distribution must be"},
+      // a closed set read as its names: they are listed, a typo is named
+      {"{cost_override: {a: {distribution: lognormla, mean_s: 1, stddev_s: 1}}}",
+       "distribution must be 'fixed', 'uniform', 'normal' or 'lognormal', got 'lognormla' (did "
+       "you mean 'lognormal'?)"},
       {"{cost_override: {a: {distribution: fixed}}}", "needs value_s"},
       {"{cost_override: {a: {distribution: fixed, value_s: 1, mean_s: 2}}}", "takes no mean_s"},
   };

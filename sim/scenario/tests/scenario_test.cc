@@ -164,11 +164,40 @@ INSTANTIATE_TEST_SUITE_P(
                    Replace(kValid, "id: 1", "id: 12"),
                    {},
                    {F("car_id") + ":9:9: cars[1].id: id must be a single digit"}},
-        BrokenCase{"duplicate_car", Replace(kValid, "id: 1", "id: 0"), {}, {"duplicate car id 0"}},
+        // issue 34: once at the top level, line 1; now at the second car's id, naming the first
+        BrokenCase{
+            "duplicate_car",
+            Replace(kValid, "id: 1", "id: 0"),
+            {},
+            {F("duplicate_car") + ":9:9: cars[1].id: duplicate car id 0: cars[0] has it too"}},
+        BrokenCase{"duplicate_obstacle",
+                   std::string(kValid) + "obstacles:\n  - {name: b}\n  - {name: b, x_m: 1}\n",
+                   {},
+                   {F("duplicate_obstacle") +
+                    ":17:12: obstacles[1].name: duplicate obstacle name 'b': obstacles[0] has it "
+                    "too"}},
         BrokenCase{"unknown_route",
                    Replace(kValid, "route: inner_loop", "route: figure_nine"),
                    {},
                    {F("unknown_route") + ":10:12: cars[1].route:", "figure_nine", "south_loop"}},
+        BrokenCase{"route_typo",
+                   Replace(kValid, "route: inner_loop", "route: inner_lop"),
+                   {},
+                   {F("route_typo") + ":10:12: cars[1].route: unknown route 'inner_lop' (did you "
+                                      "mean 'inner_loop'?); known routes: inner_loop, north_loop, "
+                                      "outer_loop, south_loop"}},
+        // issue 34: the start pose's error named neither the track's poses nor the closest
+        BrokenCase{"unknown_start",
+                   Replace(kValid, "start: real_car", "start: real_cra"),
+                   {},
+                   {F("unknown_start") + ":8:12: cars[0].start: unknown start pose 'real_cra' (did "
+                                         "you mean 'real_car'?); known start poses: gazebo, "
+                                         "inner_north, real_car"}},
+        BrokenCase{"unknown_start_far_from_any",
+                   Replace(kValid, "start: real_car", "start: pit_lane"),
+                   {},
+                   {"cars[0].start: unknown start pose 'pit_lane'; known start poses: gazebo, "
+                    "inner_north, real_car"}},
         BrokenCase{"lanes_disconnected",
                    Replace(kValid, "route: inner_loop", "lanes: [outer_south, middle_west]"),
                    {},
@@ -213,6 +242,14 @@ INSTANTIATE_TEST_SUITE_P(
             Replace(kValid, "- no_collision:", "- no_collision: {laps: 3}"),
             {},
             {"expect[0].no_collision.laps: 'no_collision' takes no key 'laps' (its keys: car)"}},
+        // issue 34 asked that a fault's unknown key list only its own kind's keys: it does (since
+        // the reference's commit), this keeps it so
+        BrokenCase{"fault_argument",
+                   std::string(kValid) +
+                       "faults:\n  - node_crash: {car: 0, node: lane_detection, for_s: 2}\n",
+                   {},
+                   {F("fault_argument") + ":16:48: faults[0].node_crash.for_s: 'node_crash' takes "
+                                          "no key 'for_s' (its keys: at_s, car, node)"}},
         BrokenCase{"expect_two_kinds",
                    Replace(kValid, "- no_collision:", "- {no_collision: , intersection_mutex: }"),
                    {},
@@ -226,6 +263,12 @@ INSTANTIATE_TEST_SUITE_P(
                    {},
                    {F("obstacle_times") + ":16:41: obstacles[0].disappear_s: disappear_s must be "
                                           "after appear_s"}},
+        // issue 34: a negative height was reported at length_m's line
+        BrokenCase{"obstacle_negative_height",
+                   std::string(kValid) + "obstacles:\n  - {name: b, height_m: -0.1}\n",
+                   {},
+                   {F("obstacle_negative_height") +
+                    ":16:25: obstacles[0].height_m: height_m must be > 0, got -0.1"}},
         BrokenCase{"no_cars", "name: empty\ncars: []\n", {}, {"cars must not be empty"}},
         // issue 34: `run STUDY.yaml` said "unknown key 'scenario'"
         BrokenCase{"a_study",
@@ -273,6 +316,11 @@ INSTANTIATE_TEST_SUITE_P(
                    kValid,
                    {"cars[0].driver=autopilot"},
                    {"--set cars[0].driver", "driver must be 'oracle'", "or 'stack'"}},
+        BrokenCase{"lane_thresholds_unknown",
+                   kValid,
+                   {"cars[0].perception.lane_detection.thresholds=real_cars"},
+                   {"--set cars[0].perception.lane_detection.thresholds: thresholds must be "
+                    "'simulation' or 'real_car', got 'real_cars' (did you mean 'real_car'?)"}},
         BrokenCase{
             "mapping_without_board",
             Replace(kValid, "start: real_car",
@@ -316,6 +364,21 @@ INSTANTIATE_TEST_SUITE_P(
                    {"cars[0].driver=stack"},
                    {"cars[0]", "set perception.enabled: true"}}),
     [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return param_info.param.name; });
+
+// Issue 34: a number in a message reads as the user wrote it ("got 65", not "got 65.000000").
+TEST(ScenarioTest, AMessageWritesABadNumberAsTheUserWouldWriteIt) {
+  ScenarioFile file("number_in_message", kValid);
+  for (const auto& [key, value] :
+       {std::pair{"color_stddev", "65"}, std::pair{"depth_stddev_per_m", "0.25"}}) {
+    try {
+      LoadScenario(file.path(),
+                   {std::string("cars[0].sensors.color_camera.noise.") + key + "=" + value});
+      FAIL() << key << ": no error";
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), ::testing::EndsWith(std::string(", got ") + value)) << key;
+    }
+  }
+}
 
 // Issue 15: a scenario kept outside scenarios/ finds the shipped track and profile.
 TEST(ScenarioTest, AScenarioAnywhereFindsTheShippedTrackAndProfile) {

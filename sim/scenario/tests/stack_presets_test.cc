@@ -188,15 +188,15 @@ TEST(StackPresetsTest, EveryShippedScenarioHeaderNamesItsDeparturesFromTheLab) {
             << "), and the header does not name `" << name << "`";
       }
     };
-    const std::optional<std::string>& fleet = loaded.scenario.stack.preset;
+    const std::optional<StackPreset>& fleet = loaded.scenario.stack.preset;
     for (std::size_t i = 0; i < loaded.scenario.cars.size(); ++i) {
       const CarConfig& car = loaded.scenario.cars[i];
       if (car.driver != Driver::kStack) continue;
-      const std::optional<std::string>& own = car.stack.preset ? car.stack.preset : fleet;
-      check(scenario["cars"][i], car_keys, car_safe, own == "safe",
+      const std::optional<StackPreset>& own = car.stack.preset ? car.stack.preset : fleet;
+      check(scenario["cars"][i], car_keys, car_safe, own == StackPreset::kSafe,
             "cars[" + std::to_string(i) + "].");
     }
-    check(scenario, scenario_keys, scenario_safe, fleet == "safe", "");
+    check(scenario, scenario_keys, scenario_safe, fleet == StackPreset::kSafe, "");
   }
 }
 
