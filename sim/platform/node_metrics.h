@@ -31,7 +31,7 @@ struct MetricsOptions {
   // CPU is in the busy counter and in each node's cpu_percent either way).
   bool trace_receive{false};
   // The trace's busy-cores counter: the mean over each period (to 0.001 cores), written when it
-  // changes; zero: a value at every change (some 60 % of a trace's events).
+  // changes; zero: a value at every change (1.28 M of the default run's 1.75 M events).
   Duration trace_busy_period{std::chrono::milliseconds(10)};
 };
 
