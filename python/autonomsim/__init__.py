@@ -326,7 +326,8 @@ class Simulation:
     ``advance_to(t)`` runs every event before ``t`` (those at ``t`` come with the next piece), so
     a fault injected at ``time_s`` strikes at that instant among its events, as the scenario's own
     would. Advancing in any number of pieces, then ``finish``, gives the same ``result_sha256``
-    as one ``run``. Several simulations live in one process, each used by one thread at a time.
+    as one ``run``. Several simulations live in one process; one simulation may be shared by
+    threads (each call waits for the one in progress).
     """
 
     def __init__(self, scenario: Union[Scenario, PathLike],
@@ -338,7 +339,8 @@ class Simulation:
     @property
     def time_s(self) -> float:
         """The simulated time advanced to (s)."""
-        return self._core.time_s
+        with self._lock:
+            return self._core.time_s
 
     @property
     def end_s(self) -> float:
@@ -375,23 +377,28 @@ class Simulation:
     @property
     def cars(self) -> list:
         """Each car's CarState now, in the scenario's order."""
-        return [CarState(c) for c in self._core.cars()]
+        with self._lock:
+            return [CarState(c) for c in self._core.cars()]
 
     @property
     def server(self) -> dict:
         """The traffic-light server now: ``{intersection id: {"holder": car or None, "queue":
         [cars]}}`` (the queue is empty with v2i.link: mqtt, where the server is another process)."""
-        return {a["intersection"]: {"holder": a["holder"], "queue": a["queue"]}
-                for a in self._core.server()}
+        with self._lock:
+            areas = self._core.server()
+        return {a["intersection"]: {"holder": a["holder"], "queue": a["queue"]} for a in areas}
 
     @property
     def boards(self) -> list:
         """The BoardState of each car that has a board, its metrics so far."""
-        return [BoardState(b) for b in self._core.boards()]
+        with self._lock:
+            return [BoardState(b) for b in self._core.boards()]
 
     def events_since(self, t_s: float = 0.0) -> list:
         """The events (dicts, as events.jsonl's lines) at or after ``t_s`` (s) so far."""
-        return json.loads(self._core.events_since_json(float(t_s)))
+        with self._lock:
+            text = self._core.events_since_json(float(t_s))
+        return json.loads(text)
 
     def inject(self, fault: Mapping[str, Any]) -> None:
         """Strikes a fault now: a ``faults:`` entry (docs/faults.md) with at_s = ``time_s``.
