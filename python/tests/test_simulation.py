@@ -119,3 +119,41 @@ def test_stepping_outside_the_run_is_refused():
     sim.finish()
     with pytest.raises(RuntimeError):
         sim.finish()
+
+
+def test_the_server_shows_the_holder_the_grant_events_name():
+    scenario = autonomsim.load(ORACLE, set={"duration_s": 30})
+    events = autonomsim.run(scenario).events
+    grant = next(e for e in events if e["type"] == "grant")
+    sim = autonomsim.Simulation(scenario)
+    sim.advance_to(grant["t_s"])  # the grant is among the events at its instant: not yet
+    assert sim.server[grant["intersection"]]["holder"] != grant["car"]
+    sim.advance_to(grant["t_s"] + 1e-6)
+    assert sim.server[grant["intersection"]]["holder"] == grant["car"]
+    assert set(sim.server) == {0, 1}
+
+
+def test_the_server_shows_the_car_a_denial_queued():
+    # fifo: a request for a held intersection is denied and the car queued until it is granted
+    scenario = autonomsim.load(ORACLE, set={"duration_s": 30})
+    events = autonomsim.run(scenario).events
+    denied = next(e for e in events if e["type"] == "denied")
+    area = denied["intersection"]
+    sim = autonomsim.Simulation(scenario)
+    sim.advance_to(denied["t_s"] + 1e-6)
+    assert denied["car"] in sim.server[area]["queue"]
+    assert sim.server[area]["holder"] not in (None, denied["car"])
+    granted = next(e for e in events if e["type"] == "grant" and e["car"] == denied["car"]
+                   and e["intersection"] == area and e["t_s"] > denied["t_s"])
+    sim.advance_to(granted["t_s"] + 1e-6)
+    assert sim.server[area] == {"holder": denied["car"], "queue": []}
+
+
+def test_finish_writes_the_folder_run_writes(tmp_path):
+    scenario = autonomsim.load(ORACLE, set={"duration_s": 3})
+    autonomsim.run(scenario, out=tmp_path / "whole")
+    sim = autonomsim.Simulation(scenario)
+    sim.advance_to(1.5)
+    sim.finish(out=tmp_path / "pieces")
+    for name in ("trajectory.csv", "events.jsonl"):
+        assert (tmp_path / "pieces" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes()
