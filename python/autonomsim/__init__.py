@@ -52,20 +52,27 @@ override), ``.key`` (the key path such as ``cars[0].laps``, or None) and ``.mess
 message). A ValueError.
 """
 
-# "file:line:col: key.path: message" (sim/core/config.h); an override's has no line
+# "file:line:col: key.path: message" (sim/core/config.h); "--set key.path: message" for an
+# override; "file: message" for a file that cannot be read
 _LOCATED = re.compile(r"^(?P<file>[^:\n]+?):(?P<line>\d+):(?P<col>\d+): (?P<rest>.*)$", re.S)
 _KEYED = re.compile(r"^(?P<key>[A-Za-z_][\w.\[\]]*): ")
+_FILE_SUFFIXES = (".yaml", ".yml", ".json", ".csv")
 
 
 def _error_parts(message: str) -> tuple:
-    file = line = key = None
+    file = line = None
     rest = message
-    located = _LOCATED.match(message)
-    if located:
-        file, line, rest = located["file"], int(located["line"]), located["rest"]
+    if message.startswith("--set "):
+        rest = message[len("--set "):]
+    else:
+        located = _LOCATED.match(message)
+        head, separator, tail = message.partition(": ")
+        if located:
+            file, line, rest = located["file"], int(located["line"]), located["rest"]
+        elif separator and ("/" in head or head.endswith(_FILE_SUFFIXES)):
+            file, rest = head, tail
     keyed = _KEYED.match(rest)
-    if keyed:
-        key = keyed["key"]
+    key = keyed["key"] if keyed and not keyed["key"].endswith(_FILE_SUFFIXES) else None
     return file, line, key
 
 
