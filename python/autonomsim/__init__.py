@@ -466,7 +466,7 @@ def sweep(study_or_scenario: PathLike, vary=None, set: Optional[Mapping[str, Any
     ``study_or_scenario``: a study file (scenarios/studies/) or a scenario file. ``vary``:
     ``{key: [values]}`` (each value as in ``set``) or ``{key: "start:stop:count"}``, or a list
     of ``--vary`` strings ("key=a,b,c"); added to a study's own. ``set``: as for ``load``, applied
-    to every run. ``repeat``: seeds per grid point. ``jobs``: threads (None: one per CPU).
+    to every run. ``repeat``: seeds per grid point (None: a study's own, 1 for a scenario). ``jobs``: threads (None: one per CPU).
     ``out``: the sweep's folder (docs/sweeps.md); a sweep run again into it is resumed (finished
     runs are not redone), as the CLI's; None: a new temporary folder. ``plots``: draw plots/
     (gnuplot). Returns results.csv: a pandas DataFrame when pandas is installed, else a dict of

@@ -32,7 +32,18 @@ def test_a_sweep_gives_the_clis_table_and_resumes(tmp_path):
 
 def test_a_study_file_sweeps_its_grid(tmp_path):
     study = tmp_path / "study.yaml"
-    study.write_text(f"scenario: {REPO / ORACLE}\nset: [duration_s=3]\n"
+    study.write_text(f"scenario: {REPO / ORACLE}\nset: [duration_s=3]\nrepeat: 2\n"
                      "vary:\n  - key: v2i.loss\n    values: [0.0, 0.5]\n")
     table = autonomsim.sweep(study, out=tmp_path / "out", jobs=1)
-    assert list(table["v2i.loss"]) == [0.0, 0.5]
+    assert list(table["v2i.loss"]) == [0.0, 0.0, 0.5, 0.5]  # the study's 2 seeds a point
+    once = autonomsim.sweep(study, repeat=1, out=tmp_path / "once", jobs=1)
+    assert list(once["v2i.loss"]) == [0.0, 0.5]
+
+
+def test_without_pandas_the_table_is_a_dict_of_columns(tmp_path, monkeypatch):
+    monkeypatch.setitem(__import__("sys").modules, "pandas", None)  # import pandas fails
+    table = autonomsim.sweep(ORACLE, vary={"v2i.loss": [0.0, 0.5]}, set={"duration_s": 3},
+                             out=tmp_path / "out", jobs=1)
+    assert isinstance(table, dict)
+    assert table["v2i.loss"] == [0, 0.5]
+    assert table["index"] == [0, 1]
