@@ -463,6 +463,9 @@ void Simulation::Finish() {
 
 void Simulation::Inject(FaultClause fault) {
   if (impl_->finished) throw std::logic_error("Simulation::Inject: the run is over");
+  if (impl_->realtime_link) {  // its faults are checked against the link at load
+    throw std::logic_error("Simulation::Inject: not into a real-time run (v2i.link: realtime)");
+  }
   const std::optional<int> car = FaultCar(fault);
   if (car && !impl_->agent_index.contains(*car)) {
     throw ConfigError(

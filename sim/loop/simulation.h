@@ -43,7 +43,8 @@ class Simulation {
   void Finish();
   bool finished() const;
   // A fault as a scenario's `faults:` entry has it, its at_s replaced by now(): it strikes at
-  // now() (ConfigError for a car or node the run does not have).
+  // now() (ConfigError for a car or node the run does not have; std::logic_error after Finish
+  // and for a real-time run).
   void Inject(FaultClause fault);
 
   // What the run is now (between pieces; ground truth unless named an estimate).
