@@ -161,12 +161,20 @@ void Stepper::Inject(const std::string& fault_text) {
   } catch (const YAML::Exception& e) {
     throw sim::ConfigError("inject: " + std::string(e.what()));
   }
-  const sim::ConfigSource source{.file = "inject"};
-  sim::FaultClause fault = sim::ReadConfig<sim::FaultClause>(node, source, "fault");
+  sim::FaultClause fault;
+  try {
+    fault = sim::ReadConfig<sim::FaultClause>(node, sim::ConfigSource{.file = "inject"});
+  } catch (const sim::ConfigError& e) {
+    // "inject:LINE:COL: kind.key: message": the line and column are the JSON text's, which the
+    // caller never saw; the key path alone locates it
+    const std::string message = e.what();
+    const std::size_t key = message.find(": ");
+    throw sim::ConfigError(key == std::string::npos ? message : message.substr(key + 2));
+  }
   try {
     std::visit([](const auto& f) { f.Validate(); }, fault);
   } catch (const std::invalid_argument& e) {
-    throw sim::ConfigError("inject: " + std::string(e.what()));
+    throw sim::ConfigError(std::string(ToName(sim::KindOf(fault))) + ": " + e.what());
   }
   simulation_->Inject(std::move(fault));
 }

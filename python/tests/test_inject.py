@@ -33,8 +33,13 @@ def test_a_fault_for_a_car_the_run_lacks_is_a_scenario_error():
     with pytest.raises(autonomsim.ScenarioError) as caught:
         sim.inject({"car_stall": {"car": 7}})
     assert "car 7" in str(caught.value)
+    assert caught.value.key == "car_stall.car"
     with pytest.raises(autonomsim.ScenarioError) as caught:
         sim.inject({"car_stal": {"car": 0}})
-    assert "car_stal" in str(caught.value)
+    assert "did you mean 'car_stall'" in str(caught.value)
+    assert (caught.value.key, caught.value.file, caught.value.line) == ("car_stal", None, None)
+    with pytest.raises(autonomsim.ScenarioError) as caught:
+        sim.inject({"car_stall": {"car": 0, "for_s": -1.0}})
+    assert caught.value.key == "car_stall.for_s"
     with pytest.raises(autonomsim.ScenarioError):
         sim.inject({"node_crash": {"car": 0, "node": "lane_planner"}})  # an oracle car: no board
