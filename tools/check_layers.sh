@@ -23,6 +23,7 @@ declare -A uses=(
   [sim/study]="sim/results"
   [bench]="sim/study"
   [tools]="sim/study"
+  [python]="sim/study"  # the Python module: over sim/, as the CLI
   [tools/tlserver]="world sim/mqtt"
 )
 test_fixtures="vehicle sim/core"

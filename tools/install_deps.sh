@@ -15,6 +15,11 @@ packages=(
   clang-format  # .ci/run checks every C++ file against .clang-format before the builds
   chromium  # the replay report's browser test loads it in headless chromium
   gnuplot-nox  # draws a sweep's plots (pngcairo)
+  # the Python module (python/, docs/python.md): pybind11 and the headers of Debian's python3; its
+  # tests (pytest) and docs example (numpy, pandas, matplotlib); python3-venv: pip install into a
+  # virtual environment
+  pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pandas python3-matplotlib
+  python3-pytest python3-venv python3-setuptools python3-pip
   python3-paho-mqtt  # the real-time test's stand-in of the lab's vtl.py (tools/tests/vtl_standin.py)
   cyclonedds-tools  # ddsperf: bench/dds_vs_cyclone.sh measures real Cyclone DDS against the model
   # the GL camera backend and 3D views: EGL and OpenGL ES headers (glvnd), and Mesa's EGL driver

@@ -140,6 +140,7 @@ void Simulation::Impl::AddStack(CarAgent* agent, SensorSuite* suite,
                 (estimate.X_map_base.position() - agent->car->pose().position()).norm();
             m.max_localization_error_m = std::max(m.max_localization_error_m.value_or(0.0), error);
             m.final_localization_error_m = error;
+            agent->estimate = estimate.X_map_base;
           },
       .on_control =
           [agent](bool follow_path, bool collision) {

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <numbers>
 
 #include "sim/loop/simulation_impl.h"
@@ -95,9 +96,19 @@ FaultActions ActionsOf(const CarStallFault& f, const FaultTargets& sim) {
 // The node's board; it has the node (else the scenario's error, located at the fault's node).
 NodeGraph& BoardWithNode(const FaultTargets& sim, const FaultClause& fault, int car,
                          const std::string& node) {
-  NodeGraph& graph = sim.boards[sim.agent_index.at(car)]->graph();
+  const std::vector<FaultClause>& listed = sim.loaded.scenario.faults;
+  const bool injected = std::none_of(listed.begin(), listed.end(),
+                                     [&](const FaultClause& f) { return &f == &fault; });
+  const std::unique_ptr<Board>& board = sim.boards[sim.agent_index.at(car)];
+  if (injected && (!board || !board->graph().HasNode(node))) {  // Simulation::Inject's
+    throw ConfigError(fmt::format(
+        "{}.node: car {} has no node '{}'{}", ToName(KindOf(fault)), car, node,
+        board ? "; its nodes: " + fmt::format("{}", fmt::join(board->graph().node_names(), ", "))
+              : " (no board)"));
+  }
+  NodeGraph& graph = board->graph();
   if (!graph.HasNode(node)) {
-    const std::size_t i = static_cast<std::size_t>(&fault - sim.loaded.scenario.faults.data());
+    const std::size_t i = static_cast<std::size_t>(&fault - listed.data());
     throw sim.loaded.ErrorAt(fmt::format("faults[{}].{}.node", i, ToName(KindOf(fault))),
                              fmt::format("car {}'s board has no node '{}'; its nodes: {}", car,
                                          node, fmt::join(graph.node_names(), ", ")));
@@ -152,46 +163,48 @@ FaultActions ActionsOf(const LocalizationJumpFault& f, const FaultTargets& sim) 
 }  // namespace
 
 void Simulation::Impl::ScheduleFaults() {
+  for (const FaultClause& fault : scenario.faults) ScheduleFault(fault);
+}
+
+void Simulation::Impl::ScheduleFault(const FaultClause& fault) {
   const FaultTargets targets{loaded, agents, agent_index, server, link.get(), boards, sensors};
-  for (const FaultClause& fault : scenario.faults) {
-    FaultActions actions = std::visit(
-        [&](const auto& f) {
-          if constexpr (requires { ActionsOf(f, targets, fault); }) {
-            return ActionsOf(f, targets, fault);
-          } else {
-            return ActionsOf(f, targets);
-          }
-        },
-        fault);
-    // the events, and the actions at their instants
-    const FaultKind kind = KindOf(fault);
-    const Time begin_at = FromSeconds(FaultStart_s(fault));
-    if (begin_at >= end) continue;  // never strikes (the scenario's load warned)
-    const int car = FaultCar(fault).value_or(-1);
-    kernel.ScheduleAt(
-        begin_at,
-        [this, begin = std::move(actions.begin), kind, car, detail = DescribeFault(fault)] {
-          Emit(Event{.t = kernel.Now(),
-                     .type = EventKind::kFaultBegin,
-                     .car = car,
-                     .fault = kind,
-                     .detail = detail});
-          begin();
-        },
-        kPriorityWorldChange);
-    const std::optional<double> for_s = FaultDuration_s(fault);
-    std::optional<Time> end_at;
-    if (for_s) end_at = begin_at + FromSeconds(*for_s);
-    if (!for_s && !LastsWithoutEnd(fault)) end_at = begin_at;
-    if (!end_at || *end_at > end) continue;
-    kernel.ScheduleAt(
-        *end_at,
-        [this, finish = std::move(actions.end), kind, car] {
-          if (finish) finish();
-          Emit(Event{.t = kernel.Now(), .type = EventKind::kFaultEnd, .car = car, .fault = kind});
-        },
-        kPriorityWorldChange);
-  }
+  FaultActions actions = std::visit(
+      [&](const auto& f) {
+        if constexpr (requires { ActionsOf(f, targets, fault); }) {
+          return ActionsOf(f, targets, fault);
+        } else {
+          return ActionsOf(f, targets);
+        }
+      },
+      fault);
+  // the events, and the actions at their instants
+  const FaultKind kind = KindOf(fault);
+  const Time begin_at = FromSeconds(FaultStart_s(fault));
+  if (begin_at >= end) return;  // never strikes (the scenario's load warned)
+  const int car = FaultCar(fault).value_or(-1);
+  kernel.ScheduleAt(
+      begin_at,
+      [this, begin = std::move(actions.begin), kind, car, detail = DescribeFault(fault)] {
+        Emit(Event{.t = kernel.Now(),
+                   .type = EventKind::kFaultBegin,
+                   .car = car,
+                   .fault = kind,
+                   .detail = detail});
+        begin();
+      },
+      kPriorityWorldChange);
+  const std::optional<double> for_s = FaultDuration_s(fault);
+  std::optional<Time> end_at;
+  if (for_s) end_at = begin_at + FromSeconds(*for_s);
+  if (!for_s && !LastsWithoutEnd(fault)) end_at = begin_at;
+  if (!end_at || *end_at > end) return;
+  kernel.ScheduleAt(
+      *end_at,
+      [this, finish = std::move(actions.end), kind, car] {
+        if (finish) finish();
+        Emit(Event{.t = kernel.Now(), .type = EventKind::kFaultEnd, .car = car, .fault = kind});
+      },
+      kPriorityWorldChange);
 }
 
 }  // namespace autonomsim::sim

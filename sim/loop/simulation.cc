@@ -1,7 +1,10 @@
 #include "sim/loop/simulation.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "sim/loop/area_sensing.h"
 #include "sim/loop/simulation_impl.h"
@@ -410,6 +413,7 @@ Simulation::Simulation(const LoadedScenario& scenario, std::shared_ptr<RecordSto
 Simulation::~Simulation() = default;
 
 void Simulation::Run(const std::function<void(Time)>& progress, Duration progress_period) {
+  if (impl_->finished) throw std::logic_error("Simulation::Run: the run is over");
   if (progress) {
     impl_->kernel.SchedulePeriodic(
         progress_period, progress_period, [this, &progress] { progress(impl_->kernel.Now()); },
@@ -421,6 +425,98 @@ void Simulation::Run(const std::function<void(Time)>& progress, Duration progres
     impl_->kernel.RunUntil(impl_->end);
   }
   impl_->Finish();
+  impl_->finished = true;
+}
+
+void Simulation::AdvanceTo(Time t) {
+  if (impl_->finished) throw std::logic_error("Simulation::AdvanceTo: the run is over");
+  if (impl_->realtime_link) {
+    throw std::logic_error(
+        "Simulation::AdvanceTo: a real-time run (v2i.link: realtime) paces "
+        "itself; Run it");
+  }
+  if (t < impl_->advanced_to || t > impl_->end) {
+    throw std::logic_error(fmt::format("Simulation::AdvanceTo: {} s is outside [{} s, {} s]",
+                                       ToSeconds(t), ToSeconds(impl_->advanced_to),
+                                       ToSeconds(impl_->end)));
+  }
+  if (t == impl_->advanced_to) return;
+  impl_->kernel.RunUntil(t - Duration{1});  // every event before t; those at t come next
+  impl_->advanced_to = t;
+}
+
+Time Simulation::now() const { return impl_->advanced_to; }
+Time Simulation::end() const { return impl_->end; }
+bool Simulation::finished() const { return impl_->finished; }
+
+void Simulation::Finish() {
+  if (impl_->finished) throw std::logic_error("Simulation::Finish: the run is over");
+  if (impl_->realtime_link) {
+    impl_->RunRealTime();
+  } else {
+    impl_->kernel.RunUntil(impl_->end);
+  }
+  impl_->Finish();
+  impl_->finished = true;
+  impl_->advanced_to = impl_->end;
+}
+
+void Simulation::Inject(FaultClause fault) {
+  if (impl_->finished) throw std::logic_error("Simulation::Inject: the run is over");
+  if (impl_->realtime_link) {  // its faults are checked against the link at load
+    throw std::logic_error("Simulation::Inject: not into a real-time run (v2i.link: realtime)");
+  }
+  const std::optional<int> car = FaultCar(fault);
+  if (car && !impl_->agent_index.contains(*car)) {
+    throw ConfigError(
+        fmt::format("{}.car: the scenario has no car {}", ToName(KindOf(fault)), *car));
+  }
+  std::visit([this](auto& f) { f.at_s = ToSeconds(impl_->advanced_to); }, fault);
+  // kept for the life of the run: the fault's actions may refer to it
+  impl_->injected_faults.push_back(std::make_unique<FaultClause>(std::move(fault)));
+  impl_->ScheduleFault(*impl_->injected_faults.back());
+}
+
+std::vector<Simulation::CarState> Simulation::Cars() const {
+  std::vector<CarState> cars;
+  for (const CarAgent& agent : impl_->agents) {
+    CarState car{.id = agent.config->id,
+                 .pose = agent.car->pose(),
+                 .speed_mps = agent.car->forward_speed_mps(),
+                 .steering_rad = agent.car->steering_angle_rad(),
+                 .lateral_error_m = agent.route_monitor.lateral_error_m(),
+                 .route_progress_m = agent.route_monitor.progress_m(),
+                 .laps = agent.metrics.laps,
+                 .estimate = agent.estimate};
+    if (agent.config->drives_by_stack()) car.behavior_mode = stack::ToString(agent.behavior_mode);
+    cars.push_back(std::move(car));
+  }
+  return cars;
+}
+
+std::vector<Simulation::IntersectionState> Simulation::Server() const {
+  const auto* embedded =
+      dynamic_cast<const EmbeddedTrafficLightEndpoint*>(&impl_->server.endpoint());
+  std::vector<IntersectionState> areas;
+  for (const world::IntersectionSpec& spec : impl_->loaded.track.spec().intersections) {
+    IntersectionState area{.id = spec.id, .holder = impl_->server.Holder(spec.id).value_or(-1)};
+    if (embedded) area.queue = embedded->server().Queue(spec.id);  // mqtt: another process's
+    areas.push_back(std::move(area));
+  }
+  return areas;
+}
+
+std::vector<Simulation::BoardState> Simulation::Boards() const {
+  std::vector<BoardState> boards;
+  for (std::size_t i = 0; i < impl_->boards.size(); ++i) {
+    const std::unique_ptr<Board>& board = impl_->boards[i];
+    if (!board) continue;
+    boards.push_back({.car = impl_->agents[i].config->id,
+                      .name = board->name(),
+                      .busy_cores = board->platform().cpu().busy_cores(),
+                      .report = ReportJson(board->Report(impl_->advanced_to).report)});
+  }
+  return boards;
 }
 
 void Simulation::Impl::RunRealTime() {

@@ -53,6 +53,7 @@ struct CarAgent {
   // driver: stack
   StackControls stack_controls;
   stack::BehaviorMode behavior_mode{stack::BehaviorMode::kDrive};
+  std::optional<world::Pose2> estimate;  // the EKF's last estimate (Simulation::Cars)
   // the intersection client, and the responses for this car since its last step
   stack::IntersectionClientState client;
   std::vector<world::Response> inbox;
@@ -82,6 +83,7 @@ struct Simulation::Impl {
   void AddSensorsAndBoards();
   void AddOracleDrivers();
   void ScheduleFaults();  // sim/loop/faults.cc
+  void ScheduleFault(const FaultClause& fault);
   void ScheduleRecording();
   void ScheduleWorldStep();
 
@@ -137,6 +139,10 @@ struct Simulation::Impl {
   LaneJudgeParams lane_judge;
   std::shared_ptr<RecordStore> store;  // where samples and events go; null: into `record`
   RunRecord record;
+  // stepping (Simulation::AdvanceTo): every event before `advanced_to` has run
+  Time advanced_to{kZeroTime};
+  bool finished{false};
+  std::vector<std::unique_ptr<FaultClause>> injected_faults;  // Simulation::Inject's
 };
 
 }  // namespace autonomsim::sim
