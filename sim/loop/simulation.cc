@@ -419,13 +419,7 @@ void Simulation::Run(const std::function<void(Time)>& progress, Duration progres
         progress_period, progress_period, [this, &progress] { progress(impl_->kernel.Now()); },
         kPriorityRecord);
   }
-  if (impl_->realtime_link) {
-    impl_->RunRealTime();
-  } else {
-    impl_->kernel.RunUntil(impl_->end);
-  }
-  impl_->Finish();
-  impl_->finished = true;
+  Finish();
 }
 
 void Simulation::AdvanceTo(Time t) {
