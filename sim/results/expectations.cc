@@ -376,13 +376,21 @@ ExpectationResult Evaluate(const NoGridlockExpect& args, const RunRecord& record
 
 // A standing car has an obstacle in its way when one of the scenario's obstacles, present then,
 // lies ahead of it within kObstacleAhead_m and across its path (the obstacle's half diagonal
-// plus kCarHalfWidth_m to either side of its heading). Assumed: the stack stops a car 0.14-0.42 m
-// before a box (stack_obstacle's gaps on the two presets, from the bumper, which is 0.26 m ahead
-// of the centre), so 1 m from the centre to the box's nearest reach holds every such stop.
+// plus half the car's width to either side of its heading). Assumed: the stack stops a car
+// 0.14-0.42 m before a box (stack_obstacle's gaps on the two presets, from the bumper, which is
+// 0.26 m ahead of the centre), so 1 m from the centre to the box's nearest reach holds every such
+// stop.
 constexpr double kObstacleAhead_m = 1.0;
-constexpr double kCarHalfWidth_m = 0.15;  // the lab car's 0.296 m body (reference §2), rounded up
 
-bool ObstacleAhead(const TrajectorySample& s, const std::vector<ObstacleConfig>& obstacles) {
+// A car's width as its scenario gives it (vehicle.width_m); the vehicle's default (the lab car's,
+// reference §2) for a car the scenario does not name.
+double CarWidth_m(const Scenario& scenario, int car) {
+  const CarConfig* config = scenario.FindCar(car);
+  return config ? config->vehicle.width_m : CarConfig{}.vehicle.width_m;
+}
+
+bool ObstacleAhead(const TrajectorySample& s, const std::vector<ObstacleConfig>& obstacles,
+                   double car_width_m) {
   for (const ObstacleConfig& o : obstacles) {
     if (!o.PresentAt(s.t)) continue;
     const double ex = o.x_m - s.x_m;
@@ -391,7 +399,7 @@ bool ObstacleAhead(const TrajectorySample& s, const std::vector<ObstacleConfig>&
     const double across = -std::sin(s.yaw_rad) * ex + std::cos(s.yaw_rad) * ey;
     const double half_diagonal = 0.5 * std::hypot(o.length_m, o.width_m);
     if (ahead > 0.0 && ahead - half_diagonal <= kObstacleAhead_m &&
-        std::abs(across) <= half_diagonal + kCarHalfWidth_m) {
+        std::abs(across) <= half_diagonal + car_width_m / 2) {
       return true;
     }
   }
@@ -412,8 +420,8 @@ struct Standstill {
   Time end{0};
 };
 std::map<int, std::vector<Standstill>> StandstillsNotHeldByObstacles(
-    const RecoversWithinExpect& args, const RunRecord& record,
-    const std::vector<ObstacleConfig>& obstacles, std::size_t* held_by_obstacles) {
+    const RecoversWithinExpect& args, const RunRecord& record, const Scenario& scenario,
+    std::size_t* held_by_obstacles) {
   std::map<int, std::vector<Standstill>> standstills;
   std::map<int, std::optional<Time>> since;  // car -> the open standstill's start
   std::map<int, bool> held;  // car -> its open standstill began with an obstacle in its way
@@ -431,7 +439,7 @@ std::map<int, std::vector<Standstill>> StandstillsNotHeldByObstacles(
     if (std::abs(s.speed_mps) < kStillSpeed_mps) {
       if (!open) {
         open = s.t;
-        held[s.car] = ObstacleAhead(s, obstacles);
+        held[s.car] = ObstacleAhead(s, scenario.obstacles, CarWidth_m(scenario, s.car));
       }
     } else if (open) {
       close(s.car, *open, s.t);
@@ -445,13 +453,13 @@ std::map<int, std::vector<Standstill>> StandstillsNotHeldByObstacles(
 }
 
 ExpectationResult Evaluate(const RecoversWithinExpect& args, const RunRecord& record,
-                           const std::vector<ObstacleConfig>& obstacles) {
+                           const Scenario& scenario) {
   const double bound_s = args.max_s;
   const std::vector<FaultSpan> faults = FaultSpans(record);
   if (faults.empty()) return {"", true, "no fault in the run"};
   std::size_t held_by_obstacles = 0;
   const std::map<int, std::vector<Standstill>> standstills =
-      StandstillsNotHeldByObstacles(args, record, obstacles, &held_by_obstacles);
+      StandstillsNotHeldByObstacles(args, record, scenario, &held_by_obstacles);
   std::map<int, Time> parked;
   ForEachEvent(record, [&](const Event& e) {
     if (e.type == EventKind::kParked && !parked.count(e.car)) parked[e.car] = e.t;
@@ -523,7 +531,7 @@ std::vector<ExpectationResult> EvaluateExpectations(const Scenario& scenario,
     ExpectationResult result = std::visit(
         [&](const auto& expectation) {
           if constexpr (std::is_same_v<std::decay_t<decltype(expectation)>, RecoversWithinExpect>) {
-            return Evaluate(expectation, record, scenario.obstacles);
+            return Evaluate(expectation, record, scenario);
           } else {
             return Evaluate(expectation, record);
           }
