@@ -60,7 +60,7 @@ void NodeGraph::CheckConfigUsed() const {
   }
 }
 
-int NodeGraph::AddTopicImpl(TopicSpec spec) {
+int NodeGraph::AddTopicImpl(TopicSpec spec, std::type_index value_type) {
   if (const auto it = transport_config_.find(spec.name); it != transport_config_.end()) {
     spec.transport = it->second.transport;
     if (it->second.depth) spec.depth = *it->second.depth;
@@ -72,7 +72,7 @@ int NodeGraph::AddTopicImpl(TopicSpec spec) {
   for (const Topic& t : topics_) {
     if (t.spec.name == spec.name) throw ConfigError("topic '" + spec.name + "' added twice");
   }
-  Topic topic{.spec = spec};
+  Topic topic{.spec = spec, .value_type = value_type};
   if (spec.transport == Transport::kDds) {
     const auto it = transport_config_.find(spec.name);
     topic.dds = DdsLinkParamsFor(
@@ -318,6 +318,20 @@ std::vector<std::string> NodeGraph::node_names() const {
   std::vector<std::string> names;
   for (const Node& n : nodes_) names.push_back(n.name);
   return names;
+}
+
+bool NodeGraph::TapImpl(const std::string& name, std::type_index value_type,
+                        std::function<void(const detail::EnvelopeBase&, Time)> tap) {
+  for (Topic& topic : topics_) {
+    if (topic.spec.name != name) continue;
+    if (topic.value_type != value_type) {
+      throw std::invalid_argument("Tap: topic '" + name + "' carries another type than " +
+                                  value_type.name());
+    }
+    topic.taps.push_back(std::move(tap));
+    return true;
+  }
+  return false;
 }
 
 const TopicSpec& NodeGraph::topic_spec(int topic) const {
@@ -591,6 +605,7 @@ void NodeGraph::FinishJob(int node) {
     if (topic.spec.transport == Transport::kZeroCopy) --pub.loans_held;
     if (n.crashed) continue;  // died before publishing: the loan goes back, nothing is sent
     if (metrics_) metrics_->Published(n.metrics_index, topic.metrics_index, now, p.message->stamp);
+    for (const auto& tap : topic.taps) tap(*p.message, now);
     Distribute(topic, std::move(p.message));
   }
   if (n.crashed) return;

@@ -22,6 +22,7 @@
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <typeindex>
 #include <utility>
 #include <vector>
 
@@ -155,7 +156,7 @@ class NodeGraph {
   // ConfigError for a zero-copy topic whose type is not fixed-size or fits no shared-memory chunk.
   template <class T>
   TopicId<T> AddTopic(TopicSpec spec) {
-    return TopicId<T>{AddTopicImpl(std::move(spec))};
+    return TopicId<T>{AddTopicImpl(std::move(spec), typeid(T))};
   }
   // ConfigError for an unknown cost, a node without the cost for its mapping, a bad slot.
   NodeId AddNode(NodeSpec spec);
@@ -205,6 +206,20 @@ class NodeGraph {
   void ResumeNode(const std::string& name);
   void CrashNode(const std::string& name);
 
+  // A tap on the topic named `name`: `tap(value, stamp, now)` for every message a node publishes
+  // on it, at the instant it is published (its job's completion; a node that crashed or a loan
+  // that failed publishes nothing), before any transport. A tap is not a subscriber: it costs
+  // nothing on the platform, delays nothing and changes nothing in the run (a recorder,
+  // sim/results/mcap_recording.h). False when the graph has no topic of that name;
+  // std::invalid_argument when it has one of another type than T.
+  template <class T>
+  bool Tap(const std::string& name, std::function<void(const T&, Time stamp, Time now)> tap) {
+    return TapImpl(name, typeid(T),
+                   [tap = std::move(tap)](const detail::EnvelopeBase& message, Time now) {
+                     const auto& typed = static_cast<const detail::Envelope<T>&>(message);
+                     tap(typed.value, typed.stamp, now);
+                   });
+  }
   const TopicSpec& topic_spec(int topic) const;
   const std::string& node_name(NodeId node) const;
   bool HasNode(const std::string& name) const;
@@ -245,6 +260,8 @@ class NodeGraph {
     std::vector<int> publishers;
     std::optional<int> pool;  // zero-copy chunk pool
     DdsLinkParams dds;        // DDS: the profile's settings with the topic's own
+    std::type_index value_type{typeid(void)};  // what its messages carry (AddTopic's T)
+    std::vector<std::function<void(const detail::EnvelopeBase&, Time)>> taps;  // Tap
   };
   // A DDS publisher's writer and its readers (the topic's subscriptions): the link, and per
   // reader the samples on their way by sequence number until they are delivered or lost.
@@ -300,7 +317,9 @@ class NodeGraph {
   };
   Node& NodeNamed(const std::string& name);
 
-  int AddTopicImpl(TopicSpec spec);
+  int AddTopicImpl(TopicSpec spec, std::type_index value_type);
+  bool TapImpl(const std::string& name, std::type_index value_type,
+               std::function<void(const detail::EnvelopeBase&, Time)> tap);
   int AddPublisherImpl(int node, int topic);
   void AddSubscriptionImpl(int node, int topic,
                            std::function<void(const detail::EnvelopeBase&, Outbox&)> handler,

@@ -150,6 +150,53 @@ TEST(NodeGraph, ComponentRunsAtOnceAndPublishesAtTheJobsEndWithTheSensorStamp) {
   EXPECT_NEAR(report.FindNode("double")->cpu_percent, 100.0 * 0.120 / 0.250, 1e-9);
 }
 
+// A tap sees each message at its publication, with its stamp, and changes nothing: the subscriber
+// gets the same messages at the same instants with and without it, and the node's CPU is the same.
+TEST(NodeGraph, ATapSeesEveryPublishedMessageAndChangesNothing) {
+  struct Seen {
+    int value;
+    Time stamp;
+    Time at;
+    bool operator==(const Seen&) const = default;
+  };
+  const auto run = [](bool tapped, std::vector<Seen>* tap_seen) {
+    PlatformProfile profile = FreeTransportProfile(2);
+    profile.components["double"] = ComponentCost{.sw = SwCost{.work_s = 0.040}};
+    Rig rig(profile);
+    auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
+    auto out = rig.graph.AddTopic<int>({.name = "/out", .type = {"I", 8, true}});
+    AddSourceNode(rig.graph, NodeSpec{.name = "source"}, in, milliseconds(10), milliseconds(100),
+                  [](Time now) { return static_cast<int>(now / milliseconds(1)); });
+    AddComponentNode(rig.graph, NodeSpec{.name = "double"}, in, out, DoubleParams{},
+                     std::make_shared<DoubleState>(), DoubleStep);
+    std::vector<Seen> seen;
+    const NodeId sink = rig.graph.AddNode(NodeSpec{.name = "sink"});
+    rig.graph.AddSubscription<int>(sink, out, [&](const int& v, Time stamp, Outbox&) {
+      seen.push_back({v, stamp, rig.kernel.Now()});
+    });
+    if (tapped) {
+      EXPECT_TRUE(rig.graph.Tap<int>("/out", [tap_seen](const int& v, Time stamp, Time now) {
+        tap_seen->push_back({v, stamp, now});
+      }));
+      EXPECT_FALSE(rig.graph.Tap<int>("/nothing", [](const int&, Time, Time) {}));
+      EXPECT_THROW(rig.graph.Tap<double>("/out", [](const double&, Time, Time) {}),
+                   std::invalid_argument);
+    }
+    rig.kernel.RunUntil(milliseconds(250));
+    const MetricsReport report = BuildReport(rig.metrics, milliseconds(250));
+    return std::pair(seen, report.FindNode("double")->cpu_percent);
+  };
+  std::vector<Seen> tapped_seen;
+  const auto plain = run(false, nullptr);
+  const auto tapped = run(true, &tapped_seen);
+  EXPECT_EQ(plain, tapped);
+  // published at 50, 150, 250 ms (10 ms + 40 ms of work, every 100 ms), stamped with the frame's
+  // time: the zero-copy subscriber gets them after the free transport's latency of 0
+  EXPECT_EQ(tapped_seen, (std::vector<Seen>{{20, milliseconds(10), milliseconds(50)},
+                                            {220, milliseconds(110), milliseconds(150)},
+                                            {420, milliseconds(210), milliseconds(250)}}));
+}
+
 TEST(NodeGraph, OptionalOutputPublishesOnlyWhenSet) {
   Rig rig(FreeTransportProfile(2));
   auto in = rig.graph.AddTopic<int>({.name = "/in", .type = {"I", 8, true}});
