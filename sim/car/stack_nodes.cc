@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "sim/car/stack_messages.h"
 #include "stack/controller_server.h"
 
 namespace autonomsim::sim {
@@ -13,17 +14,7 @@ namespace {
 
 // ---- The messages between the stack's nodes ----
 
-struct CostmapMessage {  // /local_costmap/costmap_raw, in the odom frame
-  std::shared_ptr<const stack::Costmap2D> costmap;
-};
-struct PathMessage {  // /plan, in the map frame
-  std::shared_ptr<const std::vector<world::Vec2>> path;
-  std::uint64_t id{0};
-  bool ok{false};
-};
-struct IntersectionFree {  // /intersection_free
-  bool free{true};
-};
+// CostmapMessage, PathMessage, IntersectionFree: sim/car/stack_messages.h.
 struct EmergencyCall {  // /emergency (the carcontroller's SetBool service, as a topic)
   bool stop{false};
 };

@@ -345,6 +345,7 @@ void Simulation::Impl::Track(CarAgent* agent, Time t) {
 }
 
 void Simulation::Impl::Emit(Event event) {
+  for (RunObserver* observer : observers) observer->OnEvent(event);
   if (store) {
     store->Append(event);
   } else {
@@ -368,6 +369,7 @@ void Simulation::Impl::Sample() {
         .lateral_error_m = agent.route_monitor.lateral_error_m(),
         .route_progress_m = agent.route_monitor.progress_m(),
     };
+    for (RunObserver* observer : observers) observer->OnSample(sample);
     if (store) {
       store->Append(sample);
     } else {
@@ -411,6 +413,47 @@ Simulation::Simulation(const LoadedScenario& scenario, std::shared_ptr<RecordSto
     : impl_(std::make_unique<Impl>(scenario, std::move(store))) {}
 
 Simulation::~Simulation() = default;
+
+namespace {
+
+// The V2I link with observers: tells them of each message as it is sent, then sends it.
+class TappedV2ILink final : public V2ILink {
+ public:
+  TappedV2ILink(V2ILink* link, const Kernel* kernel, const std::vector<RunObserver*>* observers)
+      : link_(link), kernel_(kernel), observers_(observers) {}
+  void SendToServer(int car_id, const world::V2IMessage& message) override {
+    for (RunObserver* o : *observers_) o->OnV2iPublished(kernel_->Now(), car_id, message);
+    link_->SendToServer(car_id, message);
+  }
+  void Broadcast(const world::V2IMessage& message) override {
+    for (RunObserver* o : *observers_) o->OnV2iPublished(kernel_->Now(), std::nullopt, message);
+    link_->Broadcast(message);
+  }
+
+ private:
+  V2ILink* link_;
+  const Kernel* kernel_;
+  const std::vector<RunObserver*>* observers_;
+};
+
+}  // namespace
+
+void Simulation::Impl::AddObserver(RunObserver* observer) {
+  if (advanced_to != kZeroTime || kernel.executed() != 0 || finished) {
+    throw std::logic_error("Simulation::AddObserver: the run has started");
+  }
+  observers.push_back(observer);
+  if (!tapped_link) {
+    tapped_link = std::make_unique<TappedV2ILink>(to_server, &kernel, &observers);
+    to_server = tapped_link.get();
+    if (link) server.set_link(tapped_link.get());
+  }
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    if (boards[i]) observer->OnBoard(agents[i].config->id, *boards[i], *sensors[i]);
+  }
+}
+
+void Simulation::AddObserver(RunObserver* observer) { impl_->AddObserver(observer); }
 
 void Simulation::Run(const std::function<void(Time)>& progress, Duration progress_period) {
   if (impl_->finished) throw std::logic_error("Simulation::Run: the run is over");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/loop/run_observer.h"
 #include "sim/scenario/run_record.h"
 #include "sim/scenario/scenario.h"
 
@@ -23,6 +24,10 @@ class Simulation {
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
+
+  // Adds an observer (sim/loop/run_observer.h) before the run starts; it is told of each board at
+  // once and must outlive the run. std::logic_error once the run has advanced.
+  void AddObserver(RunObserver* observer);
 
   // Runs to the scenario's duration (with v2i.link: realtime, paced to the wall clock). `progress`,
   // if given, is called with the simulated time every `progress_period` of simulated time (the CLI
