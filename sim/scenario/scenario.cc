@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <set>
@@ -219,8 +220,11 @@ std::pair<double, world::Pose2> ResolveStart(const CarConfig& car, std::size_t i
 }
 
 // Car `i`'s route, start and board profile, checked against the track and the server's lease.
+// The car's board profile comes from its file (platform.profile, relative to `folder`), or, with
+// `resolved_platforms`, from a scenario.resolved.json's "platforms" (LoadResolvedScenario).
 LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track& track,
-                     const std::filesystem::path& folder, const ScenarioSite& site) {
+                     const std::filesystem::path& folder, const ScenarioSite& site,
+                     const nlohmann::json* resolved_platforms = nullptr) {
   const CarConfig& car = scenario.cars[i];
   LoadedCar resolved{.config = &car};
   if (car.route && track.spec().routes.count(*car.route) == 0) {
@@ -244,7 +248,16 @@ LoadedCar ResolveCar(const Scenario& scenario, std::size_t i, const world::Track
   if (car.laps && !resolved.route.cyclic) {
     FailAt(site.root, site.source, {"cars", i, "laps"}, "laps needs a route that is a loop");
   }
-  if (car.has_board()) {
+  if (car.has_board() && resolved_platforms) {
+    const std::string board = "car" + std::to_string(car.id);
+    if (!resolved_platforms->contains(board)) {
+      FailAt(site.root, site.source, {"cars", i, "platform"},
+             "no \"platforms\": {\"" + board + "\": ...} in the resolved file");
+    }
+    const ConfigSource source{site.source.file + ": platforms." + board, {}};
+    resolved.profile =
+        ReadConfig<PlatformProfile>(YAML::Load(resolved_platforms->at(board).dump()), source);
+  } else if (car.has_board()) {
     try {
       resolved.profile = LoadPlatformProfile(ResolveScenarioFile(folder, car.platform.profile));
     } catch (const ConfigError& e) {
@@ -635,6 +648,41 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   CheckFaults(scenario, car_ids, site, &loaded.warnings);
   loaded.key_locations = BoardNameLocations(scenario, site);
   loaded.preset_overrides = std::move(preset_overrides);
+  Resolve(&loaded);
+  return loaded;
+}
+
+LoadedScenario LoadResolvedScenario(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw ConfigError(file.string() + ": cannot read");
+  nlohmann::json resolved;
+  try {
+    resolved = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw ConfigError(file.string() + ": not valid JSON: " + e.what());
+  }
+  if (!resolved.is_object() || !resolved.contains("scenario") || !resolved.contains("track")) {
+    throw ConfigError(file.string() + ": has no \"scenario\" and \"track\"");
+  }
+  const ConfigSource source{file.string(), {}};
+  // JSON is YAML: the resolved values read back as a scenario file's
+  const YAML::Node root = YAML::Load(resolved["scenario"].dump());
+  Scenario read = ReadConfig<Scenario>(root, source);
+  const auto spec = ReadConfig<world::TrackSpec>(YAML::Load(resolved["track"].dump()), source);
+  std::optional<world::Track> track;
+  try {
+    track.emplace(spec);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(file.string() + ": track: " + e.what());
+  }
+  LoadedScenario loaded(file, std::move(read), std::move(*track));
+  const ScenarioSite site{root, source};
+  const nlohmann::json platforms = resolved.value("platforms", nlohmann::json::object());
+  for (std::size_t i = 0; i < loaded.scenario.cars.size(); ++i) {
+    loaded.cars.push_back(
+        ResolveCar(loaded.scenario, i, loaded.track, file.parent_path(), site, &platforms));
+  }
+  loaded.warnings = StackMixWarnings(loaded.scenario);
   Resolve(&loaded);
   return loaded;
 }
