@@ -25,6 +25,7 @@ packages=(
   # the GL camera backend and 3D views: EGL and OpenGL ES headers (glvnd), and Mesa's EGL driver
   # with llvmpipe, which renders without a GPU or a display (EGL_PLATFORM_SURFACELESS_MESA)
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
+  libzstd-dev zlib1g-dev  # sim/mcap: zstd chunks and CRC-32 (zlib's crc32) in MCAP recordings
 )
 
 missing=()
