@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages autonomsim needs to build, test and run. Idempotent: packages
-# already present are not touched, and apt is not called at all when nothing is missing.
+# Installs the Debian 12 packages autonomsim needs to build, test and run, then the test-only
+# Node.js readers (package.json: `npm ci` at the repository root, into node_modules/). Idempotent:
+# packages already present are not touched, apt is not called at all when nothing is missing, and
+# npm only when node_modules is missing or older than package-lock.json.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 packages=(
   build-essential cmake ninja-build pkg-config
@@ -25,6 +28,7 @@ packages=(
   # the GL camera backend and 3D views: EGL and OpenGL ES headers (glvnd), and Mesa's EGL driver
   # with llvmpipe, which renders without a GPU or a display (EGL_PLATFORM_SURFACELESS_MESA)
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
+  libzstd-dev zlib1g-dev  # sim/mcap: zstd chunks and CRC-32 (zlib's crc32) in MCAP recordings
 )
 
 missing=()
@@ -33,16 +37,28 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+# Debian's Node.js, for the test readers (tools/tests/mcap_check.mjs), only where there is no
+# `node` at all: a newer one installed otherwise (nodesource, nvm) is used as it is.
+if ! command -v node >/dev/null; then
+  missing+=(nodejs npm)
 fi
 
-sudo_cmd=()
-if [ "$(id -u)" -ne 0 ]; then
-  command -v sudo >/dev/null || { echo "install_deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
-  sudo_cmd=(sudo)
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo_cmd=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install_deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo_cmd=(sudo)
+  fi
+  echo "install_deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -q
+  "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
-echo "install_deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -q
-"${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+
+# The test readers, pinned by package-lock.json (the ctest Mcap.node_reader, label node, uses
+# them). node_modules/ is remade when missing or older than the lock file.
+if [ ! -d node_modules ] || [ package-lock.json -nt node_modules ]; then
+  echo "install_deps: npm ci (the test readers in package.json)"
+  npm ci --no-audit --no-fund --ignore-scripts  # none is needed: the zstd decoder is prebuilt wasm
+  touch node_modules  # its time marks this install, for the test above
+fi
