@@ -15,11 +15,11 @@ int main(int argc, char** argv) {
       "half-written is removed)."};
   app.set_version_flag("--version", std::string("autonomsim ") + AUTONOMSIM_VERSION);
   app.require_subcommand(1);
-  const std::vector<Command> commands = {AddRunCommand(app),       AddCheckCommand(app),
-                                         AddValidateCommand(app),  AddTable1Command(app),
-                                         AddTransportCommand(app), AddRenderCommand(app),
-                                         AddSweepCommand(app),     AddReportCommand(app),
-                                         AddReferenceCommand(app), AddVideoForwarder(app)};
+  const std::vector<Command> commands = {
+      AddRunCommand(app),    AddCheckCommand(app),     AddValidateCommand(app),
+      AddTable1Command(app), AddTransportCommand(app), AddRenderCommand(app),
+      AddSweepCommand(app),  AddReportCommand(app),    AddReferenceCommand(app),
+      AddExportCommand(app), AddVideoForwarder(app)};
 
   return ParseAndRun(app, argc, argv, commands);
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/loop/simulation.h"
 #include "sim/mqtt/mqtt_client.h"
@@ -41,7 +42,72 @@ void PrintPacing(const sim::RealTimeMetrics& m) {
   }
 }
 
+// A file written under "<file>.partial-<pid>" and renamed to `file` by Commit; removed if
+// destroyed uncommitted (a failed or interrupted run leaves nothing half-written).
+class PartialFile {
+ public:
+  explicit PartialFile(fs::path file)
+      : file_(std::move(file)),
+        partial_(file_.string() + ".partial-" + std::to_string(::getpid())) {}
+  ~PartialFile() {
+    std::error_code ignored;
+    if (!committed_) fs::remove(partial_, ignored);
+  }
+  PartialFile(const PartialFile&) = delete;
+  PartialFile& operator=(const PartialFile&) = delete;
+  const fs::path& path() const { return partial_; }
+  void Commit() {
+    fs::rename(partial_, file_);
+    committed_ = true;
+  }
+
+ private:
+  fs::path file_;
+  fs::path partial_;
+  bool committed_{false};
+};
+
 }  // namespace
+
+void AddMcapOptions(CLI::App* command, McapArgs* args, const std::string& file_help,
+                    bool file_required) {
+  command->add_option("--mcap", args->file, file_help)->type_name("FILE")->required(file_required);
+  command
+      ->add_option("--mcap-topics", args->topics,
+                   "Record only the topics matching these globs (fnmatch on the full name, e.g. "
+                   "'/car0/*,/vtl/*'; '*' takes everything, camera images included); default: "
+                   "every topic but the camera images (docs/mcap.md lists them)")
+      ->delimiter(',')
+      ->type_name("PATTERN,...");
+  command
+      ->add_option("--mcap-images", args->images,
+                   "The camera images as sensor_msgs/Image (raw, default) or "
+                   "sensor_msgs/CompressedImage (png: lossless, smaller, slower to write)")
+      ->check(CLI::IsMember({"raw", "png"}))
+      ->default_str("raw");
+}
+
+std::optional<McapRequest> McapArgs::Request() const {
+  if (!file) {
+    if (!topics.empty() || images != "raw") {
+      throw sim::ConfigError("--mcap-topics and --mcap-images go with --mcap FILE");
+    }
+    return std::nullopt;
+  }
+  return McapRequest{.file = *file, .options = {.topics = topics, .png_images = images == "png"}};
+}
+
+fs::path CheckMcapFile(const std::string& given, bool force) {
+  return sim::CheckOutputFile(given, force, sim::McapFileSignature());
+}
+
+void PrintMcapWritten(const McapWritten& written) {
+  fmt::print("mcap: {} ({} channels, {} messages, {:.1f} MB)\n", written.file.string(),
+             written.channels.size(), written.messages, static_cast<double>(written.bytes) / 1e6);
+  for (const std::string& pattern : written.unmatched) {
+    fmt::print(stderr, "warning: --mcap-topics '{}' matched no topic of the run\n", pattern);
+  }
+}
 
 int ParseAndRun(CLI::App& app, int argc, char** argv, const std::vector<Command>& commands) {
   // a mistake on the command line opens with "error: " as every other error does
@@ -131,7 +197,7 @@ bool Outcome::passed() const {
 }
 
 Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::path>& out_dir,
-                  Progress* progress, bool force) {
+                  Progress* progress, bool force, const McapRequest* mcap) {
   Outcome outcome;
   outcome.file = loaded.file.string();
   outcome.scenario_name = loaded.scenario.name;
@@ -153,6 +219,13 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   }
   const auto start = std::chrono::steady_clock::now();
   sim::Simulation simulation(loaded, store);
+  std::optional<PartialFile> partial;
+  std::optional<sim::McapRecording> recording;
+  if (mcap) {
+    partial.emplace(mcap->file);
+    recording.emplace(loaded, partial->path(), mcap->options);
+    simulation.AddObserver(&*recording);
+  }
   // every simulated second: Ctrl-C stops the run there, and its partial folder goes with it
   simulation.Run([progress](Time t) {
     ThrowIfInterrupted();
@@ -163,6 +236,17 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   if (simulation.record().realtime) PrintPacing(*simulation.record().realtime);
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
+  outcome.result_sha256 = sim::ResultSha256(simulation.record());
+  if (recording) {
+    recording->Close(outcome.expectations, outcome.result_sha256);
+    partial->Commit();
+    McapWritten written{.file = mcap->file,
+                        .channels = recording->channels(),
+                        .messages = recording->counts().messages,
+                        .bytes = static_cast<std::uint64_t>(fs::file_size(mcap->file)),
+                        .unmatched = recording->unmatched_patterns()};
+    outcome.mcap = std::move(written);
+  }
   if (folder) {
     folder->Complete(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds);
     for (const sim::BoardReport& board : simulation.record().boards) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim/results/expectations.h"
+#include "sim/results/mcap_recording.h"
 #include "sim/scenario/scenario.h"
 
 namespace autonomsim::cli {
@@ -41,6 +42,7 @@ Command AddSweepCommand(CLI::App& parent);
 Command AddReportCommand(CLI::App& parent);
 Command AddReferenceCommand(CLI::App& parent);
 Command AddValidateCommand(CLI::App& parent);
+Command AddExportCommand(CLI::App& parent);
 // The video command lives in the `autonomsim-video` helper (tools/autonomsim_video.cc);
 // `autonomsim video ...` runs it with the same arguments (AddVideoForwarder).
 Command AddVideoCommand(CLI::App& parent);
@@ -86,6 +88,38 @@ class Progress {
   int last_decile_{0};
 };
 
+// A recording of the run as MCAP (`run --mcap`, `export --mcap`): where, and what.
+struct McapRequest {
+  std::filesystem::path file;  // checked (CheckMcapFile) before the run
+  sim::McapRecordingOptions options;
+};
+// What a recording wrote.
+struct McapWritten {
+  std::filesystem::path file;
+  std::vector<sim::McapRecording::ChannelCount> channels;
+  std::uint64_t messages{0};
+  std::uint64_t bytes{0};              // the file's size
+  std::vector<std::string> unmatched;  // --mcap-topics patterns no topic matched
+};
+
+// --mcap FILE, --mcap-topics and --mcap-images as given (run and export).
+struct McapArgs {
+  std::optional<std::string> file;
+  std::vector<std::string> topics;
+  std::string images{"raw"};
+  // The recording they ask for, none without a file; ConfigError for --mcap-topics or
+  // --mcap-images without --mcap.
+  std::optional<McapRequest> Request() const;
+};
+// Adds --mcap (with `file_help`; required for export), --mcap-topics and --mcap-images.
+void AddMcapOptions(CLI::App* command, McapArgs* args, const std::string& file_help,
+                    bool file_required);
+// The file `given` checked as an MCAP output: absent, or one this program wrote (else refused
+// unless `force`; sim/core/files.h CheckOutputFile). ConfigError.
+std::filesystem::path CheckMcapFile(const std::string& given, bool force);
+// "mcap: FILE (N channels, M messages, X MB)" and a warning per pattern that matched nothing.
+void PrintMcapWritten(const McapWritten& written);
+
 struct Outcome {
   std::string scenario_name;
   std::string file;
@@ -100,15 +134,19 @@ struct Outcome {
   std::vector<std::string> warnings;  // settings that do not go together (LoadedScenario)
   // A board's trace.json that stops before the run's end (trace_max_events), one line each.
   std::vector<std::string> trace_cuts;
+  std::optional<McapWritten> mcap;  // the run's recording, when it made one
+  std::string result_sha256;        // of the run's record (sim/scenario/run_record.h)
   bool passed() const;
 };
 
 // Runs and judges one loaded scenario; writes its folder when out_dir is given.
 // `force`: replace out_dir even if this program did not write it (--force; see
 // sim/core/files.h CheckOutputFolder).
+// With `mcap`, records the run into its file (written under a temporary name and renamed when
+// complete; removed if the run fails).
 Outcome RunLoaded(const sim::LoadedScenario& loaded,
                   const std::optional<std::filesystem::path>& out_dir, Progress* progress,
-                  bool force = false);
+                  bool force = false, const McapRequest* mcap = nullptr);
 // Loads, runs and judges one scenario file; unusable input becomes the outcome's input_error.
 Outcome RunFile(const std::filesystem::path& file, const std::vector<std::string>& overrides,
                 const std::optional<std::filesystem::path>& out_dir, bool force = false,

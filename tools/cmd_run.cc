@@ -1,6 +1,8 @@
 // `autonomsim run SCENARIO`: one scenario, one result folder.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "sim/core/config.h"
 #include "sim/core/files.h"
 #include "sim/mqtt/mqtt_client.h"
@@ -14,7 +16,7 @@ namespace fs = std::filesystem;
 
 int RunCommand(const std::string& scenario_file, const std::optional<std::string>& out,
                std::optional<std::uint64_t> seed, const std::vector<std::string>& overrides,
-               bool quiet, bool force, bool report) {
+               bool quiet, bool force, bool report, std::optional<McapRequest> mcap) {
   InstallInterruptHandlers();  // Ctrl-C: stop at the next simulated second
   std::optional<sim::LoadedScenario> loaded;
   try {
@@ -27,6 +29,16 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
   try {  // refused before anything runs
     out_dir = sim::CheckOutputFolder(
         out ? *out : (fs::path("runs") / loaded->scenario.name).string(), force);
+    if (mcap) {
+      mcap->file = CheckMcapFile(mcap->file.string(), force);
+      const fs::path dir = fs::weakly_canonical(out_dir);
+      const fs::path file = fs::weakly_canonical(mcap->file);
+      if (std::mismatch(dir.begin(), dir.end(), file.begin(), file.end()).first == dir.end()) {
+        throw sim::ConfigError("--mcap " + mcap->file.string() + " lies inside the result folder " +
+                               out_dir.string() +
+                               ", which the run replaces when it completes: put it elsewhere");
+      }
+    }
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -48,7 +60,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
   Progress progress(duration_s, quiet);
   Outcome outcome;
   try {
-    outcome = RunLoaded(*loaded, out_dir, &progress, force);
+    outcome = RunLoaded(*loaded, out_dir, &progress, force, mcap ? &*mcap : nullptr);
   } catch (const sim::MqttError& e) {  // the broker or server of v2i.link: mqtt or realtime
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitUnusableInput;
@@ -60,6 +72,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
              outcome.wall_seconds,
              outcome.wall_seconds > 0 ? outcome.sim_seconds / outcome.wall_seconds : 0.0);
   fmt::print("results: {}\n", out_dir.string());
+  if (outcome.mcap) PrintMcapWritten(*outcome.mcap);
   PrintReportPath(outcome);
   return outcome.passed() ? kExitOk : kExitExpectationFailed;
 }
@@ -77,6 +90,7 @@ Command AddRunCommand(CLI::App& parent) {
     bool quiet{false};
     bool force{false};
     bool report{false};
+    McapArgs mcap;
   };
   auto o = std::make_shared<Options>();
   CLI::App* run = parent.add_subcommand(
@@ -90,8 +104,8 @@ Command AddRunCommand(CLI::App& parent) {
                   "if an earlier run, render, check or sweep wrote it (else refused: see --force)")
       ->type_name("DIR");
   run->add_flag("--force", o->force,
-                "Replace --out even if this program did not write it (a folder and all it holds, "
-                "or a file; never a device)");
+                "Replace --out (and --mcap's file) even if this program did not write it (a "
+                "folder and all it holds, or a file; never a device)");
   AddSeedOption(run, &o->seed);
   AddSetOption(run, &o->overrides);
   run->add_option("--broker", o->broker,
@@ -110,6 +124,10 @@ Command AddRunCommand(CLI::App& parent) {
   run->add_flag("--quiet,-q", o->quiet, "No progress output");
   run->add_flag("--report", o->report,
                 "Also write the replay report, RESULTS/report.html (see `autonomsim report`)");
+  AddMcapOptions(run, &o->mcap,
+                 "Also record the run as MCAP into FILE while it goes (ROS 2 messages, /carN/... "
+                 "topics: open it in Foxglove or Lichtblick, or `ros2 bag play` it; docs/mcap.md)",
+                 false);
   return {run, [o] {
             std::vector<std::string> overrides = o->overrides;
             if (o->realtime && !o->broker) {
@@ -123,8 +141,15 @@ Command AddRunCommand(CLI::App& parent) {
               overrides.push_back(o->realtime ? "v2i.link=realtime" : "v2i.link=mqtt");
               overrides.push_back("v2i.mqtt.broker=" + *o->broker);
             }
+            std::optional<McapRequest> mcap;
+            try {
+              mcap = o->mcap.Request();
+            } catch (const sim::ConfigError& e) {
+              fmt::print(stderr, "error: {}\n", e.what());
+              return kExitUnusableInput;
+            }
             return RunCommand(o->scenario, o->out, o->seed, overrides, o->quiet, o->force,
-                              o->report);
+                              o->report, std::move(mcap));
           }};
 }
 

@@ -125,7 +125,8 @@ struct Simulation::Impl {
   std::unique_ptr<EmbeddedV2ILink> link;
   // v2i.link: realtime: the cars' link to a server outside the run, instead of `link`
   std::unique_ptr<RealTimeV2ILink> realtime_link;
-  V2ILink* to_server{nullptr};  // what the cars send on: `link` or `realtime_link`, or `tapped_link`
+  V2ILink* to_server{
+      nullptr};  // what the cars send on: `link` or `realtime_link`, or `tapped_link`
   // with observers: the link the cars and the server send on, which tells the observers
   std::unique_ptr<V2ILink> tapped_link;
   std::vector<RunObserver*> observers;

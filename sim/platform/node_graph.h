@@ -258,8 +258,8 @@ class NodeGraph {
     int metrics_index{-1};
     std::vector<int> subscriptions;
     std::vector<int> publishers;
-    std::optional<int> pool;  // zero-copy chunk pool
-    DdsLinkParams dds;        // DDS: the profile's settings with the topic's own
+    std::optional<int> pool;                   // zero-copy chunk pool
+    DdsLinkParams dds;                         // DDS: the profile's settings with the topic's own
     std::type_index value_type{typeid(void)};  // what its messages carry (AddTopic's T)
     std::vector<std::function<void(const detail::EnvelopeBase&, Time)>> taps;  // Tap
   };

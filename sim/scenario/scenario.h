@@ -310,9 +310,9 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides = {},
                             std::optional<std::uint64_t> seed = std::nullopt);
 
-// A finished run's scenario.resolved.json read back (its scenario, track and boards' profiles, every
-// default as resolved), ready to run again: the run it describes, without the files it was made
-// from. Its sha256 equals that run's scenario_sha256. Throws ConfigError on an unusable file.
+// A finished run's scenario.resolved.json read back (its scenario, track and boards' profiles,
+// every default as resolved), ready to run again: the run it describes, without the files it was
+// made from. Its sha256 equals that run's scenario_sha256. Throws ConfigError on an unusable file.
 LoadedScenario LoadResolvedScenario(const std::filesystem::path& file);
 
 // How a named start pose sits against a route: the distance along the route nearest to it, how far
