@@ -29,8 +29,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
   try {  // refused before anything runs
     out_dir = sim::CheckOutputFolder(
         out ? *out : (fs::path("runs") / loaded->scenario.name).string(), force);
-    if (mcap) {
-      mcap->file = CheckMcapFile(mcap->file.string(), force);
+    if (mcap) {  // before CheckMcapFile, which makes the file's folder
       const fs::path dir = fs::weakly_canonical(out_dir);
       const fs::path file = fs::weakly_canonical(mcap->file);
       if (std::mismatch(dir.begin(), dir.end(), file.begin(), file.end()).first == dir.end()) {
@@ -38,6 +37,7 @@ int RunCommand(const std::string& scenario_file, const std::optional<std::string
                                out_dir.string() +
                                ", which the run replaces when it completes: put it elsewhere");
       }
+      mcap->file = CheckMcapFile(mcap->file.string(), force);
     }
   } catch (const sim::ConfigError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -382,3 +382,60 @@ TEST(CliTest, Table1AndTransportFindTheShippedProfileFromAnyFolder) {
 
 }  // namespace
 }  // namespace autonomsim::cli
+
+namespace autonomsim::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::Cli;
+using ::testing::HasSubstr;
+using testing::Read;
+using testing::Result;
+
+fs::path Scratch() { return testing::Scratch("autonomsim_cli"); }
+
+// `run --mcap` and `export --mcap`'s refusals: nothing of a user's is replaced, nothing
+// half-written is left, and an export whose run no longer gives the run's result writes nothing.
+// (What a recording holds: tools/tests/mcap_e2e.sh, ctest Mcap.run_and_export.)
+TEST(CliTest, McapOutputsAreRefusedWhereTheyWouldReplaceOrMisrepresent) {
+  const fs::path dir = Scratch();
+  const std::string run =
+      "run scenarios/lab_two_cars_oracle.yaml --set duration_s=3 --set expect=null -q ";
+  // a file this program did not write is refused (exit 2), and stays as it was
+  std::ofstream(dir / "mine.mcap") << "a user's file";
+  const Result foreign =
+      Cli(run + "--out " + (dir / "a").string() + " --mcap " + (dir / "mine.mcap").string());
+  EXPECT_EQ(foreign.exit_code, 2) << foreign.output;
+  EXPECT_THAT(foreign.output, HasSubstr("--force"));
+  EXPECT_EQ(Read(dir / "mine.mcap"), "a user's file");
+  // --mcap-topics without --mcap, and --mcap inside the folder the run replaces
+  EXPECT_EQ(Cli(run + "--mcap-topics '*'").exit_code, 2);
+  const Result inside =
+      Cli(run + "--out " + (dir / "a").string() + " --mcap " + (dir / "a" / "run.mcap").string());
+  EXPECT_EQ(inside.exit_code, 2) << inside.output;
+  EXPECT_THAT(inside.output, HasSubstr("inside the result folder"));
+  // one it wrote is replaced
+  const std::string ok_run =
+      run + "--out " + (dir / "a").string() + " --mcap " + (dir / "ours.mcap").string();
+  const Result first = Cli(ok_run);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const Result again = Cli(ok_run + " --force");  // --force for the folder only
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_THAT(again.output, HasSubstr("mcap: "));
+  // an export whose run gives another result writes nothing
+  nlohmann::json summary = nlohmann::json::parse(Read(dir / "a" / "summary.json"));
+  summary["result_sha256"] = std::string(64, '0');
+  std::ofstream(dir / "a" / "summary.json") << summary.dump(2);
+  const Result differs =
+      Cli("export " + (dir / "a").string() + " --mcap " + (dir / "export.mcap").string() + " -q");
+  EXPECT_EQ(differs.exit_code, 2) << differs.output;
+  EXPECT_THAT(differs.output, HasSubstr("gives another result"));
+  EXPECT_FALSE(fs::exists(dir / "export.mcap"));
+  for (const auto& entry : fs::directory_iterator(dir)) {  // no partial file left either
+    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().string().find(".rerun"), std::string::npos) << entry.path();
+  }
+}
+
+}  // namespace
+}  // namespace autonomsim::cli
