@@ -437,13 +437,20 @@ ros2::Marker Body(const CarConfig& car, std::string frame, std::string ns, ros2:
 
 }  // namespace
 
-// /track at time 0: the floor, the painted lines (every 5 cm of the 1 cm samples), the
-// intersections' areas and stop zones, and each car's body on its ground truth and its estimate.
+// /track at time 0: the floor (its colour, and its edge), the painted lines (every 5 cm of the 1 cm
+// samples), the intersections' areas and stop zones, and each car's body on its ground truth and
+// its estimate.
 void McapRecording::WriteTrack() {
   const world::TrackSpec& spec = loaded_.track.spec();
   std::vector<ros2::Marker> markers;
   const double h = spec.size_m / 2.0;
-  markers.push_back(Outline({-h, h, -h, h}, "floor", 0, {0.5F, 0.5F, 0.5F, 1.0F}));
+  ros2::Marker floor{
+      .header = HeaderAt(kZeroTime, "map"), .ns = "floor", .id = 0, .type = ros2::Marker::kCube};
+  floor.pose.position.z = -0.007;  // its top 2 mm below the lines
+  floor.scale = {spec.size_m, spec.size_m, 0.01};
+  floor.color = ColorOf(spec.floor_rgb);
+  markers.push_back(std::move(floor));
+  markers.push_back(Outline({-h, h, -h, h}, "floor", 1, {0.5F, 0.5F, 0.5F, 1.0F}));
   for (std::size_t i = 0; i < spec.lines.size(); ++i) {
     ros2::Marker m{.header = HeaderAt(kZeroTime, "map"), .ns = "lines", .id = static_cast<int>(i)};
     m.scale.x = spec.lines[i].width_m;
