@@ -67,6 +67,21 @@ class PartialFile {
   bool committed_{false};
 };
 
+// A line per board whose part of trace.json stops before the run's end (trace_max_events).
+std::vector<std::string> TraceCuts(const sim::RunRecord& record, double sim_seconds) {
+  std::vector<std::string> cuts;
+  for (const sim::BoardReport& board : record.boards) {
+    const sim::TraceCoverage& t = board.report.trace;
+    if (!t.recorded || !t.cut_at_s) continue;
+    cuts.push_back(fmt::format(
+        "{}'s part of trace.json stops at t = {:.1f} s of {:.0f} s: it holds its first {} events "
+        "(platform.trace_max_events); nodes.csv and summary.json cover the whole run. Raise "
+        "trace_max_events for more, or set platform.trace: false",
+        board.board, *t.cut_at_s, sim_seconds, t.max_events));
+  }
+  return cuts;
+}
+
 }  // namespace
 
 void AddMcapOptions(CLI::App* command, McapArgs* args, const std::string& file_help,
@@ -98,7 +113,7 @@ std::optional<McapRequest> McapArgs::Request() const {
 }
 
 fs::path CheckMcapFile(const std::string& given, bool force) {
-  return sim::CheckOutputFile(given, force, sim::McapFileSignature());
+  return sim::CheckOutputFile(given, force, sim::McapFileSignature(), "--mcap");
 }
 
 void PrintMcapWritten(const McapWritten& written) {
@@ -217,15 +232,16 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
     scratch.emplace("autonomsim_run_");
     store = std::make_shared<sim::RecordFiles>(scratch->path());
   }
-  const auto start = std::chrono::steady_clock::now();
-  sim::Simulation simulation(loaded, store);
+  // the recording before the simulation, whose taps point into it: it outlives them
   std::optional<PartialFile> partial;
   std::optional<sim::McapRecording> recording;
   if (mcap) {
     partial.emplace(mcap->file);
     recording.emplace(loaded, partial->path(), mcap->options);
-    simulation.AddObserver(&*recording);
   }
+  const auto start = std::chrono::steady_clock::now();
+  sim::Simulation simulation(loaded, store);
+  if (recording) simulation.AddObserver(&*recording);
   // every simulated second: Ctrl-C stops the run there, and its partial folder goes with it
   simulation.Run([progress](Time t) {
     ThrowIfInterrupted();
@@ -237,27 +253,18 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
   outcome.result_sha256 = sim::ResultSha256(simulation.record());
-  if (recording) {
-    recording->Close(outcome.expectations, outcome.result_sha256);
-    partial->Commit();
-    McapWritten written{.file = mcap->file,
-                        .channels = recording->channels(),
-                        .messages = recording->counts().messages,
-                        .bytes = static_cast<std::uint64_t>(fs::file_size(mcap->file)),
-                        .unmatched = recording->unmatched_patterns()};
-    outcome.mcap = std::move(written);
-  }
+  if (recording) recording->Close(outcome.expectations, outcome.result_sha256);
   if (folder) {
     folder->Complete(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds);
-    for (const sim::BoardReport& board : simulation.record().boards) {
-      const sim::TraceCoverage& t = board.report.trace;
-      if (!t.recorded || !t.cut_at_s) continue;
-      outcome.trace_cuts.push_back(fmt::format(
-          "{}'s part of trace.json stops at t = {:.1f} s of {:.0f} s: it holds its first {} events "
-          "(platform.trace_max_events); nodes.csv and summary.json cover the whole run. Raise "
-          "trace_max_events for more, or set platform.trace: false",
-          board.board, *t.cut_at_s, outcome.sim_seconds, t.max_events));
-    }
+    outcome.trace_cuts = TraceCuts(simulation.record(), outcome.sim_seconds);
+  }
+  if (recording) {  // the file last: a folder that could not be written takes the file with it
+    partial->Commit();
+    outcome.mcap = McapWritten{.file = mcap->file,
+                               .channels = recording->channels(),
+                               .messages = recording->counts().messages,
+                               .bytes = static_cast<std::uint64_t>(fs::file_size(mcap->file)),
+                               .unmatched = recording->unmatched_patterns()};
   }
   return outcome;
 }

@@ -80,7 +80,15 @@ int ExportCommand(const ExportArgs& a) {
                a.run_dir, outcome.result_sha256, run->summary.result_sha256);
     return kExitUnusableInput;
   }
-  fs::rename(scratch.file, request.file);
+  std::error_code renamed;
+  fs::rename(scratch.file, request.file, renamed);
+  if (renamed) {
+    std::error_code ignored;
+    fs::remove(scratch.file, ignored);
+    fmt::print(stderr, "error: --mcap {}: cannot write: {}\n", request.file.string(),
+               renamed.message());
+    return kExitUnusableInput;
+  }
   McapWritten written = *outcome.mcap;
   written.file = request.file;
   PrintMcapWritten(written);

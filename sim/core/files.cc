@@ -211,9 +211,10 @@ fs::path PrepareOutputFolder(const std::string& given, bool force) {
   return target;
 }
 
-fs::path CheckOutputFile(const std::string& given, bool force, const std::string& signature) {
+fs::path CheckOutputFile(const std::string& given, bool force, const std::string& signature,
+                         const std::string& option) {
   const auto refuse = [&](const std::string& why) -> ConfigError {
-    return ConfigError("--out " + given + ": " + why);
+    return ConfigError(option + " " + given + ": " + why);
   };
   if (given.empty()) throw refuse("empty path");
   const fs::path target = fs::absolute(given).lexically_normal();
@@ -241,13 +242,13 @@ fs::path CheckOutputFile(const std::string& given, bool force, const std::string
     const fs::path marker = target.parent_path() / kOutputMarker;
     if (fs::exists(marker)) {
       if (MarkerOwns(marker, target.filename().string())) {
-        throw refuse("is one of its run's own files; choose another --out");
+        throw refuse("is one of its run's own files; choose another " + option);
       }
       return target;
     }
   }
-  throw refuse("is " + kind +
-               " this program did not write; choose another --out, or add --force to replace it");
+  throw refuse("is " + kind + " this program did not write; choose another " + option +
+               ", or add --force to replace it");
 }
 
 namespace {

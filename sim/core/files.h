@@ -81,8 +81,10 @@ std::filesystem::path CheckOutputFolder(const std::string& given, bool force,
 // Throws ConfigError (exit 2), before anything is made, for a folder, a device node, FIFO or socket
 // (never replaced), and — unless `force` — any other existing file or symbolic link. Returns the
 // path to use.
+// `option`: the command-line option that named the file, for the messages.
 std::filesystem::path CheckOutputFile(const std::string& given, bool force,
-                                      const std::string& signature = "");
+                                      const std::string& signature = "",
+                                      const std::string& option = "--out");
 
 // A folder that outputs accumulate in (a sweep's: it is resumed, never replaced): created if
 // absent and given the marker. An empty folder is taken; one that holds anything without the

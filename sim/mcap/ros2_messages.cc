@@ -1,6 +1,7 @@
 #include "sim/mcap/ros2_messages.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -136,6 +137,14 @@ const Composition& CompositionOf(Type type) {
   throw std::logic_error("ros2 message type without a composition");
 }
 
+// A sequence's element count as CDR's uint32 (std::length_error beyond it).
+void Count(CdrWriter& w, std::size_t n) {
+  if (n > std::numeric_limits<std::uint32_t>::max()) {
+    throw std::length_error("a ROS 2 sequence of more than 2^32 - 1 elements");
+  }
+  w.SequenceLength(static_cast<std::uint32_t>(n));
+}
+
 void Put(CdrWriter& w, const Time& t) {
   w.I32(t.sec);
   w.U32(t.nanosec);
@@ -177,7 +186,7 @@ void PutMarker(CdrWriter& w, const Marker& m) {
   Put(w, m.color);
   Put(w, Time{});  // lifetime 0: for ever
   w.Bool(m.frame_locked);
-  w.SequenceLength(static_cast<std::uint32_t>(m.points.size()));
+  Count(w, m.points.size());
   for (const Vector3& p : m.points) Put(w, p);
   w.SequenceLength(0);  // colors
   w.String("");         // texture_resource
@@ -207,7 +216,10 @@ std::string SchemaText(Type type) {
 }
 
 Time TimeOfNs(std::int64_t ns) {
-  if (ns < 0) throw std::invalid_argument("TimeOfNs: a negative time");
+  constexpr std::int64_t kMaxSeconds = std::numeric_limits<std::int32_t>::max();
+  if (ns < 0 || ns / 1'000'000'000 > kMaxSeconds) {
+    throw std::invalid_argument("TimeOfNs: outside builtin_interfaces/Time's [0, 2^31) s");
+  }
   return Time{.sec = static_cast<std::int32_t>(ns / 1'000'000'000),
               .nanosec = static_cast<std::uint32_t>(ns % 1'000'000'000)};
 }
@@ -217,7 +229,7 @@ Quaternion YawQuaternion(double yaw_rad) {
 }
 
 void EncodeTFMessage(CdrWriter& w, std::span<const TransformStamped> transforms) {
-  w.SequenceLength(static_cast<std::uint32_t>(transforms.size()));
+  Count(w, transforms.size());
   for (const TransformStamped& t : transforms) {
     Put(w, t.header);
     w.String(t.child_frame_id);
@@ -260,7 +272,7 @@ void EncodeCameraInfo(CdrWriter& w, const Header& header, const CameraInfo& info
   w.U32(info.height);
   w.U32(info.width);
   w.String(info.distortion_model);
-  w.SequenceLength(static_cast<std::uint32_t>(info.d.size()));
+  Count(w, info.d.size());
   w.Array(std::span<const double>(info.d));
   w.Array(std::span<const double>(info.k));
   w.Array(std::span<const double>(info.r));
@@ -283,13 +295,13 @@ void EncodeOccupancyGrid(CdrWriter& w, const Header& header, float resolution_m,
   w.U32(width);
   w.U32(height);
   Put(w, origin);
-  w.SequenceLength(static_cast<std::uint32_t>(data.size()));
+  Count(w, data.size());
   w.Array(data);
 }
 
 void EncodePath(CdrWriter& w, const Header& header, std::span<const Pose> poses) {
   Put(w, header);
-  w.SequenceLength(static_cast<std::uint32_t>(poses.size()));
+  Count(w, poses.size());
   for (const Pose& pose : poses) {
     Put(w, header);
     Put(w, pose);
@@ -311,7 +323,7 @@ void EncodeLog(CdrWriter& w, const Log& log) {
 }
 
 void EncodeMarkerArray(CdrWriter& w, std::span<const Marker> markers) {
-  w.SequenceLength(static_cast<std::uint32_t>(markers.size()));
+  Count(w, markers.size());
   for (const Marker& m : markers) PutMarker(w, m);
 }
 

@@ -565,11 +565,14 @@ void NodeGraph::NextDdsWrite(int node) {
     if (p.dropped || writer == nullptr) continue;
     const std::int64_t seq = writer->link->next_seq();
     for (auto& queue : writer->in_flight) queue.emplace_back(seq, p.message);
-    writer->link->Write(p.message->bytes, [this, node, writer, seq](bool accepted) {
+    const std::size_t output = job.write_output - 1;
+    writer->link->Write(p.message->bytes, [this, node, writer, seq, output](bool accepted) {
       if (!accepted) {
         for (auto& queue : writer->in_flight) {
           std::erase_if(queue, [seq](const auto& sample) { return sample.first == seq; });
         }
+        Node& n_now = nodes_[static_cast<std::size_t>(node)];
+        if (n_now.job) n_now.job->out.pending_[output].refused = true;
       }
       NextDdsWrite(node);
     });
@@ -605,7 +608,9 @@ void NodeGraph::FinishJob(int node) {
     if (topic.spec.transport == Transport::kZeroCopy) --pub.loans_held;
     if (n.crashed) continue;  // died before publishing: the loan goes back, nothing is sent
     if (metrics_) metrics_->Published(n.metrics_index, topic.metrics_index, now, p.message->stamp);
-    for (const auto& tap : topic.taps) tap(*p.message, now);
+    if (!p.refused) {
+      for (const auto& tap : topic.taps) tap(*p.message, now);
+    }
     Distribute(topic, std::move(p.message));
   }
   if (n.crashed) return;

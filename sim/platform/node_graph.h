@@ -132,6 +132,7 @@ class Outbox {
     int publisher;
     std::shared_ptr<detail::EnvelopeBase> message;
     bool dropped{false};  // its loan failed
+    bool refused{false};  // its DDS write failed after max_blocking: nothing was sent
   };
   explicit Outbox(const NodeGraph* graph) : graph_(graph) {}
   const NodeGraph* graph_;
@@ -207,8 +208,10 @@ class NodeGraph {
   void CrashNode(const std::string& name);
 
   // A tap on the topic named `name`: `tap(value, stamp, now)` for every message a node publishes
-  // on it, at the instant it is published (its job's completion; a node that crashed or a loan
-  // that failed publishes nothing), before any transport. A tap is not a subscriber: it costs
+  // on it, at the instant it is published (its job's completion; a node that crashed, a loan that
+  // failed and a DDS write refused after max_blocking publish nothing), before any transport. (A
+  // node that crashes between its DDS writes: the samples it wrote reach their readers, the tap
+  // sees none of them.) A tap is not a subscriber: it costs
   // nothing on the platform, delays nothing and changes nothing in the run (a recorder,
   // sim/results/mcap_recording.h). False when the graph has no topic of that name;
   // std::invalid_argument when it has one of another type than T.

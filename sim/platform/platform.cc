@@ -86,6 +86,10 @@ double Cpu::busy_cores() const {
   return busy;
 }
 
+double Cpu::BusyCoreSecondsAt(Time now) const {
+  return busy_core_s_ + busy_cores() * ToSeconds(std::max(now - last_update_, Duration{0}));
+}
+
 double Cpu::demand() const {
   double demand = 0.0;
   for (const Job& job : jobs_) demand += job.max_parallelism;
@@ -115,6 +119,7 @@ void Cpu::Advance() {
     }
   }
   if (metrics_) metrics_->AddBusy(last_update_, now, busy);
+  busy_core_s_ += busy * dt_ns * 1e-9;
   last_update_ = now;
 }
 

@@ -85,6 +85,9 @@ class Cpu {
   std::size_t running() const { return jobs_.size(); }
   // The cores job `id` gets now (0 if it is not running); for tests and traces.
   double share(JobId id) const;
+  // The core-seconds the jobs have had from t = 0 to `now` (>= the last change of load), for an
+  // observer's mean load over an interval (sim/results/mcap_recording.h). Looks, changes nothing.
+  double BusyCoreSecondsAt(Time now) const;
 
  private:
   struct Job {
@@ -105,6 +108,7 @@ class Cpu {
   RunMetrics* metrics_;
   std::vector<Job> jobs_;  // in start order
   Time last_update_{0};
+  double busy_core_s_{0.0};  // the core-seconds charged up to last_update_
   EventId next_event_;
   JobId next_id_{1};
 };

@@ -62,15 +62,21 @@ std::int8_t OccupancyOfCost(std::uint8_t cost) {
   return static_cast<std::int8_t>(1 + (97 * (cost - 1)) / 251);
 }
 
-// rosbag2's QoS metadata for a latched topic (transient local, reliable, keep last 1): what
-// `ros2 bag play` offers late subscribers of /tf_static and /track.
-std::map<std::string, std::string> LatchedQos() {
+// rosbag2's channel metadata: the QoS the recorded publisher offered, which `ros2 bag play`
+// offers again (rmw enums: history 1 keep last, reliability 1 reliable, durability 1 transient
+// local / 2 volatile, liveliness 1 automatic; unset durations as rosbag2 writes them).
+std::map<std::string, std::string> Qos(bool latched) {
   return {{"offered_qos_profiles",
-           "- history: 1\n  depth: 1\n  reliability: 1\n  durability: 1\n  deadline:\n    sec: "
-           "2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: "
-           "4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    "
-           "nsec: 4294967295\n  avoid_ros_namespace_conventions: false\n"}};
+           std::string("- history: 1\n  depth: ") + (latched ? "1" : "10") +
+               "\n  reliability: 1\n  durability: " + (latched ? "1" : "2") +
+               "\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: "
+               "2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n"
+               "    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: "
+               "false\n"}};
 }
+
+// /tf_static and /track: transient local, as a latched topic (late subscribers get them).
+std::map<std::string, std::string> LatchedQos() { return Qos(true); }
 
 ros2::LogLevel LevelOf(EventKind kind) {
   switch (kind) {
@@ -137,7 +143,7 @@ struct McapRecording::CarTaps {
   std::size_t index{0};  // in the scenario's cars
   std::string prefix;    // "/car0": its topics' namespace
   std::string frame;     // "car0/": its frames' prefix
-  const Board* board{nullptr};
+  Board* board{nullptr};
   double last_busy_core_s{0.0};
   Time last_sample{kZeroTime};
   vehicle::ColorImage color;  // the image buffers, reused frame after frame
@@ -183,9 +189,13 @@ McapRecording::~McapRecording() = default;
 McapRecording::Slot& McapRecording::SlotFor(const std::string& topic, Type type,
                                             std::map<std::string, std::string> metadata) {
   if (const auto it = slot_of_topic_.find(topic); it != slot_of_topic_.end()) return *it->second;
+  if (metadata.empty()) metadata = Qos(false);
   Slot& slot =
       slots_.emplace_back(Slot{.topic = topic, .type = type, .metadata = std::move(metadata)});
   slot_of_topic_[topic] = &slot;
+  for (std::size_t i = 0; i < options_.topics.size(); ++i) {  // a topic of the run, recorded or not
+    if (fnmatch(options_.topics[i].c_str(), topic.c_str(), 0) == 0) pattern_matched_[i] = true;
+  }
   return slot;
 }
 
@@ -213,11 +223,6 @@ void McapRecording::Write(Slot& slot, Time t, const std::function<void(mcap::Cdr
     }
     slot.channel = writer_.AddChannel(schema->second, slot.topic, "cdr", slot.metadata);
     opened_.push_back(&slot);
-    for (std::size_t i = 0; i < options_.topics.size(); ++i) {
-      if (fnmatch(options_.topics[i].c_str(), slot.topic.c_str(), 0) == 0) {
-        pattern_matched_[i] = true;
-      }
-    }
   }
   cdr_.Reset();
   encode(cdr_);
@@ -383,7 +388,7 @@ void McapRecording::OnSample(const TrajectorySample& s) {
         [&](mcap::CdrWriter& w) { ros2::EncodeTFMessage(w, transforms); });
   if (car.board && s.t > car.last_sample) {
     // the board's mean load since the last sample, in % of one core (400: the ZCU104's four)
-    const double busy = car.board->metrics().busy_core_s();
+    const double busy = car.board->platform().cpu().BusyCoreSecondsAt(s.t);
     const double percent = 100.0 * (busy - car.last_busy_core_s) / ToSeconds(s.t - car.last_sample);
     car.last_busy_core_s = busy;
     car.last_sample = s.t;
@@ -429,8 +434,8 @@ ros2::Marker Body(const CarConfig& car, std::string frame, std::string ns, ros2:
                  .id = car.id,
                  .type = ros2::Marker::kCube,
                  .frame_locked = true};
-  m.pose.position.z = 0.06;
-  m.scale = {car.vehicle.length_m, car.vehicle.width_m, 0.12};
+  m.pose.position.z = car.vehicle.height_m / 2.0;
+  m.scale = {car.vehicle.length_m, car.vehicle.width_m, car.vehicle.height_m};
   m.color = color;
   return m;
 }

@@ -406,6 +406,8 @@ TEST(CliTest, McapOutputsAreRefusedWhereTheyWouldReplaceOrMisrepresent) {
   const Result foreign =
       Cli(run + "--out " + (dir / "a").string() + " --mcap " + (dir / "mine.mcap").string());
   EXPECT_EQ(foreign.exit_code, 2) << foreign.output;
+  EXPECT_THAT(foreign.output, HasSubstr("--mcap " + (dir / "mine.mcap").string() +
+                                        ": is a file this program did not write"));
   EXPECT_THAT(foreign.output, HasSubstr("--force"));
   EXPECT_EQ(Read(dir / "mine.mcap"), "a user's file");
   // --mcap-topics without --mcap, and --mcap inside the folder the run replaces
@@ -414,12 +416,11 @@ TEST(CliTest, McapOutputsAreRefusedWhereTheyWouldReplaceOrMisrepresent) {
       Cli(run + "--out " + (dir / "a").string() + " --mcap " + (dir / "a" / "run.mcap").string());
   EXPECT_EQ(inside.exit_code, 2) << inside.output;
   EXPECT_THAT(inside.output, HasSubstr("inside the result folder"));
-  // one it wrote is replaced
-  const std::string ok_run =
-      run + "--out " + (dir / "a").string() + " --mcap " + (dir / "ours.mcap").string();
-  const Result first = Cli(ok_run);
+  // one it wrote is replaced without --force
+  const std::string to_ours = " --mcap " + (dir / "ours.mcap").string();
+  const Result first = Cli(run + "--out " + (dir / "a").string() + to_ours);
   ASSERT_EQ(first.exit_code, 0) << first.output;
-  const Result again = Cli(ok_run + " --force");  // --force for the folder only
+  const Result again = Cli(run + "--out " + (dir / "b").string() + to_ours);
   EXPECT_EQ(again.exit_code, 0) << again.output;
   EXPECT_THAT(again.output, HasSubstr("mcap: "));
   // an export whose run gives another result writes nothing

@@ -10,6 +10,7 @@
 //     trajectory sample);
 //   - an image (when recorded) has its size, encoding and data length, and is not blank;
 //   - the lane points have the lab's layout (valid, 30 points);
+//   - /carN/cpu_load's mean over the run is summary.json's cpu_percent for the board;
 //   - the file's metadata carries the run's result_sha256.
 // A car whose ground truth and TF were left out (--mcap-topics) is said so and skipped.
 // Prints a line per check; exits 1 on the first failure.
@@ -151,6 +152,19 @@ function checkEstimate(car, tf, expected) {
   }
   ok(`car ${car}: ${estimates.length} EKF transforms within ${bound.toFixed(3)} m of the ground ` +
      `truth (worst ${worst.toFixed(3)} m)`);
+}
+
+// The board's load over the run: the mean of its samples (equal intervals from the first sample
+// to the end) is summary.json's cpu_percent for the board, measured over the same span.
+for (const [topic, messages] of byTopic) {
+  const board = /^\/(car\d+)\/cpu_load$/.exec(topic)?.[1];
+  const whole = summary.platform?.[board]?.cpu_percent;
+  if (!board || whole === undefined) continue;
+  const mean = messages.reduce((sum, m) => sum + m.data, 0) / messages.length;
+  if (Math.abs(mean - whole) > 1e-6 * Math.max(1, whole)) {
+    fail(`${topic}: mean ${mean} % is not summary.json's cpu_percent ${whole} %`);
+  }
+  ok(`${topic}: ${messages.length} samples, mean ${mean.toFixed(3)} % = summary.json's`);
 }
 
 for (const [topic, messages] of byTopic) {
