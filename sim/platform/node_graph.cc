@@ -101,6 +101,34 @@ int NodeGraph::AddTopicImpl(TopicSpec spec, std::type_index value_type) {
   return static_cast<int>(topics_.size()) - 1;
 }
 
+// static: the node owns its slot for the run; executor: its bitstream must be known, and a slot
+// it names holds the bitstream at t = 0.
+void NodeGraph::PlaceInSlot(const NodeSpec& spec, const HwCost& cost,
+                            const std::string& cost_name) {
+  SlotExecutor* executor = platform_.slot_executor();
+  const FpgaSlot& slot = *spec.mapping.slot;
+  if (!executor) {
+    if (slot.any()) {
+      throw ConfigError("node '" + spec.name +
+                        "' is mapped to slot any, which needs platform.slot_policy: executor (with "
+                        "static, each hardware node owns a slot: give its number)");
+    }
+    platform_.fpga().Claim(*slot.index, spec.name);
+    return;
+  }
+  if (cost.bitstream_bytes <= 0) {
+    throw ConfigError("node '" + spec.name + "' runs in hardware under slot_policy executor, but " +
+                      "components." + cost_name + ".hw of profile '" + platform_.profile().name +
+                      "' gives no bitstream_bytes (what a slot loads to serve it)");
+  }
+  if (slot.any()) return;
+  try {
+    executor->Preload(*slot.index, spec.name);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError("node '" + spec.name + "' is mapped to FPGA " + e.what());
+  }
+}
+
 NodeId NodeGraph::AddNode(NodeSpec spec) {
   if (const auto it = mapping_config_.find(spec.name); it != mapping_config_.end()) {
     spec.mapping = it->second;
@@ -119,7 +147,7 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
     throw ConfigError("node '" + spec.name + "' is mapped to sw, but components." + cost_name +
                       " of profile '" + platform_.profile().name + "' has no 'sw' cost");
   }
-  if (hw) platform_.fpga().Claim(*spec.mapping.slot, spec.name);
+  if (hw) PlaceInSlot(spec, *cost.hw, cost_name);
 
   Node node{.name = spec.name, .mapping = spec.mapping, .hw = hw, .cost = cost};
   const double jitter = hw ? cost.hw->jitter : cost.sw->jitter;
@@ -143,8 +171,7 @@ NodeId NodeGraph::AddNode(NodeSpec spec) {
     node.override_rng.emplace(
         rng_->Stream(rng_prefix_ + "platform/" + spec.name + "/cost_override"));
   }
-  const std::string mapping =
-      hw ? "hw:slot" + std::to_string(*spec.mapping.slot) : std::string("sw");
+  const std::string mapping = hw ? "hw:slot" + ToString(*spec.mapping.slot) : std::string("sw");
   node.metrics_index =
       metrics_ ? metrics_->AddNode(spec.name, mapping) : static_cast<int>(nodes_.size());
   nodes_.push_back(std::move(node));
@@ -532,8 +559,11 @@ void NodeGraph::CostJob(Node& n, const TakenInput& in, std::int64_t out_bytes, J
 void NodeGraph::RunCompute(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
   const Job& job = *n.job;
-  if (n.hw) {
-    platform_.RunHwJob(*n.mapping.slot, Owner(node), job.fabric, job.compute_core_s,
+  if (n.hw && platform_.slot_executor()) {
+    platform_.slot_executor()->Submit(n.name, Owner(node), n.cost.hw->bitstream_bytes, job.fabric,
+                                      job.compute_core_s, [this, node] { RunPublish(node); });
+  } else if (n.hw) {
+    platform_.RunHwJob(*n.mapping.slot->index, Owner(node), job.fabric, job.compute_core_s,
                        [this, node] { RunPublish(node); });
   } else if (job.compute_core_s > 0.0) {
     platform_.cpu().Start(Owner(node), job.compute_core_s, job.max_parallelism,

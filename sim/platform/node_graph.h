@@ -321,6 +321,7 @@ class NodeGraph {
   Node& NodeNamed(const std::string& name);
 
   int AddTopicImpl(TopicSpec spec, std::type_index value_type);
+  void PlaceInSlot(const NodeSpec& spec, const HwCost& cost, const std::string& cost_name);
   bool TapImpl(const std::string& name, std::type_index value_type,
                std::function<void(const detail::EnvelopeBase&, Time)> tap);
   int AddPublisherImpl(int node, int topic);

@@ -203,6 +203,10 @@ void Fpga::Claim(int slot, const std::string& node) {
   owner = node;
 }
 
+void Fpga::Serve(int slot, const std::string& node) {
+  owner_.at(static_cast<std::size_t>(slot)) = node;
+}
+
 Duration Fpga::TransferTime(std::int64_t bytes) const {
   return FromSeconds(static_cast<double>(bytes) / profile_.memif_bytes_per_s);
 }
@@ -261,7 +265,15 @@ Platform::Platform(Kernel& kernel, PlatformProfile profile, RunMetrics* metrics)
       metrics_(metrics),
       cpu_(kernel, profile_.cpu.cores, metrics),
       fpga_(kernel, profile_.fpga, metrics),
-      chunk_pools_(std::make_shared<ChunkPools>(profile_.zero_copy.mempools)) {}
+      chunk_pools_(std::make_shared<ChunkPools>(profile_.zero_copy.mempools)) {
+  if (profile_.fpga.slot_policy == SlotPolicy::kExecutor) {
+    slot_executor_ = std::make_unique<SlotExecutor>(
+        kernel, *this, profile_.fpga.slots, profile_.fpga.agent_poll_period,
+        profile_.fpga.config_port_bytes_per_s, profile_.cpu.memcpy_bytes_per_s);
+  }
+}
+
+Platform::~Platform() = default;
 
 double DrawCostSeconds(const CostDistributionConfig& d, Rng& rng) {
   switch (d.distribution) {
@@ -284,6 +296,8 @@ double DrawCostSeconds(const CostDistributionConfig& d, Rng& rng) {
 
 PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfig& config) {
   if (config.cores) profile.cpu.cores = *config.cores;
+  if (config.slots) profile.fpga.slots = *config.slots;
+  if (config.slot_policy) profile.fpga.slot_policy = *config.slot_policy;
   if (config.host_rmem_max_bytes) profile.dds.host_rmem_max_bytes = *config.host_rmem_max_bytes;
   return profile;
 }

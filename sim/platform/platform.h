@@ -17,6 +17,7 @@
 #include "sim/core/random.h"
 #include "sim/platform/node_metrics.h"
 #include "sim/platform/platform_profile.h"
+#include "sim/platform/slot_executor.h"
 
 namespace autonomsim::sim {
 
@@ -122,6 +123,8 @@ class Fpga {
   // Gives `slot` to `node` for the whole run; a ConfigError if the slot does not exist or already
   // serves another node (one hardware node per slot).
   void Claim(int slot, const std::string& node);
+  // `slot` now serves `node` (slot_policy executor: the slots change hands; names its trace spans).
+  void Serve(int slot, const std::string& node);
   // Time to move `bytes` (read + written) over one slot's memory interface.
   Duration TransferTime(std::int64_t bytes) const;
   // Occupies `slot` for `duration`, then calls `done`. The slot must be free.
@@ -174,11 +177,16 @@ class ChunkLease {
 class Platform {
  public:
   Platform(Kernel& kernel, PlatformProfile profile, RunMetrics* metrics);
+  ~Platform();
+  Platform(const Platform&) = delete;
+  Platform& operator=(const Platform&) = delete;
 
   const PlatformProfile& profile() const { return profile_; }
   Kernel& kernel() { return kernel_; }
   Cpu& cpu() { return cpu_; }
   Fpga& fpga() { return fpga_; }
+  // The slots' executor (fpga.slot_policy executor), else null.
+  SlotExecutor* slot_executor() { return slot_executor_.get(); }
   const std::shared_ptr<ChunkPools>& chunk_pools() { return chunk_pools_; }
   RunMetrics* metrics() { return metrics_; }
 
@@ -194,6 +202,7 @@ class Platform {
   Cpu cpu_;
   Fpga fpga_;
   std::shared_ptr<ChunkPools> chunk_pools_;
+  std::unique_ptr<SlotExecutor> slot_executor_;
 };
 
 }  // namespace autonomsim::sim

@@ -141,10 +141,40 @@ PlatformProfile LoadPlatformProfile(const std::filesystem::path& file,
   return ReadConfig<PlatformProfile>(root, source);
 }
 
+void ReadScalar(const YAML::Node& node, FpgaSlot& out, const std::string& path,
+                const ConfigSource& source) {
+  if (node.IsScalar() && node.Scalar() == "any") {
+    out = FpgaSlot::Any();
+    return;
+  }
+  if (!node.IsScalar()) {
+    detail::Fail(node, path, source,
+                 "expected a slot number or `any`, got " + detail::Describe(node));
+  }
+  int index = 0;
+  try {
+    detail::ReadScalar(node, index, path, source);
+  } catch (const ConfigError&) {
+    detail::Fail(node, path, source,
+                 "expected a slot number or `any`, got '" + node.Scalar() + "'");
+  }
+  out = FpgaSlot(index);
+}
+
+void to_json(nlohmann::json& j, const FpgaSlot& slot) {
+  j = slot.index ? nlohmann::json(*slot.index) : nlohmann::json("any");
+}
+
+std::string ToString(const FpgaSlot& slot) {
+  return slot.index ? std::to_string(*slot.index) : "any";
+}
+
 void NodeMappingConfig::Validate() const {
   if (target == Target::kHw) Require(slot.has_value(), "a node mapped to 'hw' needs a 'slot'");
   if (target == Target::kSw) Require(!slot.has_value(), "'slot' is only for target 'hw'");
-  if (slot) Require(*slot >= 0, "slot must be >= 0, got " + std::to_string(*slot));
+  if (slot && slot->index) {
+    Require(*slot->index >= 0, "slot must be >= 0, got " + std::to_string(*slot->index));
+  }
 }
 
 void TopicTransportConfig::Validate() const {

@@ -7,6 +7,7 @@
 // paper does, "CPU in % of 4 cores": 100 % = one core fully busy, 400 % = all four.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -44,12 +45,16 @@ struct HwCost {
   double compute_s{0.0};       // fabric time per job besides the memory transfers
   double delegate_cpu_s{0.0};  // core-seconds of the delegate thread per job (at most one core)
   double jitter{0.0};          // as SwCost::jitter, on compute_s and delegate_cpu_s
+  // Its partial bitstream, what a slot loads to serve it (fpga.slot_policy executor); 0: none
+  // given (the executor then refuses the node).
+  int bitstream_bytes{0};
 
   template <class V>
   void Describe(V& v) {
     v("compute_s", compute_s);
     v("delegate_cpu_s", delegate_cpu_s);
     v("jitter", jitter);
+    v("bitstream_bytes", bitstream_bytes);
   }
   void Validate() const;
 };
@@ -85,14 +90,27 @@ struct CpuProfile {
   void Validate() const;
 };
 
+// How hardware nodes share the slots: `static`, one node per slot for the whole run (the lab's
+// build); `executor`, any node in any slot, reconfigured as the ReconROS executor does
+// (sim/platform/slot_executor.h).
+enum class SlotPolicy { kStatic, kExecutor };
+
 struct FpgaProfile {
   int slots{0};
   double memif_bytes_per_s{1e9};  // one slot's memory interface (bytes read + written)
+  SlotPolicy slot_policy{SlotPolicy::kStatic};
+  // executor: the configuration port's throughput (one reconfiguration at a time)
+  double config_port_bytes_per_s{4e8};
+  // executor: an idle slot agent's poll period; 0: it takes a callback the moment it is ready
+  Duration agent_poll_period{0};
 
   template <class V>
   void Describe(V& v) {
     v("slots", slots);
     v("memif_bytes_per_s", memif_bytes_per_s);
+    v("slot_policy", slot_policy);
+    v("config_port_bytes_per_s", config_port_bytes_per_s);
+    v("agent_poll_period_s", agent_poll_period);
   }
   void Validate() const;
 };
@@ -271,6 +289,11 @@ enum class Transport { kDds, kZeroCopy };
 
 namespace autonomsim {
 template <>
+struct NameTable<sim::SlotPolicy> {
+  static constexpr std::array<std::pair<sim::SlotPolicy, std::string_view>, 2> kEntries{
+      {{sim::SlotPolicy::kStatic, "static"}, {sim::SlotPolicy::kExecutor, "executor"}}};
+};
+template <>
 struct NameTable<sim::Target> {
   static constexpr std::array<std::pair<sim::Target, std::string_view>, 2> kEntries{
       {{sim::Target::kSw, "sw"}, {sim::Target::kHw, "hw"}}};
@@ -296,15 +319,35 @@ namespace autonomsim::sim {
 
 // Where one node runs: "sw" on the CPU cores, or "hw" in FPGA slot `slot`. `cost` names the
 // profile's components entry (default: the node's name).
+// A hardware node's slot as a mapping names it: its index, or `any` (slot_policy executor: the slot
+// the executor gives each callback; with an index, the slot that holds its bitstream at t = 0).
+struct FpgaSlot {
+  static constexpr const char* kTypeName = "integer \\| any";
+  FpgaSlot() = default;
+  FpgaSlot(int index_) : index(index_) {}  // NOLINT: `.slot = 1` reads as the slot it names
+  static FpgaSlot Any() { return FpgaSlot{}; }
+  std::optional<int> index;  // empty: any
+  bool any() const { return !index; }
+  friend bool operator==(const FpgaSlot&, const FpgaSlot&) = default;
+  friend bool operator==(const FpgaSlot& s, int i) { return s.index == i; }
+};
+// The config reader's and writer's forms: an integer, or the name `any`.
+void ReadScalar(const YAML::Node& node, FpgaSlot& out, const std::string& path,
+                const ConfigSource& source);
+void to_json(nlohmann::json& j, const FpgaSlot& slot);
+std::string ToString(const FpgaSlot& slot);
+
 struct NodeMappingConfig {
   Target target{Target::kSw};
-  std::optional<int> slot;
+  std::optional<FpgaSlot> slot;
   std::optional<std::string> cost;
 
   template <class V>
   void Describe(V& v) {
     v("target", target, "where the node runs: `sw` on the CPU cores, `hw` in an FPGA slot");
-    v("slot", slot, "`hw`: the FPGA slot");
+    v("slot", slot,
+      "`hw`: the FPGA slot; with slot_policy executor `any`, or the slot that holds the node's "
+      "bitstream at the start");
     v("cost", cost, "the profile's `components` entry to cost it by (default: the node's name)");
   }
   void Validate() const;
@@ -396,6 +439,8 @@ struct PlatformConfig {
   // host_rmem_max_bytes: the host kernel's net.core.rmem_max (a sysctl) instead of the profile's
   // dds.host_rmem_max_bytes: the cap on every DDS socket's receive buffer.
   std::optional<int> cores;
+  std::optional<int> slots;               // the FPGA's slots instead of the profile's
+  std::optional<SlotPolicy> slot_policy;  // instead of the profile's fpga.slot_policy
   std::optional<int> host_rmem_max_bytes;
   std::map<std::string, double> cost_scale;
   std::map<std::string, CostDistributionConfig> cost_override;
@@ -418,6 +463,11 @@ struct PlatformConfig {
     v("transport", transport,
       "by topic name: how the topic is carried; topics not named keep the default");
     v("cores", cores, "the CPU's cores instead of the profile's");
+    v("slots", slots, "the FPGA's slots instead of the profile's");
+    v("slot_policy", slot_policy,
+      "how hardware nodes share the slots instead of the profile's fpga.slot_policy: `static` "
+      "(one node per slot, the lab's build) or `executor` (reconfigured on demand, as the "
+      "ReconROS executor does)");
     v("host_rmem_max_bytes", host_rmem_max_bytes,
       "the host's net.core.rmem_max instead of the profile's: the cap on every DDS socket's "
       "receive buffer");

@@ -76,6 +76,8 @@ std::string TypeName() {
       names += (names.empty() ? "" : " \\| ") + std::string(name);
     }
     return names;
+  } else if constexpr (requires { T::kTypeName; }) {
+    return T::kTypeName;
   } else if constexpr (std::is_same_v<T, bool>) {
     return "bool";
   } else if constexpr (std::is_integral_v<T>) {
