@@ -37,6 +37,8 @@ enum class EventKind {
   kV2iMalformed,
   kFaultBegin,
   kFaultEnd,
+  kReconfigureBegin,
+  kReconfigureEnd,
 };
 
 // docs/faults.md says what each kind does; sim/scenario/fault_kinds.h holds their arguments.
@@ -80,7 +82,7 @@ namespace autonomsim {
 template <>
 struct NameTable<sim::EventKind> {
   using K = sim::EventKind;
-  static constexpr std::array<std::pair<K, std::string_view>, 20> kEntries{{
+  static constexpr std::array<std::pair<K, std::string_view>, 22> kEntries{{
       {K::kRequest, "request"},
       {K::kFree, "free"},
       {K::kGrant, "grant"},
@@ -101,6 +103,8 @@ struct NameTable<sim::EventKind> {
       {K::kV2iMalformed, "v2i_malformed"},
       {K::kFaultBegin, "fault_begin"},
       {K::kFaultEnd, "fault_end"},
+      {K::kReconfigureBegin, "reconfigure_begin"},
+      {K::kReconfigureEnd, "reconfigure_end"},
   }};
 };
 

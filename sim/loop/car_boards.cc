@@ -67,6 +67,20 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
                            depth_image, std::move(hooks));
     if (config.drives_by_stack()) AddStack(agent, suite, topics, &graph);
   }
+  if (SlotExecutor* executor = board->platform().slot_executor()) {
+    // a slot's reconfiguration as events: begin (it serves nothing from here) and end
+    const auto emit = [this, id = config.id](EventKind kind) {
+      return [this, id, kind](const SlotExecutor::Reconfiguration& r) {
+        Emit(Event{.t = kernel.Now(),
+                   .type = kind,
+                   .car = id,
+                   .detail = "slot " + std::to_string(r.slot) + ": " + r.node +
+                             (r.replaced ? " (replacing " + *r.replaced + ")" : "")});
+      };
+    };
+    executor->OnReconfigureBegin(emit(EventKind::kReconfigureBegin));
+    executor->OnReconfigured(emit(EventKind::kReconfigureEnd));
+  }
   try {
     board->Finish(kZeroTime);
   } catch (const UnknownPlatformName& e) {  // a typo in the scenario: say where

@@ -359,6 +359,27 @@ nlohmann::json OptionalSeries(const std::vector<std::optional<double>>& series) 
 }
 }  // namespace
 
+namespace {
+nlohmann::json SlotsJson(const SlotsReport& report) {
+  nlohmann::json slots = nlohmann::json::array();
+  std::uint64_t reconfigurations = 0;
+  double reconfiguring_s = 0.0;
+  for (const SlotsReport::Slot& s : report.slots) {
+    slots.push_back({{"callbacks", s.callbacks},
+                     {"reconfigurations", s.reconfigurations},
+                     {"reconfiguring_s", s.reconfiguring_s}});
+    reconfigurations += s.reconfigurations;
+    reconfiguring_s += s.reconfiguring_s;
+  }
+  return {{"policy", "executor"},
+          {"reconfigurations", reconfigurations},
+          {"reconfiguring_s", reconfiguring_s},
+          {"waits", report.waits},
+          {"wait_s", report.wait_s},
+          {"per_slot", slots}};
+}
+}  // namespace
+
 nlohmann::json ReportJson(const MetricsReport& report) {
   nlohmann::json nodes = nlohmann::json::array();
   for (const NodeReport& n : report.nodes) {
@@ -405,20 +426,23 @@ nlohmann::json ReportJson(const MetricsReport& report) {
                               {"nacks", d.nacks}};
     }
   }
-  return {{"cores", report.cores},
-          {"window_s", report.window_s},
-          {"cpu_percent", report.cpu_percent},
-          {"cpu_demand_percent", report.cpu_demand_percent},
-          {"load_bin_s", ToSeconds(report.load_bin)},
-          {"cpu_load_percent", report.cpu_load_percent},
-          {"nodes", nodes},
-          {"topics", topics},
-          {"trace",
-           {{"recorded", report.trace.recorded},
-            {"events", report.trace.events},
-            {"max_events", report.trace.max_events},
-            {"cut_at_s",
-             report.trace.cut_at_s ? nlohmann::json(*report.trace.cut_at_s) : nlohmann::json()}}}};
+  nlohmann::json out = {
+      {"cores", report.cores},
+      {"window_s", report.window_s},
+      {"cpu_percent", report.cpu_percent},
+      {"cpu_demand_percent", report.cpu_demand_percent},
+      {"load_bin_s", ToSeconds(report.load_bin)},
+      {"cpu_load_percent", report.cpu_load_percent},
+      {"nodes", nodes},
+      {"topics", topics},
+      {"trace",
+       {{"recorded", report.trace.recorded},
+        {"events", report.trace.events},
+        {"max_events", report.trace.max_events},
+        {"cut_at_s",
+         report.trace.cut_at_s ? nlohmann::json(*report.trace.cut_at_s) : nlohmann::json()}}}};
+  if (report.slots) out["slots"] = SlotsJson(*report.slots);
+  return out;
 }
 
 namespace detail {

@@ -193,6 +193,18 @@ struct TraceCoverage {
   std::optional<double> cut_at_s;  // the first event left out
 };
 
+// slot_policy executor (sim/platform/slot_executor.h): what each slot did over the whole run.
+struct SlotsReport {
+  struct Slot {
+    std::uint64_t callbacks{0};
+    std::uint64_t reconfigurations{0};
+    double reconfiguring_s{0.0};
+  };
+  std::vector<Slot> slots;
+  std::uint64_t waits{0};  // callbacks that found no idle slot
+  double wait_s{0.0};      // their time waiting, summed
+};
+
 struct MetricsReport {
   double window_s{0.0};
   int cores{1};
@@ -203,6 +215,7 @@ struct MetricsReport {
   std::vector<NodeReport> nodes;
   std::vector<TopicReport> topics;
   TraceCoverage trace;
+  std::optional<SlotsReport> slots;  // slot_policy executor only
 
   const NodeReport* FindNode(const std::string& name) const;
   const TopicReport* FindTopic(const std::string& name) const;

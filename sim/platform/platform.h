@@ -187,6 +187,7 @@ class Platform {
   Fpga& fpga() { return fpga_; }
   // The slots' executor (fpga.slot_policy executor), else null.
   SlotExecutor* slot_executor() { return slot_executor_.get(); }
+  const SlotExecutor* slot_executor() const { return slot_executor_.get(); }
   const std::shared_ptr<ChunkPools>& chunk_pools() { return chunk_pools_; }
   RunMetrics* metrics() { return metrics_; }
 

@@ -99,6 +99,11 @@ void SlotExecutor::Reconfigure(int slot, Callback callback) {
   }
   port_busy_ = true;
   const Time start = kernel_.Now();
+  const std::optional<std::string> replaced = slots_[static_cast<std::size_t>(slot)].loaded;
+  if (on_begin_) {
+    on_begin_(
+        Reconfiguration{.slot = slot, .node = shared->node, .replaced = replaced, .begin = start});
+  }
   const double bytes = static_cast<double>(shared->bitstream_bytes);
   const double transfer_s = bytes / port_bytes_per_s_;
   platform_.cpu().Start(shared->owner, bytes / memcpy_bytes_per_s_, 1.0, [=, this] {
@@ -109,12 +114,16 @@ void SlotExecutor::Reconfigure(int slot, Callback callback) {
       Slot& s = slots_[static_cast<std::size_t>(slot)];
       const Reconfiguration done{.slot = slot,
                                  .node = shared->node,
-                                 .replaced = s.loaded,
-                                 .begin = transfer_begin,
+                                 .replaced = replaced,
+                                 .begin = start,
+                                 .transfer_begin = transfer_begin,
                                  .end = kernel_.Now()};
       s.loaded = shared->node;
       ++s.stats.reconfigurations;
       s.stats.reconfiguring_s += ToSeconds(kernel_.Now() - start);
+      if (RunMetrics* metrics = platform_.metrics()) {  // the slot's trace track shows it
+        metrics->Span(TraceLane::kSlot, slot, "reconfigure " + shared->node, start, done.end);
+      }
       if (on_reconfigured_) on_reconfigured_(done);
       PortFree();
       Run(slot, std::move(*shared));

@@ -46,7 +46,8 @@ class SlotExecutor {
     int slot{0};
     std::string node;                     // whose bitstream it loads
     std::optional<std::string> replaced;  // whose bitstream it held
-    Time begin{0};                        // the port's transfer begins after the CPU's copy
+    Time begin{0};                        // the copy's start: the slot serves nothing from here
+    Time transfer_begin{0};               // the port's transfer, after the CPU's copy
     Time end{0};
   };
   struct SlotStats {
@@ -73,7 +74,10 @@ class SlotExecutor {
   std::uint64_t waited() const { return waited_; }
   double wait_s() const { return wait_s_; }
   std::size_t waiting() const { return waiting_.size(); }
-  // Called at each reconfiguration's end.
+  // Called at each reconfiguration's begin (with begin set) and end (all set).
+  void OnReconfigureBegin(std::function<void(const Reconfiguration&)> callback) {
+    on_begin_ = std::move(callback);
+  }
   void OnReconfigured(std::function<void(const Reconfiguration&)> callback) {
     on_reconfigured_ = std::move(callback);
   }
@@ -114,6 +118,7 @@ class SlotExecutor {
   std::deque<std::function<void()>> port_waiting_;  // for the configuration port
   std::uint64_t waited_{0};
   double wait_s_{0.0};
+  std::function<void(const Reconfiguration&)> on_begin_;
   std::function<void(const Reconfiguration&)> on_reconfigured_;
 };
 

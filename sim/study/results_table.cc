@@ -116,6 +116,13 @@ void AddBoardColumns(const std::string& board, const nlohmann::json& report, Row
   };
   add("cpu_percent", get(report, "cpu_percent"));
   add("cpu_demand_percent", get(report, "cpu_demand_percent"));
+  if (report.contains("slots")) {  // slot_policy executor
+    const nlohmann::json& slots = report.at("slots");
+    add("reconfigurations", get(slots, "reconfigurations"));
+    add("reconfiguring_s", get(slots, "reconfiguring_s"));
+    add("slot_waits", get(slots, "waits"));
+    add("slot_wait_s", get(slots, "wait_s"));
+  }
   for (const auto& [name, column] : {std::pair<std::string, std::string>{kCarCommandTopic, "e2e"},
                                      {kLanePointsTopic, "lanes"}}) {
     for (const nlohmann::json& topic : report.at("topics")) {

@@ -63,7 +63,8 @@ TEST(SlotExecutor, OneSlotTwoNodesReconfiguresAtEachChangeOfNode) {
                                                                  {"a", milliseconds(60)}}));
   ASSERT_EQ(rig.reconfigurations.size(), 2u);
   // the transfer after the 2 ms copy: 12-17 and 32-37
-  EXPECT_EQ(rig.reconfigurations[0].begin, milliseconds(12));
+  EXPECT_EQ(rig.reconfigurations[0].begin, milliseconds(10));
+  EXPECT_EQ(rig.reconfigurations[0].transfer_begin, milliseconds(12));
   EXPECT_EQ(rig.reconfigurations[0].end, milliseconds(17));
   EXPECT_EQ(rig.reconfigurations[0].node, "b");
   EXPECT_EQ(rig.reconfigurations[0].replaced, "a");
@@ -88,7 +89,8 @@ TEST(SlotExecutor, ReconfigurationsGoOneAtATimeThroughThePort) {
   ASSERT_EQ(rig.reconfigurations.size(), 2u);
   EXPECT_EQ(rig.reconfigurations[0].slot, 0);
   EXPECT_EQ(rig.reconfigurations[1].slot, 1);
-  EXPECT_EQ(rig.reconfigurations[1].begin, milliseconds(9));  // its copy 7-9, transfer 9-14
+  EXPECT_EQ(rig.reconfigurations[1].begin, milliseconds(7));  // its copy 7-9, transfer 9-14
+  EXPECT_EQ(rig.reconfigurations[1].transfer_begin, milliseconds(9));
 }
 
 TEST(SlotExecutor, AnIdleSlotHoldingTheBitstreamIsTakenElseTheOneIdleLongest) {

@@ -94,6 +94,8 @@
     [EVENT.PARKED]: { colour: "#bbbbbb", label: EVENT.PARKED, size: 4 },
     [EVENT.FAULT_BEGIN]: { colour: "#f0883e", label: "fault (bar: while it lasts)", size: 5 },
     [EVENT.FAULT_END]: { colour: "#f0883e", label: "fault ends", size: 3 },
+    [EVENT.RECONFIGURE_BEGIN]: { colour: "#39c5cf", label: "slot reconfiguration begins", size: 3 },
+    [EVENT.RECONFIGURE_END]: { colour: "#1b7c83", label: "slot reconfigured", size: 2 },
   };
   const styleOf = (type) => EVENT_STYLE[type] || { colour: "#cccccc", label: type, size: 3 };
 
