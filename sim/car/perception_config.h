@@ -28,5 +28,6 @@ struct PerceptionConfig {
 
 // The lane detection's output topic (reference §5), read by the controller and by sweeps' tables.
 inline constexpr const char* kLanePointsTopic = "/lane_detector/central_line/point_cloud";
+inline constexpr const char* kObstaclesTopic = "/local_costmap/obstacles";
 
 }  // namespace autonomsim::sim

@@ -78,8 +78,8 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                                          std::function<void(const stack::Grid234&, Time)> hook) {
   // depth 1: the costmap's obstacle layer subscribes with QoS(1), best effort
   // (code/ros_ws/src/obstacle_layer/src/obstacle_layer.cpp:32-37)
-  const auto obstacles = graph.AddTopic<stack::Grid234>(
-      {.name = "/local_costmap/obstacles", .type = msg::Grid234(), .depth = 1});
+  const auto obstacles =
+      graph.AddTopic<stack::Grid234>({.name = kObstaclesTopic, .type = msg::Grid234(), .depth = 1});
   GridParams params{
       .grid = config.obstacle_grid, .P = sensors.depth_camera().Info().P, .hook = std::move(hook)};
 

@@ -298,6 +298,9 @@ PlatformProfile WithConfigOverrides(PlatformProfile profile, const PlatformConfi
   if (config.cores) profile.cpu.cores = *config.cores;
   if (config.slots) profile.fpga.slots = *config.slots;
   if (config.slot_policy) profile.fpga.slot_policy = *config.slot_policy;
+  if (config.config_port_bytes_per_s) {
+    profile.fpga.config_port_bytes_per_s = *config.config_port_bytes_per_s;
+  }
   if (config.host_rmem_max_bytes) profile.dds.host_rmem_max_bytes = *config.host_rmem_max_bytes;
   return profile;
 }

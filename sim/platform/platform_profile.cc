@@ -49,6 +49,9 @@ void CpuProfile::Validate() const {
 void FpgaProfile::Validate() const {
   Require(slots >= 0, "slots must be >= 0, got " + std::to_string(slots));
   Require(memif_bytes_per_s > 0.0, "memif_bytes_per_s must be > 0, got " + Num(memif_bytes_per_s));
+  Require(config_port_bytes_per_s > 0.0,
+          "config_port_bytes_per_s must be > 0, got " + Num(config_port_bytes_per_s));
+  RequireNonNegative(agent_poll_period, "agent_poll_period_s");
 }
 
 void DdsSideCost::Validate() const {
@@ -235,6 +238,9 @@ void CostDistributionConfig::Validate() const {
 void PlatformConfig::Validate() const {
   Require(!profile.empty(), "profile must name a platform profile file");
   Require(!cores || *cores >= 1, "cores must be >= 1, got " + std::to_string(cores.value_or(0)));
+  Require(!slots || *slots >= 1, "slots must be >= 1, got " + std::to_string(slots.value_or(0)));
+  Require(!config_port_bytes_per_s || *config_port_bytes_per_s > 0.0,
+          "config_port_bytes_per_s must be > 0, got " + Num(config_port_bytes_per_s.value_or(0.0)));
   Require(
       !host_rmem_max_bytes || *host_rmem_max_bytes > 0,
       "host_rmem_max_bytes must be > 0, got " + std::to_string(host_rmem_max_bytes.value_or(0)));

@@ -439,8 +439,9 @@ struct PlatformConfig {
   // host_rmem_max_bytes: the host kernel's net.core.rmem_max (a sysctl) instead of the profile's
   // dds.host_rmem_max_bytes: the cap on every DDS socket's receive buffer.
   std::optional<int> cores;
-  std::optional<int> slots;               // the FPGA's slots instead of the profile's
-  std::optional<SlotPolicy> slot_policy;  // instead of the profile's fpga.slot_policy
+  std::optional<int> slots;                       // the FPGA's slots instead of the profile's
+  std::optional<SlotPolicy> slot_policy;          // instead of the profile's fpga.slot_policy
+  std::optional<double> config_port_bytes_per_s;  // instead of the profile's fpga one
   std::optional<int> host_rmem_max_bytes;
   std::map<std::string, double> cost_scale;
   std::map<std::string, CostDistributionConfig> cost_override;
@@ -468,6 +469,8 @@ struct PlatformConfig {
       "how hardware nodes share the slots instead of the profile's fpga.slot_policy: `static` "
       "(one node per slot, the lab's build) or `executor` (reconfigured on demand, as the "
       "ReconROS executor does)");
+    v("config_port_bytes_per_s", config_port_bytes_per_s,
+      "slot_policy executor: the configuration port's throughput instead of the profile's");
     v("host_rmem_max_bytes", host_rmem_max_bytes,
       "the host's net.core.rmem_max instead of the profile's: the cap on every DDS socket's "
       "receive buffer");

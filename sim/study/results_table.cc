@@ -124,7 +124,8 @@ void AddBoardColumns(const std::string& board, const nlohmann::json& report, Row
     add("slot_wait_s", get(slots, "wait_s"));
   }
   for (const auto& [name, column] : {std::pair<std::string, std::string>{kCarCommandTopic, "e2e"},
-                                     {kLanePointsTopic, "lanes"}}) {
+                                     {kLanePointsTopic, "lanes"},
+                                     {kObstaclesTopic, "obstacles"}}) {
     for (const nlohmann::json& topic : report.at("topics")) {
       if (topic.at("name") != name) continue;
       add(column + "_latency_p50_ms", topic.at("latency_ms").at("p50"));
