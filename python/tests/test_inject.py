@@ -12,6 +12,7 @@ STACK = "scenarios/lab_two_cars.yaml"
     (ORACLE, 8, 2.0, {"car_stall": {"car": 0, "for_s": 1.5}}),
     (STACK, 5, 1.5, {"node_hang": {"car": 1, "node": "lane_planner", "for_s": 0.8}}),
     (STACK, 5, 2.25, {"localization_jump": {"car": 0, "dx_m": 0.1}}),
+    (STACK, 5, 2.0, {"remap": {"car": 0, "node": "obstacle_detection", "target": "sw"}}),
 ])
 def test_an_injected_fault_equals_the_same_fault_in_the_scenario(scenario, duration_s, at_s, fault):
     (kind, args), = fault.items()

@@ -54,6 +54,7 @@ enum class FaultKind {
   kCameraBlackout,
   kImuBiasStep,
   kLocalizationJump,
+  kRemap,
 };
 
 // sim/scenario/expect_kinds.h holds their arguments; sim/results/expectations.cc judges them.
@@ -111,7 +112,7 @@ struct NameTable<sim::EventKind> {
 template <>
 struct NameTable<sim::FaultKind> {
   using K = sim::FaultKind;
-  static constexpr std::array<std::pair<K, std::string_view>, 11> kEntries{{
+  static constexpr std::array<std::pair<K, std::string_view>, 12> kEntries{{
       {K::kV2iPartition, "v2i_partition"},
       {K::kV2iLossBurst, "v2i_loss_burst"},
       {K::kServerRestart, "server_restart"},
@@ -123,6 +124,7 @@ struct NameTable<sim::FaultKind> {
       {K::kCameraBlackout, "camera_blackout"},
       {K::kImuBiasStep, "imu_bias_step"},
       {K::kLocalizationJump, "localization_jump"},
+      {K::kRemap, "remap"},
   }};
   static constexpr std::string_view kClause =
       "a faults entry names exactly one fault, e.g. '- car_stall: {car: 1, at_s: 20}'";

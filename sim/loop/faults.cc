@@ -126,6 +126,22 @@ FaultActions ActionsOf(const NodeHangFault& f, const FaultTargets& sim, const Fa
           .end = [&graph, node = f.node] { graph.ResumeNode(node); }};
 }
 
+FaultActions ActionsOf(const RemapFault& f, const FaultTargets& sim, const FaultClause& fault) {
+  NodeGraph& graph = BoardWithNode(sim, fault, f.car, f.node);
+  try {
+    graph.CheckRemap(f.node, f.target);  // before the run: the node can run there
+  } catch (const ConfigError& e) {
+    const std::vector<FaultClause>& listed = sim.loaded.scenario.faults;
+    const auto at = std::find_if(listed.begin(), listed.end(),
+                                 [&](const FaultClause& c) { return &c == &fault; });
+    if (at == listed.end()) throw ConfigError(std::string("remap: ") + e.what());  // injected
+    throw sim.loaded.ErrorAt(
+        fmt::format("faults[{}].remap.target", static_cast<std::size_t>(at - listed.begin())),
+        e.what());
+  }
+  return {.begin = [&graph, node = f.node, target = f.target] { graph.RemapNode(node, target); }};
+}
+
 template <FaultKind Kind>
 FaultActions ActionsOf(const CameraFault<Kind>& f, const FaultTargets& sim) {
   SensorSuite* suite = sim.suite(f.car);

@@ -267,6 +267,37 @@ void NodeGraph::AddTimer(NodeId node, Time first, Duration period,
       first, period, [this, index] { OnTimer(index); }, kPriorityPlatform);
 }
 
+void NodeGraph::CheckRemap(const std::string& name, Target target) {
+  const Node& n = NodeNamed(name);
+  const char* kind = target == Target::kHw ? "hw" : "sw";
+  if ((target == Target::kHw && !n.cost.hw) || (target == Target::kSw && !n.cost.sw)) {
+    throw ConfigError("node '" + name + "' has no " + kind + " cost in profile '" +
+                      platform_.profile().name + "' (components." + n.mapping.cost.value_or(name) +
+                      "." + kind + ")");
+  }
+  if (target == Target::kHw && !platform_.slot_executor()) {
+    throw ConfigError("moving node '" + name +
+                      "' to hw at run time needs platform.slot_policy: executor (a slot to "
+                      "reconfigure for it)");
+  }
+  if (target == Target::kHw && n.cost.hw->bitstream_bytes <= 0) {
+    throw ConfigError("node '" + name + "' has no bitstream_bytes in its hw cost (what a slot " +
+                      "loads to serve it)");
+  }
+}
+
+void NodeGraph::RemapNode(const std::string& name, Target target) {
+  CheckRemap(name, target);
+  Node& n = NodeNamed(name);
+  n.hw = target == Target::kHw;
+  n.mapping.target = target;
+  n.mapping.slot = n.hw ? std::optional<FpgaSlot>(FpgaSlot::Any()) : std::nullopt;
+  const double jitter = n.hw ? n.cost.hw->jitter : n.cost.sw->jitter;
+  if (jitter > 0.0 && !n.rng && rng_ != nullptr) {  // its stream, by name as at the start
+    n.rng.emplace(rng_->Stream(rng_prefix_ + "platform/" + name));
+  }
+}
+
 NodeGraph::Node& NodeGraph::NodeNamed(const std::string& name) {
   for (Node& n : nodes_) {
     if (n.name == name) return n;
@@ -533,6 +564,7 @@ std::int64_t NodeGraph::LoanOutputs(const Node& n, Job* job) {
 }
 
 void NodeGraph::CostJob(Node& n, const TakenInput& in, std::int64_t out_bytes, Job* job) {
+  job->hw = n.hw;  // the mapping when the job starts (a remap takes effect from the next)
   if (n.hw) {
     const HwCost& hw = *n.cost.hw;
     const double factor = Jitter(n, hw.jitter);
@@ -559,10 +591,10 @@ void NodeGraph::CostJob(Node& n, const TakenInput& in, std::int64_t out_bytes, J
 void NodeGraph::RunCompute(int node) {
   Node& n = nodes_[static_cast<std::size_t>(node)];
   const Job& job = *n.job;
-  if (n.hw && platform_.slot_executor()) {
+  if (job.hw && platform_.slot_executor()) {
     platform_.slot_executor()->Submit(n.name, Owner(node), n.cost.hw->bitstream_bytes, job.fabric,
                                       job.compute_core_s, [this, node] { RunPublish(node); });
-  } else if (n.hw) {
+  } else if (job.hw) {
     platform_.RunHwJob(*n.mapping.slot->index, Owner(node), job.fabric, job.compute_core_s,
                        [this, node] { RunPublish(node); });
   } else if (job.compute_core_s > 0.0) {

@@ -206,6 +206,12 @@ class NodeGraph {
   void HangNode(const std::string& name);
   void ResumeNode(const std::string& name);
   void CrashNode(const std::string& name);
+  // Remap (a `remap` fault): the node runs in `target` from its next job on (a running job
+  // finishes where it started); to hw it takes a slot from the slot executor. ConfigError where
+  // it cannot: no cost of that kind in the profile, hw without slot_policy executor or without
+  // bitstream_bytes. CheckRemap only says whether it can.
+  void CheckRemap(const std::string& name, Target target);
+  void RemapNode(const std::string& name, Target target);
 
   // A tap on the topic named `name`: `tap(value, stamp, now)` for every message a node publishes
   // on it, at the instant it is published (its job's completion; a node that crashed, a loan that
@@ -293,6 +299,7 @@ class NodeGraph {
     double write_core_s{0.0};     // the DDS writes' first transmissions (the job's nominal cost)
     bool own_cost{false};         // a subscription's own cost, not the node's
     std::size_t write_output{0};  // the DDS writes, one after another as on the node's thread
+    bool hw{false};               // its node's mapping when it started (CostJob)
   };
   struct Node {
     std::string name;

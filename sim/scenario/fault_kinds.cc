@@ -49,6 +49,11 @@ void NodeHangFault::Validate() const {
   Require(!node.empty(), "node must name a node of the car's board");
 }
 
+void RemapFault::Validate() const {
+  ValidateFaultTiming(at_s, std::nullopt);
+  Require(!node.empty(), "node must name a node of the car's board");
+}
+
 void ImuBiasStepFault::Validate() const {
   ValidateFaultTiming(at_s, for_s);
   Require(std::isfinite(gyro_bias_rad_per_s) && gyro_bias_rad_per_s != 0.0,
@@ -79,6 +84,9 @@ template struct FleetFault<FaultKind::kBrokerOutage, true>;
 std::string CarStallFault::Detail() const { return Join(*this, {}); }
 std::string NodeCrashFault::Detail() const { return Join(*this, {"node " + node}); }
 std::string NodeHangFault::Detail() const { return Join(*this, {"node " + node}); }
+std::string RemapFault::Detail() const {
+  return Join(*this, {"node " + node + " to " + std::string(ToName(target))});
+}
 template <FaultKind Kind>
 std::string CameraFault<Kind>::Detail() const {
   return Join(*this, {"camera " + std::string(ToName(camera))});

@@ -14,6 +14,7 @@
 
 #include "sim/core/config.h"
 #include "sim/core/vocabulary.h"
+#include "sim/platform/platform_profile.h"
 
 namespace autonomsim::sim {
 
@@ -262,11 +263,36 @@ struct LocalizationJumpFault {
   std::string Detail() const;
 };
 
+// {car, node, target}: the node moves between software and hardware at at_s (run-time remapping);
+// instantaneous, the new mapping stays.
+struct RemapFault {
+  static constexpr FaultKind kKind = FaultKind::kRemap;
+  static constexpr std::string_view kMeaning =
+      "The node moves to `target` (`sw` or `hw`) from its next job on: to software it runs on the "
+      "cores at its software cost; to hardware it takes a slot as the ReconROS executor gives one, "
+      "reconfiguring it (needs `platform.slot_policy: executor` and a cost of the target's kind)";
+  static constexpr bool kLastsWithoutEnd = false;
+  double at_s{0.0};
+  int car{0};
+  std::string node;  // a node on the car's board
+  Target target{Target::kSw};
+
+  template <class V>
+  void Describe(V& v) {
+    v("at_s", at_s, "when it strikes");
+    v("car", car, kRequired, "the car it strikes");
+    v("node", node, kRequired, "a node on the car's board (a wrong name lists them)");
+    v("target", target, kRequired, "where it runs from then on: `sw` or `hw`");
+  }
+  void Validate() const;
+  std::string Detail() const;
+};
+
 // One `faults:` entry.
 using FaultClause =
     std::variant<V2iPartitionFault, V2iLossBurstFault, ServerRestartFault, BrokerOutageFault,
                  CarStallFault, NodeCrashFault, NodeHangFault, CameraFreezeFault,
-                 CameraBlackoutFault, ImuBiasStepFault, LocalizationJumpFault>;
+                 CameraBlackoutFault, ImuBiasStepFault, LocalizationJumpFault, RemapFault>;
 
 // What every kind has, read the same way for all.
 FaultKind KindOf(const FaultClause& fault);

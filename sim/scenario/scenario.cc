@@ -485,7 +485,8 @@ bool NeedsStack(FaultKind kind) {
 }
 bool NeedsBoard(FaultKind kind) {
   return kind == FaultKind::kNodeCrash || kind == FaultKind::kNodeHang ||
-         kind == FaultKind::kCameraFreeze || kind == FaultKind::kCameraBlackout;
+         kind == FaultKind::kRemap || kind == FaultKind::kCameraFreeze ||
+         kind == FaultKind::kCameraBlackout;
 }
 
 // Each fault's car exists and has what the fault strikes, and the fault starts within the run.

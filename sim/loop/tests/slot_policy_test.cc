@@ -83,3 +83,68 @@ TEST(SlotPolicy, OneSlotForThreeHardwareNodesReconfiguresAndDelaysTheLanes) {
 
 }  // namespace
 }  // namespace autonomsim::sim
+
+namespace autonomsim::sim {
+namespace {
+
+// car 0's board: its mean load over [from_s, to_s) from the 1 s bins.
+double MeanLoad(const RunRecord& record, int from_s, int to_s) {
+  const std::vector<double>& bins = record.boards.at(0).report.cpu_load_percent;
+  double sum = 0.0;
+  for (int b = from_s; b < to_s; ++b) sum += bins.at(static_cast<std::size_t>(b));
+  return sum / (to_s - from_s);
+}
+
+// A remap fault moves car 0's point cloud between software and hardware at run time. Its
+// software job is 12.96 ms at 30 Hz (39 % of a core), its hardware delegate 1.96 ms (5.9 %):
+// the board's load changes by ~33 points at the instant, and the move to hardware first loads
+// the empty slot 0 with its bitstream.
+TEST(SlotPolicy, ARemapMovesANodeBetweenSoftwareAndHardwareAtItsInstant) {
+  const std::vector<std::string> pc_sw = {
+      "duration_s=30", "cars[0].platform.slot_policy=executor",
+      "cars[0].platform.mapping.point_cloud.target=sw",
+      "cars[0].platform.mapping.obstacle_detection.target=sw",
+      "faults=[{remap: {car: 0, node: point_cloud, target: hw, at_s: 10}},"
+      " {remap: {car: 0, node: point_cloud, target: sw, at_s: 20}}]"};
+  const RunRecord record = RunScenario(LoadScenario("scenarios/lab_two_cars.yaml", pc_sw));
+  const double sw_before = MeanLoad(record, 2, 10);
+  const double hw = MeanLoad(record, 11, 20);
+  const double sw_after = MeanLoad(record, 21, 30);
+  EXPECT_NEAR(sw_before - hw, 33.1, 6.0);
+  EXPECT_NEAR(sw_after - hw, 33.1, 6.0);
+  std::vector<Event> reconfigurations;
+  ForEachEvent(record, [&](const Event& e) {
+    if (e.type == EventKind::kReconfigureBegin) reconfigurations.push_back(e);
+  });
+  ASSERT_EQ(reconfigurations.size(), 1u);  // slot 0, at the first hardware job after 10 s
+  EXPECT_GE(reconfigurations[0].t, FromSeconds(10.0));
+  EXPECT_LT(reconfigurations[0].t, FromSeconds(10.05));
+  EXPECT_EQ(reconfigurations[0].detail, "slot 0: point_cloud");
+}
+
+TEST(SlotPolicy, ARemapThatCannotRunThereIsRefusedAtItsKey) {
+  try {  // lane_planner has no software cost; moving to hw needs the executor
+    LoadedScenario loaded =
+        LoadScenario("scenarios/lab_two_cars.yaml",
+                     {"faults=[{remap: {car: 0, node: lane_planner, target: sw, at_s: 1}}]"});
+    Simulation simulation(loaded);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("faults[0].remap.target"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("has no sw cost"), std::string::npos) << e.what();
+  }
+  try {
+    LoadedScenario loaded =
+        LoadScenario("scenarios/lab_two_cars.yaml",
+                     {"cars[0].platform.mapping.point_cloud.target=sw",
+                      "cars[0].platform.mapping.obstacle_detection.target=sw",
+                      "faults=[{remap: {car: 0, node: point_cloud, target: hw, at_s: 1}}]"});
+    Simulation simulation(loaded);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("slot_policy: executor"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace autonomsim::sim
