@@ -20,6 +20,7 @@ constexpr int kPidExecutors = 1;
 constexpr int kPidReceive = 2;
 constexpr int kPidSlots = 3;
 constexpr int kPidsPerBoard = 10;
+constexpr int kConfigPortTid = 1000;  // the configuration port's track among the slots
 
 int PidOf(TraceLane lane) {
   switch (lane) {
@@ -28,6 +29,7 @@ int PidOf(TraceLane lane) {
     case TraceLane::kReceive:
       return kPidReceive;
     case TraceLane::kSlot:
+    case TraceLane::kConfigPort:
       return kPidSlots;
   }
   return kPidExecutors;
@@ -193,7 +195,8 @@ void RunMetrics::Published(int /*node*/, int topic, Time t, Time stamp) {
 
 void RunMetrics::Span(TraceLane lane, int id, const std::string& name, Time start, Time end) {
   if (lane == TraceLane::kReceive && !options_.trace_receive) return;
-  AddTrace({'X', PidOf(lane), id, TraceName(name), start.count(), (end - start).count(), 0.0});
+  const int tid = lane == TraceLane::kConfigPort ? kConfigPortTid : id;
+  AddTrace({'X', PidOf(lane), tid, TraceName(name), start.count(), (end - start).count(), 0.0});
 }
 
 int RunMetrics::TraceName(const std::string& name) {
@@ -528,7 +531,9 @@ class TraceWriter {
       if (e.pid == kPidSlots) slots.insert(e.tid);
     }
     for (int slot : slots) {
-      Meta(base + kPidSlots, slot, "thread_name", fmt::format("slot {}", slot));
+      Meta(base + kPidSlots, slot, "thread_name",
+           slot == kConfigPortTid ? std::string("configuration port")
+                                  : fmt::format("slot {}", slot));
     }
   }
 

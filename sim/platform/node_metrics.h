@@ -37,7 +37,8 @@ struct MetricsOptions {
 
 // Where a trace span is drawn: a node's executor (its jobs, on the CPU or in its slot), a node's
 // DDS receive thread, or an FPGA slot.
-enum class TraceLane { kExecutor, kReceive, kSlot };
+// kConfigPort: the FPGA's configuration port (slot_policy executor), a track of the slots' process.
+enum class TraceLane { kExecutor, kReceive, kSlot, kConfigPort };
 
 class RunMetrics {
  public:

@@ -123,6 +123,9 @@ void SlotExecutor::Reconfigure(int slot, Callback callback) {
       s.stats.reconfiguring_s += ToSeconds(kernel_.Now() - start);
       if (RunMetrics* metrics = platform_.metrics()) {  // the slot's trace track shows it
         metrics->Span(TraceLane::kSlot, slot, "reconfigure " + shared->node, start, done.end);
+        metrics->Span(TraceLane::kConfigPort, 0,
+                      "slot " + std::to_string(slot) + " <- " + shared->node, transfer_begin,
+                      done.end);
       }
       if (on_reconfigured_) on_reconfigured_(done);
       PortFree();

@@ -73,6 +73,11 @@ TEST(SlotExecutor, OneSlotTwoNodesReconfiguresAtEachChangeOfNode) {
   EXPECT_EQ(stats.callbacks, 4u);
   EXPECT_EQ(stats.reconfigurations, 2u);
   EXPECT_NEAR(stats.reconfiguring_s, 0.014, 1e-12);
+  // the trace: each reconfiguration on the slot's track and its transfer on the port's
+  const std::string trace = TraceJson({BoardMetrics{"car0", &rig.metrics}});
+  EXPECT_NE(trace.find("\"configuration port\""), std::string::npos);
+  EXPECT_NE(trace.find("\"slot 0 <- b\""), std::string::npos);
+  EXPECT_NE(trace.find("\"reconfigure b\""), std::string::npos);
   EXPECT_EQ(rig.executor().waited(), 1u);              // b
   EXPECT_NEAR(rig.executor().wait_s(), 0.008, 1e-12);  // from 2 to 10 ms
 }
