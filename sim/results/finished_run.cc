@@ -97,32 +97,11 @@ FinishedRun ReadFinishedRun(const fs::path& dir) {
 
   const fs::path resolved_file = dir / "scenario.resolved.json";
   RequireRegularFile(resolved_file);
-  std::ifstream in(resolved_file);
-  if (!in) throw ConfigError(resolved_file.string() + ": cannot read");
-  nlohmann::json resolved;
-  try {
-    resolved = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw ConfigError(resolved_file.string() + ": not valid JSON: " + e.what());
-  }
-  if (!resolved.contains("scenario") || !resolved.contains("track")) {
-    throw ConfigError(resolved_file.string() + ": has no \"scenario\" and \"track\"");
-  }
-  const ConfigSource source{resolved_file.string(), {}};
-  // JSON is YAML: the config readers read the resolved values back as they read a scenario file
-  Scenario scenario = ReadConfig<Scenario>(YAML::Load(resolved["scenario"].dump()), source);
-  const world::TrackSpec spec =
-      ReadConfig<world::TrackSpec>(YAML::Load(resolved["track"].dump()), source);
-  std::optional<world::Track> track;
-  try {
-    track.emplace(spec);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(resolved_file.string() + ": track: " + e.what());
-  }
+  ResolvedScenarioFile resolved = ReadResolvedScenarioFile(resolved_file);
   FinishedRun run{.dir = dir,
                   .summary = std::move(summary),
-                  .scenario = std::move(scenario),
-                  .track = std::move(*track),
+                  .scenario = std::move(resolved.scenario),
+                  .track = std::move(resolved.track),
                   .record = {}};
 
   run.record.sim_duration = FromSeconds(run.summary.sim_seconds);

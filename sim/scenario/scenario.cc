@@ -653,7 +653,7 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
   return loaded;
 }
 
-LoadedScenario LoadResolvedScenario(const std::filesystem::path& file) {
+ResolvedScenarioFile ReadResolvedScenarioFile(const std::filesystem::path& file) {
   std::ifstream in(file);
   if (!in) throw ConfigError(file.string() + ": cannot read");
   nlohmann::json resolved;
@@ -667,8 +667,7 @@ LoadedScenario LoadResolvedScenario(const std::filesystem::path& file) {
   }
   const ConfigSource source{file.string(), {}};
   // JSON is YAML: the resolved values read back as a scenario file's
-  const YAML::Node root = YAML::Load(resolved["scenario"].dump());
-  Scenario read = ReadConfig<Scenario>(root, source);
+  Scenario scenario = ReadConfig<Scenario>(YAML::Load(resolved["scenario"].dump()), source);
   const auto spec = ReadConfig<world::TrackSpec>(YAML::Load(resolved["track"].dump()), source);
   std::optional<world::Track> track;
   try {
@@ -676,9 +675,16 @@ LoadedScenario LoadResolvedScenario(const std::filesystem::path& file) {
   } catch (const std::invalid_argument& e) {
     throw ConfigError(file.string() + ": track: " + e.what());
   }
-  LoadedScenario loaded(file, std::move(read), std::move(*track));
+  return {std::move(resolved), std::move(scenario), std::move(*track)};
+}
+
+LoadedScenario LoadResolvedScenario(const std::filesystem::path& file) {
+  ResolvedScenarioFile read = ReadResolvedScenarioFile(file);
+  LoadedScenario loaded(file, std::move(read.scenario), std::move(read.track));
+  const ConfigSource source{file.string(), {}};
+  const YAML::Node root = YAML::Load(read.resolved["scenario"].dump());  // for error locations
   const ScenarioSite site{root, source};
-  const nlohmann::json platforms = resolved.value("platforms", nlohmann::json::object());
+  const nlohmann::json platforms = read.resolved.value("platforms", nlohmann::json::object());
   for (std::size_t i = 0; i < loaded.scenario.cars.size(); ++i) {
     loaded.cars.push_back(
         ResolveCar(loaded.scenario, i, loaded.track, file.parent_path(), site, &platforms));

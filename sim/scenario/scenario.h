@@ -310,6 +310,15 @@ LoadedScenario LoadScenario(const std::filesystem::path& file,
                             const std::vector<std::string>& overrides = {},
                             std::optional<std::uint64_t> seed = std::nullopt);
 
+// A finished run's scenario.resolved.json read as it is: the JSON, its scenario and its track.
+// ConfigError for a file that cannot be read, is not JSON or lacks either.
+struct ResolvedScenarioFile {
+  nlohmann::json resolved;
+  Scenario scenario;
+  world::Track track;
+};
+ResolvedScenarioFile ReadResolvedScenarioFile(const std::filesystem::path& file);
+
 // A finished run's scenario.resolved.json read back (its scenario, track and boards' profiles,
 // every default as resolved), ready to run again: the run it describes, without the files it was
 // made from. Its sha256 equals that run's scenario_sha256. Throws ConfigError on an unusable file.
