@@ -252,8 +252,10 @@ Outcome RunLoaded(const sim::LoadedScenario& loaded, const std::optional<fs::pat
   if (simulation.record().realtime) PrintPacing(*simulation.record().realtime);
   outcome.sim_seconds = ToSeconds(loaded.scenario.duration);
   outcome.expectations = sim::EvaluateExpectations(loaded.scenario, simulation.record());
-  outcome.result_sha256 = sim::ResultSha256(simulation.record());
-  if (recording) recording->Close(outcome.expectations, outcome.result_sha256);
+  if (recording) {  // the file's metadata names the result (summary.json hashes it again)
+    outcome.result_sha256 = sim::ResultSha256(simulation.record());
+    recording->Close(outcome.expectations, outcome.result_sha256);
+  }
   if (folder) {
     folder->Complete(loaded, simulation.record(), outcome.expectations, outcome.wall_seconds);
     outcome.trace_cuts = TraceCuts(simulation.record(), outcome.sim_seconds);

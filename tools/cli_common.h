@@ -135,7 +135,7 @@ struct Outcome {
   // A board's trace.json that stops before the run's end (trace_max_events), one line each.
   std::vector<std::string> trace_cuts;
   std::optional<McapWritten> mcap;  // the run's recording, when it made one
-  std::string result_sha256;        // of the run's record (sim/scenario/run_record.h)
+  std::string result_sha256;        // of the run's record, when it was recorded as MCAP
   bool passed() const;
 };
 

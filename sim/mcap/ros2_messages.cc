@@ -327,7 +327,8 @@ void EncodeMarkerArray(CdrWriter& w, std::span<const Marker> markers) {
   for (const Marker& m : markers) PutMarker(w, m);
 }
 
-void EncodeLanePoints(CdrWriter& w, std::uint64_t valid, std::span<const LanePoint, 30> points) {
+void EncodeLanePoints(CdrWriter& w, std::uint64_t valid,
+                      std::span<const LanePoint, kLanePointsCount> points) {
   w.U64(valid);
   for (const LanePoint& p : points) {
     w.F32(p.x);

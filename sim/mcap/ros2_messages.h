@@ -128,6 +128,8 @@ struct LanePoint {
   float x{0.0F};
   float y{0.0F};
 };
+// iceoryx_msg/LanePoints' fixed array: `LanePoint[30] points` (the lab's LanePoints.msg).
+inline constexpr std::size_t kLanePointsCount = 30;
 
 // The encoders: each writes one whole message into `w` (after Reset, or a fresh writer).
 void EncodeTFMessage(CdrWriter& w, std::span<const TransformStamped> transforms);
@@ -150,6 +152,7 @@ void EncodeBool(CdrWriter& w, bool data);
 void EncodeFloat64(CdrWriter& w, double data);
 void EncodeLog(CdrWriter& w, const Log& log);
 void EncodeMarkerArray(CdrWriter& w, std::span<const Marker> markers);
-void EncodeLanePoints(CdrWriter& w, std::uint64_t valid, std::span<const LanePoint, 30> points);
+void EncodeLanePoints(CdrWriter& w, std::uint64_t valid,
+                      std::span<const LanePoint, kLanePointsCount> points);
 
 }  // namespace autonomsim::mcap::ros2

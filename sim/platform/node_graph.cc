@@ -756,14 +756,7 @@ Board::Board(Kernel& kernel, std::string name, const PlatformConfig& config,
 BoardReport Board::Report(Time end) const {
   BoardReport out{name_, BuildReport(metrics_, end)};
   if (const SlotExecutor* executor = platform_.slot_executor()) {
-    SlotsReport slots{.waits = executor->waited(), .wait_s = executor->wait_s()};
-    for (int s = 0; s < executor->slots(); ++s) {
-      const SlotExecutor::SlotStats& stats = executor->stats(s);
-      slots.slots.push_back({.callbacks = stats.callbacks,
-                             .reconfigurations = stats.reconfigurations,
-                             .reconfiguring_s = stats.reconfiguring_s});
-    }
-    out.report.slots = std::move(slots);
+    out.report.slots = executor->Report();
   }
   for (TopicReport& topic : out.report.topics) topic.dds = graph_.dds_stats(topic.name);
   return out;

@@ -199,7 +199,7 @@ struct SlotsReport {
   struct Slot {
     std::uint64_t callbacks{0};
     std::uint64_t reconfigurations{0};
-    double reconfiguring_s{0.0};
+    double reconfiguring_s{0.0};  // the slot being reconfigured (copy and transfer)
   };
   std::vector<Slot> slots;
   std::uint64_t waits{0};  // callbacks that found no idle slot

@@ -19,6 +19,12 @@ SlotExecutor::SlotExecutor(Kernel& kernel, Platform& platform, int slots, Durati
       port_bytes_per_s_(port_bytes_per_s),
       memcpy_bytes_per_s_(memcpy_bytes_per_s) {}
 
+SlotsReport SlotExecutor::Report() const {
+  SlotsReport report{.waits = waited_, .wait_s = wait_s_};
+  for (const Slot& slot : slots_) report.slots.push_back(slot.stats);
+  return report;
+}
+
 void SlotExecutor::Preload(int slot, const std::string& node) {
   if (slot < 0 || slot >= slots()) {
     throw std::invalid_argument("slot " + std::to_string(slot) + " does not exist (slots 0.." +

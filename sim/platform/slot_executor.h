@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "sim/core/kernel.h"
+#include "sim/platform/node_metrics.h"
 
 namespace autonomsim::sim {
 
@@ -50,11 +51,8 @@ class SlotExecutor {
     Time transfer_begin{0};               // the port's transfer, after the CPU's copy
     Time end{0};
   };
-  struct SlotStats {
-    std::uint64_t callbacks{0};
-    std::uint64_t reconfigurations{0};
-    double reconfiguring_s{0.0};  // the slot being reconfigured (copy and transfer)
-  };
+  // What a slot did: callbacks run, reconfigurations, time reconfiguring (summary.json's form).
+  using SlotStats = SlotsReport::Slot;
 
   SlotExecutor(Kernel& kernel, Platform& platform, int slots, Duration poll_period,
                double port_bytes_per_s, double memcpy_bytes_per_s);
@@ -74,6 +72,8 @@ class SlotExecutor {
   std::uint64_t waited() const { return waited_; }
   double wait_s() const { return wait_s_; }
   std::size_t waiting() const { return waiting_.size(); }
+  // Every slot's stats and the waits, as a board's report holds them.
+  SlotsReport Report() const;
   // Called at each reconfiguration's begin (with begin set) and end (all set).
   void OnReconfigureBegin(std::function<void(const Reconfiguration&)> callback) {
     on_begin_ = std::move(callback);

@@ -21,6 +21,8 @@ namespace autonomsim::sim {
 
 namespace ros2 = mcap::ros2;
 using ros2::Type;
+static_assert(stack::LanePoints::kCount == ros2::kLanePointsCount,
+              "the stack's lane points are the lab's message's");
 
 namespace {
 
@@ -53,13 +55,19 @@ ros2::TransformStamped TransformOf(Time stamp, std::string parent, std::string c
 }
 
 // Nav2's costmap → OccupancyGrid translation (nav2_costmap_2d costmap_2d_publisher.cpp): free 0,
-// inscribed 99, lethal 100, unknown -1, the costs between scaled into 1..98.
-std::int8_t OccupancyOfCost(std::uint8_t cost) {
-  if (cost == 0) return 0;
-  if (cost == 253) return 99;
-  if (cost == 254) return 100;
-  if (cost == 255) return -1;
-  return static_cast<std::int8_t>(1 + (97 * (cost - 1)) / 251);
+// inscribed 99, lethal 100, unknown -1, the costs between scaled into 1..98; a table by cost.
+const std::array<std::int8_t, 256>& OccupancyOfCost() {
+  static const std::array<std::int8_t, 256> kTable = [] {
+    std::array<std::int8_t, 256> table{};
+    for (int cost = 1; cost < 253; ++cost) {
+      table[static_cast<std::size_t>(cost)] = static_cast<std::int8_t>(1 + (97 * (cost - 1)) / 251);
+    }
+    table[253] = 99;
+    table[254] = 100;
+    table[255] = -1;
+    return table;
+  }();
+  return kTable;
 }
 
 // rosbag2's channel metadata: the QoS the recorded publisher offered, which `ros2 bag play`
@@ -144,6 +152,10 @@ struct McapRecording::CarTaps {
   std::string prefix;    // "/car0": its topics' namespace
   std::string frame;     // "car0/": its frames' prefix
   Board* board{nullptr};
+  // the slots of what every sample writes, made once (cpu_load once the car has a board)
+  Slot* ground_truth{nullptr};
+  Slot* tf{nullptr};
+  Slot* cpu_load{nullptr};
   double last_busy_core_s{0.0};
   Time last_sample{kZeroTime};
   vehicle::ColorImage color;  // the image buffers, reused frame after frame
@@ -178,9 +190,12 @@ McapRecording::McapRecording(const LoadedScenario& loaded, const std::filesystem
     car->index = i;
     car->prefix = fmt::format("/car{}", car->id);
     car->frame = fmt::format("car{}/", car->id);
+    car->ground_truth = &SlotFor(car->prefix + "/ground_truth/pose", Type::kPoseStamped);
+    car->tf = &SlotFor(car->prefix + "/tf", Type::kTFMessage);
     car_of_id_[car->id] = car.get();
     cars_.push_back(std::move(car));
   }
+  rosout_ = &SlotFor("/rosout", Type::kLog);
   WriteTrack();
 }
 
@@ -213,17 +228,20 @@ bool McapRecording::Wanted(Slot& slot) {
   return *slot.wanted;
 }
 
-void McapRecording::Write(Slot& slot, Time t, const std::function<void(mcap::CdrWriter&)>& encode) {
-  if (closed_ || !Wanted(slot)) return;
-  if (slot.channel == 0) {
-    const auto [schema, added] = schema_ids_.try_emplace(slot.type, 0);
-    if (added) {
-      schema->second =
-          writer_.AddSchema(ros2::SchemaName(slot.type), "ros2msg", ros2::SchemaText(slot.type));
-    }
-    slot.channel = writer_.AddChannel(schema->second, slot.topic, "cdr", slot.metadata);
-    opened_.push_back(&slot);
+void McapRecording::OpenChannel(Slot& slot) {
+  const auto [schema, added] = schema_ids_.try_emplace(slot.type, 0);
+  if (added) {
+    schema->second =
+        writer_.AddSchema(ros2::SchemaName(slot.type), "ros2msg", ros2::SchemaText(slot.type));
   }
+  slot.channel = writer_.AddChannel(schema->second, slot.topic, "cdr", slot.metadata);
+  opened_.push_back(&slot);
+}
+
+template <class Encode>
+void McapRecording::Write(Slot& slot, Time t, const Encode& encode) {
+  if (closed_ || !Wanted(slot)) return;
+  if (slot.channel == 0) OpenChannel(slot);
   cdr_.Reset();
   encode(cdr_);
   writer_.Write(slot.channel, Ns(t), Ns(t), cdr_.data());
@@ -234,6 +252,7 @@ void McapRecording::Write(Slot& slot, Time t, const std::function<void(mcap::Cdr
 void McapRecording::OnBoard(int car_id, Board& board, const SensorSuite& sensors) {
   CarTaps& car = *car_of_id_.at(car_id);
   car.board = &board;
+  car.cpu_load = &SlotFor(car.prefix + "/cpu_load", Type::kFloat64);
   WriteStatics(car, sensors);
   TapCameras(car, board.graph(), sensors);
   TapStack(car, board.graph());
@@ -300,25 +319,32 @@ void McapRecording::TapStack(CarTaps& car, NodeGraph& graph) {
   graph.Tap<stack::LocalizationEkfOutput>(
       "/odometry/filtered", [this, tf, odom, base = car.frame + "base_link"](
                                 const stack::LocalizationEkfOutput& e, Time stamp, Time now) {
-        const std::array transforms{TransformOf(stamp, odom, base, e.X_odom_base)};
-        Write(*tf, now, [&](mcap::CdrWriter& w) { ros2::EncodeTFMessage(w, transforms); });
+        Write(*tf, now, [&](mcap::CdrWriter& w) {
+          const std::array transforms{TransformOf(stamp, odom, base, e.X_odom_base)};
+          ros2::EncodeTFMessage(w, transforms);
+        });
       });
   Slot* lanes = &SlotFor(p + kLanePointsTopic, Type::kLanePoints);
-  graph.Tap<stack::LanePoints>(
-      kLanePointsTopic, [this, lanes](const stack::LanePoints& l, Time, Time now) {
-        std::array<ros2::LanePoint, 30> points;
-        for (std::size_t i = 0; i < points.size(); ++i)
-          points[i] = {l.points[i].x_m, l.points[i].y_m};
-        Write(*lanes, now, [&](mcap::CdrWriter& w) { ros2::EncodeLanePoints(w, l.valid, points); });
-      });
+  graph.Tap<stack::LanePoints>(kLanePointsTopic,
+                               [this, lanes](const stack::LanePoints& l, Time, Time now) {
+                                 Write(*lanes, now, [&](mcap::CdrWriter& w) {
+                                   std::array<ros2::LanePoint, ros2::kLanePointsCount> points;
+                                   for (std::size_t i = 0; i < points.size(); ++i) {
+                                     points[i] = {l.points[i].x_m, l.points[i].y_m};
+                                   }
+                                   ros2::EncodeLanePoints(w, l.valid, points);
+                                 });
+                               });
   Slot* costmap = &SlotFor(p + "/local_costmap/costmap", Type::kOccupancyGrid);
   graph.Tap<CostmapMessage>("/local_costmap/costmap_raw",
                             [this, costmap, odom](const CostmapMessage& m, Time stamp, Time now) {
                               if (!m.costmap || !Wanted(*costmap)) return;
                               const stack::Costmap2D& c = *m.costmap;
                               std::vector<std::int8_t> cells(c.costs().size());
-                              for (std::size_t i = 0; i < cells.size(); ++i)
-                                cells[i] = OccupancyOfCost(c.costs()[i]);
+                              const auto& occupancy = OccupancyOfCost();
+                              for (std::size_t i = 0; i < cells.size(); ++i) {
+                                cells[i] = occupancy[c.costs()[i]];
+                              }
                               const world::Vec2 origin = c.origin_m();
                               Write(*costmap, now, [&](mcap::CdrWriter& w) {
                                 ros2::EncodeOccupancyGrid(
@@ -380,32 +406,33 @@ void McapRecording::OnV2iPublished(Time t, std::optional<int> /*car_id*/,
 void McapRecording::OnSample(const TrajectorySample& s) {
   CarTaps& car = *car_of_id_.at(s.car);
   const world::Pose2 pose{s.x_m, s.y_m, s.yaw_rad};
-  Write(
-      SlotFor(car.prefix + "/ground_truth/pose", Type::kPoseStamped), s.t,
-      [&](mcap::CdrWriter& w) { ros2::EncodePoseStamped(w, HeaderAt(s.t, "map"), PoseOf(pose)); });
-  const std::array transforms{TransformOf(s.t, "map", car.frame + "ground_truth", pose)};
-  Write(SlotFor(car.prefix + "/tf", Type::kTFMessage), s.t,
-        [&](mcap::CdrWriter& w) { ros2::EncodeTFMessage(w, transforms); });
+  Write(*car.ground_truth, s.t, [&](mcap::CdrWriter& w) {
+    ros2::EncodePoseStamped(w, HeaderAt(s.t, "map"), PoseOf(pose));
+  });
+  Write(*car.tf, s.t, [&](mcap::CdrWriter& w) {
+    const std::array transforms{TransformOf(s.t, "map", car.frame + "ground_truth", pose)};
+    ros2::EncodeTFMessage(w, transforms);
+  });
   if (car.board && s.t > car.last_sample) {
     // the board's mean load since the last sample, in % of one core (400: the ZCU104's four)
     const double busy = car.board->platform().cpu().BusyCoreSecondsAt(s.t);
     const double percent = 100.0 * (busy - car.last_busy_core_s) / ToSeconds(s.t - car.last_sample);
     car.last_busy_core_s = busy;
     car.last_sample = s.t;
-    Write(SlotFor(car.prefix + "/cpu_load", Type::kFloat64), s.t,
-          [&](mcap::CdrWriter& w) { ros2::EncodeFloat64(w, percent); });
+    Write(*car.cpu_load, s.t, [&](mcap::CdrWriter& w) { ros2::EncodeFloat64(w, percent); });
   }
 }
 
 void McapRecording::OnEvent(const Event& e) {
-  const ros2::Log log{.stamp = ros2::TimeOfNs(e.t.count()),
-                      .level = LevelOf(e.type),
-                      .name = e.car >= 0 ? fmt::format("car{}", e.car) : "autonomsim",
-                      .msg = DescribeEvent(e),
-                      .file = "events.jsonl",
-                      .function = std::string(ToName(e.type)),
-                      .line = 0};
-  Write(SlotFor("/rosout", Type::kLog), e.t, [&](mcap::CdrWriter& w) { ros2::EncodeLog(w, log); });
+  Write(*rosout_, e.t, [&](mcap::CdrWriter& w) {
+    ros2::EncodeLog(w, ros2::Log{.stamp = ros2::TimeOfNs(e.t.count()),
+                                 .level = LevelOf(e.type),
+                                 .name = e.car >= 0 ? fmt::format("car{}", e.car) : "autonomsim",
+                                 .msg = DescribeEvent(e),
+                                 .file = "events.jsonl",
+                                 .function = std::string(ToName(e.type)),
+                                 .line = 0});
+  });
 }
 
 namespace {
@@ -500,7 +527,7 @@ void McapRecording::Close(const std::vector<ExpectationResult>& expectations,
                         .msg = "failed: " + e.name + ": " + e.detail,
                         .file = "summary.json",
                         .function = "expect"};
-    Write(SlotFor("/rosout", Type::kLog), at, [&](mcap::CdrWriter& w) { ros2::EncodeLog(w, log); });
+    Write(*rosout_, at, [&](mcap::CdrWriter& w) { ros2::EncodeLog(w, log); });
   }
   writer_.AddMetadata("autonomsim", {{"scenario", loaded_.scenario.name},
                                      {"seed", std::to_string(loaded_.scenario.seed)},

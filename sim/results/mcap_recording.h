@@ -81,8 +81,11 @@ class McapRecording final : public RunObserver {
   Slot& SlotFor(const std::string& topic, mcap::ros2::Type type,
                 std::map<std::string, std::string> metadata = {});
   bool Wanted(Slot& slot);
-  // Encodes with `encode` and writes the message at `t` if the slot's topic is recorded.
-  void Write(Slot& slot, Time t, const std::function<void(mcap::CdrWriter&)>& encode);
+  // Encodes with `encode(CdrWriter&)` and writes the message at `t` if the slot's topic is
+  // recorded (nothing is encoded otherwise). Defined in the .cc, which alone calls it.
+  template <class Encode>
+  void Write(Slot& slot, Time t, const Encode& encode);
+  void OpenChannel(Slot& slot);
   void TapStack(CarTaps& car, NodeGraph& graph);
   void TapCommands(CarTaps& car, NodeGraph& graph);
   void TapCameras(CarTaps& car, NodeGraph& graph, const SensorSuite& sensors);
@@ -95,6 +98,7 @@ class McapRecording final : public RunObserver {
   mcap::CdrWriter cdr_;
   std::deque<Slot> slots_;  // stable addresses: the taps hold pointers
   std::map<std::string, Slot*> slot_of_topic_;
+  Slot* rosout_{nullptr};      // the events' and failed expectations' topic
   std::vector<Slot*> opened_;  // the slots with a channel, in the order they were opened
   std::map<mcap::ros2::Type, std::uint16_t> schema_ids_;
   std::vector<std::unique_ptr<CarTaps>> cars_;
