@@ -882,8 +882,40 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
         u_begin = std::max(u_begin, region->columns[static_cast<std::size_t>(v)].first);
         u_end = std::min(u_end, region->columns[static_cast<std::size_t>(v)].second);
       }
-      TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
+      if (color == nullptr && labels == nullptr) {
+        TracePrismDepthRow(trace, v, u_begin, u_end, depth);
+      } else {
+        TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
+      }
     }
+  }
+}
+
+void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
+                                        DepthImage* depth) {
+  // TracePrismRow's depth, four pixels at a time: without colour or labels the face the ray
+  // enters through does not matter.
+  const CameraParams& params = rays_->camera().params();
+  const F4 near_m = Splat(static_cast<float>(params.clip_near_m));
+  const F4 far_m = Splat(static_cast<float>(params.clip_far_m));
+  const int w = rays_->width();
+  std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
+  float* nearest = nearest_t_.data();
+  PrismTrace::Hits hits;
+  for (int u = u_begin; u < u_end; u += kLanes) {
+    const int i = v * w + u;
+    const int n = std::min(kLanes, u_end - u);
+    if (!trace.Test(i, n, nearest, &hits)) continue;
+    // DepthMillimetres in float, as TracePrismRow: 0 outside the clip range (converted only
+    // inside it)
+    const I4 in_clip = (hits.t >= near_m) & (hits.t <= far_m);
+    const I4 mm = __builtin_convertvector(in_clip ? hits.t * 1000.0f + 0.5f : Splat(0.0f), I4);
+    for (int k = 0; k < n; ++k) {
+      if (!hits.hit[k]) continue;
+      nearest[i + k] = hits.t[k];
+      if (depth_mm != nullptr) depth_mm[i + k] = static_cast<std::uint16_t>(mm[k]);
+    }
+    if (depth_mm != nullptr) depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
   }
 }
 

@@ -379,6 +379,9 @@ class CameraRenderer {
   struct PrismTrace;
   void TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end, ColorImage* color,
                      DepthImage* depth, const LabelOut* labels);
+  // The same without colour or labels: the depth alone, with no face to find.
+  void TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
+                          DepthImage* depth);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;

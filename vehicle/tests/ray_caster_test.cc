@@ -461,6 +461,31 @@ TEST(RayCasterTest, ColourOnlyAndDepthOnlyRendersAgreeWithABothRender) {
   EXPECT_EQ(both_depth.mm, depth.mm);
 }
 
+TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsAndTheClips) {
+  // the depth-only path finds no entry face: overlapping prisms in both orders, one nearer than
+  // the near clip, one enclosing the camera, one reaching past the far clip, at several poses
+  CameraParams params = DepthCameraParams();
+  params.clip_near_m = 0.45;  // the box at x = 0.25 m is nearer, 0.4 m from the camera
+  params.clip_far_m = 6.0;    // the box at 11 m reaches inside it
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  const std::vector<Prism> prisms{
+      Box(1.2, 0.1, 0.4, 0.525, 0.296, 0.2), Box(1.5, 0.0, 0.0, 0.3, 0.3, 0.3),
+      Box(0.25, 0.0, 0.0, 0.05, 0.6, 0.4),   Box(11.0, 0.5, 0.2, 4.0, 2.0, 1.0),
+      Box(0.9, -0.3, 0.7, 0.2, 0.2, 0.6),    Box(0.0, 0.0, 0.0, 0.8, 0.6, 0.5)};
+  for (int k = 0; k < 6; ++k) {
+    const world::Pose2 car{0.05 * k, -0.02 * k, 0.1 * k - 0.2};
+    // (the enclosing box only in every other frame; the others in turned order)
+    std::vector<Prism> scene(prisms.begin(), prisms.end() - (k % 2 == 0 ? 1 : 0));
+    if (k % 3 == 1) std::reverse(scene.begin(), scene.end());
+    ColorImage both_color;
+    DepthImage both_depth, depth;
+    renderer.Render(car, scene, &both_color, &both_depth);
+    renderer.Render(car, scene, nullptr, &depth);
+    EXPECT_EQ(both_depth.mm, depth.mm) << "frame " << k;
+    EXPECT_NE(std::count(depth.mm.begin(), depth.mm.end(), std::uint16_t{0}), 0) << "frame " << k;
+  }
+}
+
 TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
   // a textured floor, cars and boxes in view, 24 poses; the region a trapezoid like the lane
   // detector's, reaching both image edges, with rows left out
