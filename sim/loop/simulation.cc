@@ -402,7 +402,13 @@ void Simulation::Impl::Finish() {
       traced.push_back({boards[i]->name(), &boards[i]->metrics()});
     }
   }
-  if (!traced.empty()) record.trace_json = TraceJson(traced);
+  if (!traced.empty()) {
+    if (std::ostream* out = store ? store->OpenTrace() : nullptr) {
+      WriteTraceJson(traced, *out);  // straight to the folder, never whole in memory
+    } else {
+      record.trace_json = TraceJson(traced);
+    }
+  }
   if (store) {
     store->Close();
     record.store = store;

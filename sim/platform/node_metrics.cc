@@ -7,6 +7,7 @@
 #include <iterator>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <string_view>
 
 #include "world/validation.h"
@@ -562,6 +563,12 @@ class TraceWriter {
 }  // namespace
 
 std::string TraceJson(const std::vector<BoardMetrics>& boards) {
+  std::ostringstream out;
+  WriteTraceJson(boards, out);
+  return std::move(out).str();
+}
+
+void WriteTraceJson(const std::vector<BoardMetrics>& boards, std::ostream& stream) {
   std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
   TraceWriter writer(&out);
   std::vector<std::string> truncated;
@@ -571,6 +578,8 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
     const int base = kPidsPerBoard * (static_cast<int>(b) + 1);
     writer.AppendBoardNames(metrics, board, base);
     writer.AppendEvents(metrics, base);
+    stream << out;  // the board's text; the writer goes on in the emptied buffer
+    out.clear();
     if (metrics.trace_truncated()) {
       truncated.push_back(fmt::format("{}: recording stopped after {} events", board,
                                       metrics.options().trace_max_events));
@@ -581,7 +590,7 @@ std::string TraceJson(const std::vector<BoardMetrics>& boards) {
     out += ",\"otherData\":" + nlohmann::json({{"truncated", truncated}}).dump();
   }
   out += "}\n";
-  return out;
+  stream << out;
 }
 
 }  // namespace autonomsim::sim

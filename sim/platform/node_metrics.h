@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -260,6 +261,9 @@ nlohmann::json ReportJson(const MetricsReport& report);
 // executor (its jobs, on the cores or in its slot), per FPGA slot and (trace_receive) per DDS
 // receive thread.
 std::string TraceJson(const std::vector<BoardMetrics>& boards);
+// The same text written to `out` a board at a time, so that a long run's trace is never held in
+// memory whole.
+void WriteTraceJson(const std::vector<BoardMetrics>& boards, std::ostream& out);
 
 namespace detail {
 // A span from start_ns to end_ns (>= start_ns >= 0) in the trace's whole microseconds: both ends

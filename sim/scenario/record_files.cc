@@ -81,6 +81,7 @@ void HashFile(const fs::path& file, Sha256* hash) {
 RecordFiles::RecordFiles(const fs::path& folder)
     : trajectory_file_(folder / "trajectory.csv"),
       events_file_(folder / "events.jsonl"),
+      trace_file_(folder / "trace.json"),
       trajectory_(OpenForWriting(trajectory_file_)),
       events_(OpenForWriting(events_file_)) {
   Write(trajectory_, TrajectoryCsvHeader(), trajectory_file_);
@@ -96,10 +97,20 @@ void RecordFiles::RequireClosed() const {
   if (!closed_) throw std::logic_error("RecordFiles read before Close: " + events_file_.string());
 }
 
+std::ostream* RecordFiles::OpenTrace() {
+  if (closed_)
+    throw std::logic_error("RecordFiles::OpenTrace after Close: " + trace_file_.string());
+  if (!trace_.is_open()) trace_ = OpenForWriting(trace_file_);
+  return &trace_;
+}
+
 void RecordFiles::Close() {
   if (closed_) return;
   closed_ = true;
-  for (auto [out, file] : {std::pair{&trajectory_, &trajectory_file_}, {&events_, &events_file_}}) {
+  for (auto [out, file] : {std::pair{&trajectory_, &trajectory_file_},
+                           {&events_, &events_file_},
+                           {&trace_, &trace_file_}}) {
+    if (out == &trace_ && !trace_.is_open()) continue;
     out->close();
     if (!*out) ThrowCannotWrite(*file);
   }

@@ -31,6 +31,8 @@ class RecordFiles : public RecordStore {
   void ForEachSample(const std::function<void(const TrajectorySample&)>& visit) const override;
   void ForEachEvent(const std::function<void(const Event&)>& visit) const override;
   void HashText(Sha256* hash) const override;
+  // `folder`/trace.json, created on the first call.
+  std::ostream* OpenTrace() override;
 
   const std::filesystem::path& trajectory_file() const { return trajectory_file_; }
   const std::filesystem::path& events_file() const { return events_file_; }
@@ -40,8 +42,10 @@ class RecordFiles : public RecordStore {
 
   std::filesystem::path trajectory_file_;
   std::filesystem::path events_file_;
+  std::filesystem::path trace_file_;
   std::ofstream trajectory_;
   std::ofstream events_;
+  std::ofstream trace_;  // open once OpenTrace was called
   bool closed_{false};
 };
 

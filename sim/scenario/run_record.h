@@ -8,6 +8,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -140,6 +141,9 @@ class RecordStore {
   virtual void ForEachEvent(const std::function<void(const Event&)>& visit) const = 0;
   // Feeds the text of trajectory.csv, then of events.jsonl, to `hash`.
   virtual void HashText(Sha256* hash) const = 0;
+  // Where the run writes its trace.json as it makes it (before Close), so that the trace is never
+  // held in memory whole; null where the store keeps no files (then RunRecord::trace_json has it).
+  virtual std::ostream* OpenTrace() { return nullptr; }
 };
 
 struct RunRecord {
@@ -163,7 +167,7 @@ struct RunRecord {
   // The cars' compute boards (those that have one): per-node and platform metrics, and the
   // Chrome trace of their jobs (empty when no board records one).
   std::vector<BoardReport> boards;
-  std::string trace_json;
+  std::string trace_json;  // empty where it went to `store` (RecordStore::OpenTrace)
 };
 
 void ForEachEvent(const RunRecord& record, const std::function<void(const Event&)>& visit);

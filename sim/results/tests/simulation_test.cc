@@ -112,6 +112,25 @@ TEST(SimulationTest, AStreamedRunWritesWhatARunInMemoryWrites) {
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "memory" / "nodes.csv"));
 }
 
+// A streamed run writes its boards' trace into the folder as it makes it (issue 38: a 10-car
+// minute's trace is ~47 MB of text, which the run held whole beside its events); the file is the
+// in-memory run's trace_json, byte for byte.
+TEST(SimulationTest, AStreamedRunWritesItsTraceIntoTheFolderNotIntoTheRecord) {
+  const LoadedScenario scenario =
+      LoadScenario(kDefault, {"cars[1].perception.enabled=true", "duration_s=3", "expect=[]"});
+  const TempDir dir("simulation_test");
+  const RunRecord memory = RunScenario(scenario);
+  ASSERT_NE(memory.trace_json.find("\"traceEvents\""), std::string::npos);
+
+  RunFolder folder(dir.path() / "streamed");
+  Simulation simulation(scenario, folder.store());
+  simulation.Run();
+  const RunRecord& streamed = simulation.record();
+  EXPECT_TRUE(streamed.trace_json.empty());
+  folder.Complete(scenario, streamed, {}, 0.0);
+  EXPECT_EQ(ReadFile(dir.path() / "streamed" / "trace.json"), memory.trace_json);
+}
+
 TEST(SimulationTest, TheSeedChangesTheRun) {
   // the V2I delays are drawn from seeded streams, so another seed moves the grant times
   const std::string a = ResultSha256(RunScenario(LoadScenario(kDefault, {}, 1)));
