@@ -351,6 +351,16 @@ void CameraRays::ComputeTiles() {
       tiles_.push_back(tile);
     }
   }
+  for (std::size_t first = 0; first < tiles_.size(); first += tiles_per_row()) {
+    Tile row = tiles_[first];
+    for (std::size_t k = first; k < first + tiles_per_row(); ++k) {
+      row.x_min = std::min(row.x_min, tiles_[k].x_min);
+      row.x_max = std::max(row.x_max, tiles_[k].x_max);
+      row.y_min = std::min(row.y_min, tiles_[k].y_min);
+      row.y_max = std::max(row.y_max, tiles_[k].y_max);
+    }
+    tile_rows_.push_back(row);
+  }
 }
 
 CameraRenderer::CameraRenderer(std::shared_ptr<const CameraRays> rays,
@@ -859,6 +869,12 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   const std::optional<RayBounds> bounds =
       BoundOnImage(placed, r.camera().X_base_camera().inverse(), r.camera().params().clip_far_m);
   if (!bounds) return;
+  const auto misses = [&](const CameraRays::Tile& tile) {
+    return tile.x_max < bounds->x_lo || tile.x_min > bounds->x_hi || tile.y_max < bounds->y_lo ||
+           tile.y_min > bounds->y_hi;
+  };
+  const std::vector<CameraRays::Tile>& tile_rows = r.tile_rows();
+  if (std::all_of(tile_rows.begin(), tile_rows.end(), misses)) return;  // beside the view
 
   PrismTrace trace(r, placed, *bounds);
   trace.face_bgr = PrismFaceColours(prism);
@@ -869,24 +885,38 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   }
 
   const std::vector<CameraRays::Tile>& tiles = r.tiles();
-  for (std::size_t ti = 0; ti < tiles.size(); ++ti) {
-    const CameraRays::Tile& tile = tiles[ti];
-    if (tile.x_max < bounds->x_lo || tile.x_min > bounds->x_hi || tile.y_max < bounds->y_lo ||
-        tile.y_min > bounds->y_hi) {
-      continue;
+  const auto per_row = static_cast<std::size_t>(r.tiles_per_row());
+  for (std::size_t row = 0; row < tile_rows.size(); ++row) {
+    if (misses(tile_rows[row])) continue;
+    for (std::size_t ti = row * per_row; ti < (row + 1) * per_row; ++ti) {
+      if (!misses(tiles[ti])) TracePrismTile(trace, ti, color, depth, region, labels);
     }
-    if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
-    for (int v = tile.v0; v < tile.v1; ++v) {
-      int u_begin = tile.u0, u_end = tile.u1;
-      if (region != nullptr) {
-        u_begin = std::max(u_begin, region->columns[static_cast<std::size_t>(v)].first);
-        u_end = std::min(u_end, region->columns[static_cast<std::size_t>(v)].second);
-      }
-      if (color == nullptr && labels == nullptr) {
-        TracePrismDepthRow(trace, v, u_begin, u_end, depth);
-      } else {
-        TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
-      }
+  }
+}
+
+void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, ColorImage* color,
+                                    DepthImage* depth, const RowSpans* region,
+                                    const LabelOut* labels) {
+  const CameraRays::Tile& tile = rays_->tiles()[ti];
+  // row v's pixels of the tile that are asked for
+  const auto columns = [&](int v) {
+    if (region == nullptr) return std::pair{tile.u0, tile.u1};
+    const auto [begin, end] = region->columns[static_cast<std::size_t>(v)];
+    return std::pair{std::max(tile.u0, begin), std::min(tile.u1, end)};
+  };
+  bool asked = false;
+  for (int v = tile.v0; v < tile.v1 && !asked; ++v) {
+    const auto [u_begin, u_end] = columns(v);
+    asked = u_begin < u_end;
+  }
+  if (!asked) return;
+  if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
+  for (int v = tile.v0; v < tile.v1; ++v) {
+    const auto [u_begin, u_end] = columns(v);
+    if (color == nullptr && labels == nullptr) {
+      TracePrismDepthRow(trace, v, u_begin, u_end, depth);
+    } else {
+      TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
     }
   }
 }

@@ -215,6 +215,11 @@ class CameraRays {
   const std::vector<Run>& floor_runs() const { return floor_runs_; }        // see the floor
   const std::vector<Run>& surround_runs() const { return surround_runs_; }  // see nothing
   const std::vector<Tile>& tiles() const { return tiles_; }
+  // The tiles row by row: tile row k is tiles()[k · tiles_per_row(), (k + 1) · tiles_per_row()),
+  // and tile_rows()[k] bounds the normalized rays of all of them (its x_min..y_max; u0..v1 unused),
+  // so that a prism is tested against the tiles of the rows it can reach only.
+  int tiles_per_row() const { return (width_ + kTileSize - 1) / kTileSize; }
+  const std::vector<Tile>& tile_rows() const { return tile_rows_; }
 
   // Aligned blocks of kBlockSize pixels of a row, columns [k · kBlockSize, (k + 1) · kBlockSize):
   // where all of a block's pixels see the floor, a circle (base frame, metres) holding their floor
@@ -255,6 +260,7 @@ class CameraRays {
   std::vector<Run> floor_runs_;
   std::vector<Run> surround_runs_;
   std::vector<Tile> tiles_;
+  std::vector<Tile> tile_rows_;
   std::vector<FloorBlock> floor_blocks_;
   std::vector<FloorBlock> floor_block_groups_;
 };
@@ -382,6 +388,10 @@ class CameraRenderer {
   // The same without colour or labels: the depth alone, with no face to find.
   void TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
                           DepthImage* depth);
+  // RenderPrism's step for one tile that the prism's bounds reach: each row's pixels (of
+  // `region`, if given) traced.
+  void TracePrismTile(const PrismTrace& trace, std::size_t tile, ColorImage* color,
+                      DepthImage* depth, const RowSpans* region, const LabelOut* labels);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;
