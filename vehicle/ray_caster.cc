@@ -569,12 +569,17 @@ struct CameraRenderer::FloorPass {
            row + reach < static_cast<float>(tex.height()) && tex.CommonWithin(col, row, reach);
   }
 
-  // Pixels [i, i + kBlockSize) of row v: the common colour.
-  void FillCommon(int v, int i) const {
+  // The `count` blocks of pixels from pixel i of row v on (kBlockSize each): the common colour.
+  void FillCommon(int v, int i, int count) const {
+    if (count <= 0) return;
     if (labels != nullptr) {
-      std::memset(LabelRow(v) + i, common_label, CameraRays::kBlockSize);
-    } else {
-      std::memcpy(out + 3 * i, common_block.data(), common_block.size());
+      std::memset(LabelRow(v) + i, common_label,
+                  static_cast<std::size_t>(count) * CameraRays::kBlockSize);
+      return;
+    }
+    for (int b = 0; b < count; ++b) {
+      std::memcpy(out + 3 * (i + b * CameraRays::kBlockSize), common_block.data(),
+                  common_block.size());
     }
   }
 
@@ -649,30 +654,44 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
   // of its blocks is met: 0 not yet, 1 all of the common colour, 2 not known to be.
   const CameraRays::FloorBlock* groups = r.floor_block_groups().data();
   group_common_.assign(r.floor_block_groups().size(), 0);
-  const auto group_common = [&](int row, int k) {
-    const std::size_t g = static_cast<std::size_t>(row / CameraRays::kGroupRows) * blocks_per_row +
-                          static_cast<std::size_t>(k);
-    if (group_common_[g] == 0) group_common_[g] = pass.Common(groups[g]) ? 1 : 2;
-    return group_common_[g] == 1;
-  };
+  std::uint8_t* const group_status = group_common_.data();
+  // Per run, the blocks wholly inside it [k_begin, k_end) one by one, a stretch of common ones
+  // filled at once; the partial blocks at its ends looked up. (The count is kept in a local: the
+  // byte stores may alias any member, which the compiler would then reload after each.)
+  std::uint64_t common_blocks = 0;
   for (const CameraRays::Run& run : runs) {
     const int row = run.begin / w;  // a run lies in one row
-    int i = run.begin;
-    while (i < run.end) {
-      const int column = i - row * w;
-      if (column % kBlock == 0 && i + kBlock <= run.end &&
-          (group_common(row, column / kBlock) ||
-           pass.Common(blocks[row * blocks_per_row + column / kBlock]))) {
-        pass.FillCommon(row, i);
-        ++common_floor_blocks_;
-        i += kBlock;
-        continue;
-      }
-      const int next = std::min(run.end, row * w + (column / kBlock + 1) * kBlock);
-      pass.LookUp(row, i, next);
-      i = next;
+    const int row_start = row * w;
+    const std::size_t group_row =
+        static_cast<std::size_t>(row / CameraRays::kGroupRows) * blocks_per_row;
+    const auto common = [&](int k) {
+      std::uint8_t& status = group_status[group_row + static_cast<std::size_t>(k)];
+      if (status == 0)
+        status = pass.Common(groups[group_row + static_cast<std::size_t>(k)]) ? 1 : 2;
+      return status == 1 || pass.Common(blocks[row * blocks_per_row + k]);
+    };
+    const int k_begin = (run.begin - row_start + kBlock - 1) / kBlock;
+    const int k_end = (run.end - row_start) / kBlock;
+    if (k_begin >= k_end) {
+      pass.LookUp(row, run.begin, run.end);
+      continue;
     }
+    if (run.begin < row_start + k_begin * kBlock) {
+      pass.LookUp(row, run.begin, row_start + k_begin * kBlock);
+    }
+    int common_from = k_begin;  // the stretch of common blocks [common_from, k)
+    for (int k = k_begin; k < k_end; ++k) {
+      if (common(k)) continue;
+      pass.FillCommon(row, row_start + common_from * kBlock, k - common_from);
+      common_blocks += static_cast<std::uint64_t>(k - common_from);
+      pass.LookUp(row, row_start + k * kBlock, row_start + (k + 1) * kBlock);
+      common_from = k + 1;
+    }
+    pass.FillCommon(row, row_start + common_from * kBlock, k_end - common_from);
+    common_blocks += static_cast<std::uint64_t>(k_end - common_from);
+    if (row_start + k_end * kBlock < run.end) pass.LookUp(row, row_start + k_end * kBlock, run.end);
   }
+  common_floor_blocks_ += common_blocks;
 }
 
 void CameraRenderer::InitTileDepth(std::size_t tile_index) {
