@@ -1,5 +1,7 @@
 #include "stack/obstacle_grid.h"
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -177,6 +179,34 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
     CountRow(g, x, y, z, &counts);
   }
   return Finish(counts);
+}
+
+double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
+                              const ObstacleGridParams& params) {
+  params.Validate();
+  Eigen::Matrix3d M;
+  Eigen::Vector3d t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) M(r, c) = params.X_base_camera[4 * r + c];
+    t(r) = params.X_base_camera[4 * r + 3];
+  }
+  const auto inside = [&](const Eigen::Vector3d& p) {
+    return p.x() >= params.x_min_m && p.x() <= params.x_max_m && p.y() >= params.y_min_m &&
+           p.y() <= params.y_max_m && p.z() >= params.z_min_m && p.z() <= params.z_max_m;
+  };
+  constexpr double kInfinite = std::numeric_limits<double>::infinity();
+  if (inside(t) || std::abs(M.determinant()) < 1e-9) return kInfinite;
+  const Eigen::Matrix3d camera_from_base = M.inverse();
+  double ahead_m = 0.0;  // the farthest corner's distance ahead of the camera, in its frame
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1) ? params.x_max_m : params.x_min_m,
+                                 (k & 2) ? params.y_max_m : params.y_min_m,
+                                 (k & 4) ? params.z_max_m : params.z_min_m);
+    ahead_m = std::max(ahead_m, (camera_from_base * (corner - t)).x());
+  }
+  // ahead = d · m_per_mm for a depth value d in millimetres, which is the depth in metres · 1000
+  const double depth_m = ahead_m / (static_cast<double>(cloud_params.m_per_mm()) * 1000.0);
+  return depth_m + 0.01;
 }
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,

@@ -127,6 +127,15 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
                         const DepthImageView& depth, const std::array<double, 12>& P,
                         DepthGridMemo* memo, std::span<const std::uint8_t> changed_rows = {});
 
+// The largest optical depth (metres, as a depth camera measures it) that a pixel can have and
+// still be counted by the grid: a depth value d back-projects to a point d · m_per_mm ahead of the
+// camera (StepPointCloud), and no point of the box is farther ahead than its farthest corner; 1 cm
+// is added for the rounding to millimetres and the float arithmetic. A renderer may leave out
+// whatever is wholly farther (vehicle::CameraRenderer::RenderDepth): the grid is the same. +inf
+// where a pixel without a return (depth 0, the camera's own position) falls inside the box.
+double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
+                              const ObstacleGridParams& params);
+
 struct ObstacleLayerParams {
   // reference §4: a cell is an obstacle when its count is above 250.
   int lethal_above_count{250};

@@ -377,9 +377,10 @@ void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism
 }
 
 void CameraRenderer::RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms,
-                                 DepthImage* depth, DepthRowHistory* history) {
+                                 DepthImage* depth, DepthRowHistory* history,
+                                 double depth_of_interest_m) {
   Require(depth != nullptr && history != nullptr, "CameraRenderer::RenderDepth needs its outputs");
-  RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history);
+  RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history, nullptr, depth_of_interest_m);
 }
 
 void CameraRenderer::CheckRegion(const RowSpans& region, const char* what) const {
@@ -440,7 +441,8 @@ void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region,
 
 void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                 ColorImage* color, DepthImage* depth, const RowSpans* color_region,
-                                DepthRowHistory* history, const LabelOut* labels) {
+                                DepthRowHistory* history, const LabelOut* labels,
+                                double depth_of_interest_m) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
@@ -465,7 +467,7 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
   // Without a depth image, only the colour region's pixels of a prism are needed.
   const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
   for (std::size_t k = 0; k < prisms.size(); ++k) {
-    RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels);
+    RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels, depth_of_interest_m);
   }
   if (history != nullptr) {
     // rows that differ from the bare floor now or did in the last frame
@@ -751,6 +753,7 @@ PrismInBase PlaceInBase(const world::Pose2& X_map_car, const Prism& prism) {
 // The bounds of the normalized rays (x/z, y/z in the optical frame) that can meet a prism.
 struct RayBounds {
   float x_lo{kInf}, x_hi{-kInf}, y_lo{kInf}, y_hi{-kInf};
+  double z_near{0.0};  // the least optical z of the prism's corners: no point of it is nearer
   void Include(const Eigen::Vector3d& q) {
     const auto qx = static_cast<float>(q.x() / q.z());
     const auto qy = static_cast<float>(q.y() / q.z());
@@ -792,6 +795,7 @@ std::optional<RayBounds> BoundOnImage(const PrismInBase& prism,
     }
   }
   if (!(bounds.x_lo <= bounds.x_hi)) return std::nullopt;  // wholly behind the camera
+  bounds.z_near = z_min;
   return bounds;
 }
 
@@ -881,13 +885,15 @@ struct CameraRenderer::PrismTrace {
 
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
                                  std::size_t index, ColorImage* color, DepthImage* depth,
-                                 const RowSpans* region, const LabelOut* labels) {
+                                 const RowSpans* region, const LabelOut* labels,
+                                 double depth_of_interest_m) {
   const CameraRays& r = *rays_;
   const PrismInBase placed = PlaceInBase(X_map_car, prism);
   if (!(placed.half_length > 0.0 && placed.half_width > 0.0 && placed.height > 0.0)) return;
   const std::optional<RayBounds> bounds =
       BoundOnImage(placed, r.camera().X_base_camera().inverse(), r.camera().params().clip_far_m);
-  if (!bounds) return;
+  // (optical z is linear in the point, so the nearest point of a box is a corner)
+  if (!bounds || bounds->z_near > depth_of_interest_m) return;
   const auto misses = [&](const CameraRays::Tile& tile) {
     return tile.x_max < bounds->x_lo || tile.x_min > bounds->x_hi || tile.y_max < bounds->y_lo ||
            tile.y_min > bounds->y_hi;

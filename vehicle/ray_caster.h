@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -328,9 +329,13 @@ class CameraRenderer {
               DepthImage* depth, const RowSpans& color_region);
   // The depth image alone, into a buffer that `history` describes (DepthRowHistory): only the
   // rows the last frame's prisms covered are set back to the bare floor. The image is exactly
-  // Render's.
+  // Render's wherever Render's is at most `depth_of_interest_m` (optical z, metres): a prism
+  // wholly farther is left out, for a consumer that reads nothing farther (the obstacle grid,
+  // stack::FarthestCountedDepth_m); what it would have hidden is farther still. The default
+  // leaves nothing out.
   void RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms, DepthImage* depth,
-                   DepthRowHistory* history);
+                   DepthRowHistory* history,
+                   double depth_of_interest_m = std::numeric_limits<double>::infinity());
 
   // label(c) for each pixel of `region` whose colour Render would make c, written to `out`; no
   // other pixel is written. The floor has few colours and a prism's faces seven, so this costs
@@ -365,7 +370,8 @@ class CameraRenderer {
   };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
                   DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,
-                  const LabelOut* labels = nullptr);
+                  const LabelOut* labels = nullptr,
+                  double depth_of_interest_m = std::numeric_limits<double>::infinity());
   // Colour (or, with `labels`, labels) and depth of the floor and the surround.
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
                    const RowSpans* color_region, DepthRowHistory* history, const LabelOut* labels);
@@ -377,9 +383,10 @@ class CameraRenderer {
   void FillFloor(const FloorPass& pass, const std::vector<CameraRays::Run>& runs);
   // `region`: only its pixels (colour alone), or null: all of the prism's.
   // `index`: the prism's place in the frame's list (its entry of LabelOut::prism_labels).
+  // Nothing is drawn for a prism wholly farther than `depth_of_interest_m` (RenderDepth).
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, std::size_t index,
                    ColorImage* color, DepthImage* depth, const RowSpans* region,
-                   const LabelOut* labels);
+                   const LabelOut* labels, double depth_of_interest_m);
   // RenderPrism's per-pixel step: the exact ray test of pixels [u_begin, u_end) of row v, and
   // the nearest surface's colour, label and depth where the prism is nearer than what they saw.
   struct PrismTrace;

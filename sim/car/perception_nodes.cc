@@ -1,5 +1,6 @@
 #include "sim/car/perception_nodes.h"
 
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -46,8 +47,10 @@ struct DepthScratch {
   stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the rows that changed
 };
 
-stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch) {
-  frame.RenderDepth(&scratch->depth, &scratch->history);
+// `depth_of_interest_m`: what the consumer reads (CameraFrame::RenderDepth).
+stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch,
+                                  double depth_of_interest_m) {
+  frame.RenderDepth(&scratch->depth, &scratch->history, depth_of_interest_m);
   return stack::DepthImageView{scratch->depth.width, scratch->depth.height, scratch->depth.mm};
 }
 
@@ -64,6 +67,9 @@ struct GridParams {
   stack::ObstacleGridParams grid;
   std::array<double, 12> P{};
   std::function<void(const stack::Grid234&, Time)> hook;
+  // The fused node reads no depth beyond this (stack::FarthestCountedDepth_m); the point cloud
+  // node, which publishes every point, reads all.
+  double depth_of_interest_m{std::numeric_limits<double>::infinity()};
 };
 
 stack::Grid234 Report(const GridParams& params, stack::Grid234 grid, Time stamp) {
@@ -86,14 +92,16 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
   if (InHardware(mapping, "obstacle_detection", kSlot0)) {
     // Point cloud and grid fused in one slot; the cloud is never written (reference §4).
     params.cloud.hardware_scale = true;
+    params.depth_of_interest_m = stack::FarthestCountedDepth_m(params.cloud, params.grid);
     AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image,
                      obstacles, std::move(params), std::make_shared<DepthScratch>(),
                      [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
-                       return Report(p,
-                                     stack::StepDepthToGrid(
-                                         p.cloud, p.grid, RenderDepth(frame, scratch), p.P,
-                                         &scratch->grid_memo, scratch->history.changed_rows()),
-                                     frame.stamp);
+                       return Report(
+                           p,
+                           stack::StepDepthToGrid(
+                               p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
+                               p.P, &scratch->grid_memo, scratch->history.changed_rows()),
+                           frame.stamp);
                      });
     return obstacles;
   }
@@ -105,7 +113,9 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                    params, std::make_shared<DepthScratch>(),
                    [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
                      auto cloud = std::make_shared<stack::PointCloud640>();
-                     stack::StepPointCloud(p.cloud, RenderDepth(frame, scratch), p.P, cloud.get());
+                     stack::StepPointCloud(p.cloud,
+                                           RenderDepth(frame, scratch, p.depth_of_interest_m), p.P,
+                                           cloud.get());
                      return CloudMessage{std::move(cloud), frame.stamp};
                    });
   AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSoftware}, points,

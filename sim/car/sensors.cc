@@ -125,8 +125,9 @@ void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
   CameraOf(*this).Render(*this, color, depth, &color_region);
 }
 
-void CameraFrame::RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history) const {
-  CameraOf(*this).RenderDepth(*this, depth, history);
+void CameraFrame::RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history,
+                              double depth_of_interest_m) const {
+  CameraOf(*this).RenderDepth(*this, depth, history, depth_of_interest_m);
 }
 
 bool CameraFrame::RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
@@ -197,14 +198,15 @@ bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpan
 }
 
 void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
-                               vehicle::DepthRowHistory* history) const {
+                               vehicle::DepthRowHistory* history,
+                               double depth_of_interest_m) const {
   // not the bare floor plus prisms, or not rendered row by row
   if (frame.blackout || params_.noise.AltersDepth() || gl_ != nullptr) {
     Render(frame, nullptr, depth);
     history->Forget();
     return;
   }
-  renderer_.RenderDepth(frame.X_map_car, frame.prisms, depth, history);
+  renderer_.RenderDepth(frame.X_map_car, frame.prisms, depth, history, depth_of_interest_m);
   ++frames_rendered_;
 }
 

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -120,8 +121,10 @@ struct CameraFrame {
   void Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
               const vehicle::RowSpans& color_region) const;
   // The depth image alone, into a buffer `history` describes (vehicle::DepthRowHistory): Render's
-  // image, with only the rows that can have changed since the buffer's last frame rewritten.
-  void RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history) const;
+  // image, with only the rows that can have changed since the buffer's last frame rewritten;
+  // exact up to `depth_of_interest_m`, as vehicle::CameraRenderer::RenderDepth.
+  void RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history,
+                   double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
   // label(colour) of each `region` pixel (vehicle::CameraRenderer::RenderLabels), without the
   // colour image. False, and nothing written, where a pixel's colour is not the scene's own (the
   // colour noise is on): render the colour then.
@@ -147,7 +150,7 @@ class CameraSensor {
   void Render(const CameraFrame& frame, vehicle::ColorImage* color, vehicle::DepthImage* depth,
               const vehicle::RowSpans* color_region = nullptr) const;
   void RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
-                   vehicle::DepthRowHistory* history) const;
+                   vehicle::DepthRowHistory* history, double depth_of_interest_m) const;
   bool RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                     const vehicle::ColourLabel& label, vehicle::LabelView out) const;
 

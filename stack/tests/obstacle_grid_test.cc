@@ -157,6 +157,37 @@ TEST(ObstacleGridTest, MovesPointsFromTheCameraToBase) {
   EXPECT_EQ(Total(grid), 1);
 }
 
+// A renderer may leave out what lies wholly beyond FarthestCountedDepth_m (issue 38): no depth
+// value beyond it is counted, with either scale, and the bound is within 3 cm of tight.
+TEST(ObstacleGridTest, NoDepthBeyondTheFarthestCountedDepthIsCounted) {
+  const ObstacleGridParams grid;  // the lab's box
+  const std::array<double, 12> P = vehicle::CameraModel(vehicle::DepthCameraParams()).Info().P;
+  for (const bool hardware_scale : {false, true}) {
+    PointCloudParams cloud;
+    cloud.hardware_scale = hardware_scale;
+    const double far_m = FarthestCountedDepth_m(cloud, grid);
+    ASSERT_TRUE(far_m > 1.0 && far_m < 2.0) << far_m;
+    // a wall of one depth value at every pixel
+    const auto counted = [&](int mm) {
+      const std::vector<std::uint16_t> wall(640 * 480, static_cast<std::uint16_t>(mm));
+      const Grid234 g = StepDepthToGrid(cloud, grid, DepthImageView{640, 480, wall}, P);
+      int total = 0;
+      for (std::uint8_t n : g.data) total += n;
+      return total;
+    };
+    const int bound_mm = static_cast<int>(std::lround(far_m * 1000.0));
+    for (int mm = bound_mm; mm <= bound_mm + 300; mm += 3) {
+      EXPECT_EQ(counted(mm), 0) << mm << " mm, hardware_scale " << hardware_scale;
+    }
+    EXPECT_GT(counted(bound_mm - 30), 0) << "hardware_scale " << hardware_scale;
+  }
+  // a box around the camera counts a pixel without a return: nothing may be left out
+  ObstacleGridParams around = grid;
+  around.x_min_m = -0.5;
+  around.x_max_m = 0.4;
+  EXPECT_TRUE(std::isinf(FarthestCountedDepth_m(PointCloudParams{}, around)));
+}
+
 TEST(ObstacleGridTest, ValidateNamesTheBadKey) {
   ObstacleGridParams p;
   EXPECT_NO_THROW(p.Validate());

@@ -486,6 +486,39 @@ TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsA
   }
 }
 
+// RenderDepth with a depth of interest (issue 38: the obstacle grid reads nothing beyond ~1.4 m)
+// leaves out the prisms wholly beyond it and is Render's image wherever that is within it, frame
+// after frame in one buffer.
+TEST(RayCasterTest, ADepthOfInterestLeavesOutOnlyPrismsWhollyBeyondIt) {
+  const CameraParams params = DepthCameraParams();
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  constexpr double kInterest_m = 1.6;
+  const std::vector<Prism> prisms{Box(1.2, 0.0, 0.3, 0.3, 0.3, 0.3),   // near
+                                  Box(3.0, 0.1, 0.0, 0.5, 0.4, 0.3),   // far, partly behind it
+                                  Box(2.6, -0.6, 0.5, 0.4, 0.4, 0.3),  // far, beside
+                                  Box(1.9, 0.5, 0.0, 0.8, 0.2, 0.3)};  // straddling the depth
+  DepthImage limited;
+  DepthRowHistory history;
+  for (int k = 0; k < 4; ++k) {
+    const world::Pose2 car{0.1 * k, 0.05 * k, 0.05 * k};
+    DepthImage full;
+    renderer.Render(car, prisms, nullptr, &full);
+    renderer.RenderDepth(car, prisms, &limited, &history, kInterest_m);
+    int within = 0, left_out = 0;
+    for (std::size_t i = 0; i < full.mm.size(); ++i) {
+      if (full.mm[i] <= 1000 * kInterest_m) {
+        ++within;
+        EXPECT_EQ(limited.mm[i], full.mm[i]) << "frame " << k << " pixel " << i;
+      } else if (limited.mm[i] != full.mm[i]) {
+        ++left_out;  // a far prism's pixel now shows what is behind it: farther still, or nothing
+        EXPECT_TRUE(limited.mm[i] == 0 || limited.mm[i] > full.mm[i]) << "pixel " << i;
+      }
+    }
+    EXPECT_GT(within, 10000) << "frame " << k;
+    EXPECT_GT(left_out, 1000) << "frame " << k;
+  }
+}
+
 TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
   // a textured floor, cars and boxes in view, 24 poses; the region a trapezoid like the lane
   // detector's, reaching both image edges, with rows left out
