@@ -799,6 +799,26 @@ std::optional<RayBounds> BoundOnImage(const PrismInBase& prism,
   return bounds;
 }
 
+bool Misses(const CameraRays::Tile& tile, const RayBounds& bounds) {
+  return tile.x_max < bounds.x_lo || tile.x_min > bounds.x_hi || tile.y_max < bounds.y_lo ||
+         tile.y_min > bounds.y_hi;
+}
+
+// The prism's bounds on the image, or nullopt where it covers no pixel: flat, behind the camera,
+// beyond the far clip, or beside every row of tiles.
+std::optional<RayBounds> VisibleBounds(const CameraRays& r, const PrismInBase& placed) {
+  if (!(placed.half_length > 0.0 && placed.half_width > 0.0 && placed.height > 0.0)) {
+    return std::nullopt;
+  }
+  std::optional<RayBounds> bounds =
+      BoundOnImage(placed, r.camera().X_base_camera().inverse(), r.camera().params().clip_far_m);
+  if (bounds && std::all_of(r.tile_rows().begin(), r.tile_rows().end(),
+                            [&](const CameraRays::Tile& row) { return Misses(row, *bounds); })) {
+    return std::nullopt;
+  }
+  return bounds;
+}
+
 }  // namespace
 
 // The exact ray–prism test of four pixels at a time, in the prism's frame: the ray's origin o and
@@ -889,17 +909,11 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
                                  double depth_of_interest_m) {
   const CameraRays& r = *rays_;
   const PrismInBase placed = PlaceInBase(X_map_car, prism);
-  if (!(placed.half_length > 0.0 && placed.half_width > 0.0 && placed.height > 0.0)) return;
-  const std::optional<RayBounds> bounds =
-      BoundOnImage(placed, r.camera().X_base_camera().inverse(), r.camera().params().clip_far_m);
+  const std::optional<RayBounds> bounds = VisibleBounds(r, placed);
   // (optical z is linear in the point, so the nearest point of a box is a corner)
   if (!bounds || bounds->z_near > depth_of_interest_m) return;
-  const auto misses = [&](const CameraRays::Tile& tile) {
-    return tile.x_max < bounds->x_lo || tile.x_min > bounds->x_hi || tile.y_max < bounds->y_lo ||
-           tile.y_min > bounds->y_hi;
-  };
+  const auto misses = [&](const CameraRays::Tile& tile) { return Misses(tile, *bounds); };
   const std::vector<CameraRays::Tile>& tile_rows = r.tile_rows();
-  if (std::all_of(tile_rows.begin(), tile_rows.end(), misses)) return;  // beside the view
 
   PrismTrace trace(r, placed, *bounds);
   trace.face_bgr = PrismFaceColours(prism);
@@ -917,6 +931,10 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
       if (!misses(tiles[ti])) TracePrismTile(trace, ti, color, depth, region, labels);
     }
   }
+}
+
+bool CameraRenderer::MaySee(const world::Pose2& X_map_car, const Prism& prism) const {
+  return VisibleBounds(*rays_, PlaceInBase(X_map_car, prism)).has_value();
 }
 
 void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, ColorImage* color,

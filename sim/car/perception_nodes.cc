@@ -1,5 +1,6 @@
 #include "sim/car/perception_nodes.h"
 
+#include <algorithm>
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -136,13 +137,38 @@ struct LaneParams {
   std::function<void(const stack::LanePoints&, Time)> hook;
 };
 
-// What a node that computes the bird's-eye row sums keeps between frames: scratch only.
+// What a node that computes the bird's-eye row sums keeps between frames: scratch, and the last
+// frame's sums with what they were computed from.
 struct LaneScratch {
   explicit LaneScratch(std::shared_ptr<const stack::LaneDetectorTables> tables)
       : detector(std::move(tables)) {}
   stack::LaneDetector detector;  // its class image and cell index
   vehicle::ColorImage color;
+  // A frame's labels are a function of the car's pose, the blackout and the prisms the camera may
+  // see (CameraFrame::LabelsFromScene): a car that stands while nothing in view moves (a queue at
+  // an intersection) has the same sums as in its last frame.
+  struct Key {
+    world::Pose2 pose;
+    bool blackout{false};
+    stack::BirdsEyeClasses count{};
+    std::vector<vehicle::Prism> prisms;  // those it may see, in the frame's order
+  };
+  std::optional<Key> last;
+  stack::BirdsEyeRowSums last_sums;
 };
+
+bool SameKey(const LaneScratch::Key& a, const LaneScratch::Key& b) {
+  const auto same_pose = [](const world::Pose2& p, const world::Pose2& q) {
+    return p.x_m == q.x_m && p.y_m == q.y_m && p.yaw_rad == q.yaw_rad;
+  };
+  const auto same_prism = [&](const vehicle::Prism& p, const vehicle::Prism& q) {
+    return same_pose(p.footprint.pose, q.footprint.pose) &&
+           p.footprint.length_m == q.footprint.length_m &&
+           p.footprint.width_m == q.footprint.width_m && p.height_m == q.height_m && p.bgr == q.bgr;
+  };
+  return same_pose(a.pose, b.pose) && a.blackout == b.blackout && a.count == b.count &&
+         std::equal(a.prisms.begin(), a.prisms.end(), b.prisms.begin(), b.prisms.end(), same_prism);
+}
 
 // The bird's-eye row sums of a frame. The detector reads a function of each pixel's colour alone,
 // its line class, so the renderer labels the pixels it reads with their colour's class (a few
@@ -152,10 +178,21 @@ void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scr
                  stack::BirdsEyeRowSums* sums,
                  stack::BirdsEyeClasses count = stack::BirdsEyeClasses::kNonZero) {
   stack::LaneDetector& detector = scratch->detector;
-  const stack::ClassImageRegion classes = detector.MutableClassRegion();
-  if (frame.RenderLabels(*p.reads, p.line_class,
-                         vehicle::LabelView{classes.pixels.data(), classes.stride})) {
+  if (frame.LabelsFromScene()) {
+    LaneScratch::Key key{.pose = frame.X_map_car, .blackout = frame.blackout, .count = count};
+    for (const vehicle::Prism& prism : frame.prisms) {
+      if (frame.MaySee(prism)) key.prisms.push_back(prism);
+    }
+    if (scratch->last && SameKey(*scratch->last, key)) {
+      *sums = scratch->last_sums;
+      return;
+    }
+    const stack::ClassImageRegion classes = detector.MutableClassRegion();
+    frame.RenderLabels(*p.reads, p.line_class,
+                       vehicle::LabelView{classes.pixels.data(), classes.stride});
     detector.ComputeRowSumsFromClasses(sums, count);
+    scratch->last = std::move(key);
+    scratch->last_sums = *sums;
   } else {
     detector.ComputeRowSums(RenderColor(frame, &scratch->color, *p.reads), sums, count);
   }

@@ -178,9 +178,15 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
   ++frames_rendered_;
 }
 
+bool CameraFrame::LabelsFromScene() const { return CameraOf(*this).LabelsFromScene(); }
+
+bool CameraFrame::MaySee(const vehicle::Prism& prism) const {
+  return CameraOf(*this).MaySee(*this, prism);
+}
+
 bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                                 const vehicle::ColourLabel& label, vehicle::LabelView out) const {
-  if (params_.noise.AltersColor() || gl_ != nullptr) return false;
+  if (!LabelsFromScene()) return false;
   if (frame.blackout) {  // every pixel black
     const std::uint8_t black = label(vehicle::Bgr{0, 0, 0});
     for (std::size_t v = 0; v < region.columns.size(); ++v) {

@@ -130,6 +130,11 @@ struct CameraFrame {
   // colour noise is on): render the colour then.
   bool RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
                     vehicle::LabelView out) const;
+  // Whether RenderLabels renders from the scene alone (false: it would return false), and
+  // whether `prism` may cover a pixel of this frame (vehicle::CameraRenderer::MaySee): two such
+  // frames with the same pose, blackout and prisms it may see have the same labels.
+  bool LabelsFromScene() const;
+  bool MaySee(const vehicle::Prism& prism) const;
   const std::string& topic() const;
   std::int64_t bytes() const;  // of the message on the topic
 };
@@ -153,6 +158,10 @@ class CameraSensor {
                    vehicle::DepthRowHistory* history, double depth_of_interest_m) const;
   bool RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                     const vehicle::ColourLabel& label, vehicle::LabelView out) const;
+  bool LabelsFromScene() const { return !params_.noise.AltersColor() && gl_ == nullptr; }
+  bool MaySee(const CameraFrame& frame, const vehicle::Prism& prism) const {
+    return renderer_.MaySee(frame.X_map_car, prism);
+  }
 
  private:
   CameraStreamParams params_;

@@ -519,6 +519,39 @@ TEST(RayCasterTest, ADepthOfInterestLeavesOutOnlyPrismsWhollyBeyondIt) {
   }
 }
 
+// MaySee is false only for a prism that changes no pixel: with it left out, the images are the
+// same (issue 38: a consumer keys its frames on the car's pose and the prisms it may see).
+TEST(RayCasterTest, APrismTheCameraMayNotSeeChangesNoPixel) {
+  const CameraParams params = ColorCameraParams();
+  world::FloorRaster raster = BlackFloor();
+  Paint(&raster, 0.5, 0.54, -2.0, 2.0, kWhite);
+  CameraRenderer renderer = MakeRenderer(params, raster);
+  const world::Pose2 car{0.1, -0.2, 0.4};
+  const Prism ahead = Box(1.0, 0.0, 0.2, 0.3, 0.3, 0.3);
+  int unseen = 0, seen = 0;
+  // a ring of boxes around the car, near and far, beside, behind and ahead of the camera
+  for (int k = 0; k < 48; ++k) {
+    const double bearing = car.yaw_rad + k * (2.0 * std::numbers::pi / 24.0);
+    const double range = k < 24 ? 0.9 : 12.0;
+    const Prism other = Box(car.x_m + range * std::cos(bearing),
+                            car.y_m + range * std::sin(bearing), 0.1 * k, 0.3, 0.2, 0.25);
+    if (renderer.MaySee(car, other)) {
+      ++seen;
+      continue;
+    }
+    ++unseen;
+    ColorImage with_color, without_color;
+    DepthImage with_depth, without_depth;
+    renderer.Render(car, std::vector<Prism>{ahead, other}, &with_color, &with_depth);
+    renderer.Render(car, std::vector<Prism>{ahead}, &without_color, &without_depth);
+    EXPECT_EQ(with_color.bgr, without_color.bgr) << "box " << k;
+    EXPECT_EQ(with_depth.mm, without_depth.mm) << "box " << k;
+  }
+  EXPECT_TRUE(renderer.MaySee(car, ahead));
+  EXPECT_GT(unseen, 20);
+  EXPECT_GT(seen, 3);
+}
+
 TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
   // a textured floor, cars and boxes in view, 24 poses; the region a trapezoid like the lane
   // detector's, reaching both image edges, with rows left out
