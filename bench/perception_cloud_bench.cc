@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "stack/obstacle_grid.h"
@@ -74,14 +75,14 @@ void BM_PointCloudObstacleGridMemo(benchmark::State& state) {
 }
 BENCHMARK(BM_PointCloudObstacleGridMemo)->Unit(benchmark::kMicrosecond);
 
-// The same, told which rows may have changed (none: the same frame again), as the renderer's
-// DepthRowHistory tells the node: no row is compared.
+// The same, told which columns may have changed (none: the same frame again), as the renderer's
+// DepthRowHistory tells the node: nothing is compared.
 void BM_PointCloudObstacleGridMemoTold(benchmark::State& state) {
   const CloudScene& scene = TheCloudScene();
   const PointCloudParams cloud_params;
   const ObstacleGridParams grid_params;
   DepthGridMemo memo;
-  const std::vector<std::uint8_t> none(PointCloud640::kHeight, 0);
+  const std::vector<std::pair<int, int>> none(PointCloud640::kHeight, {0, 0});
   StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo);
   for (auto _ : state) {
     Grid234 grid = StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo, none);
@@ -116,7 +117,7 @@ struct MovingCarFrames {
         renderer.RenderDepth(pose, {&car, 1}, &buffer, &history);
         if (pass == 0) continue;
         depth.push_back(buffer);
-        changed.emplace_back(history.changed_rows().begin(), history.changed_rows().end());
+        changed.emplace_back(history.changed_columns().begin(), history.changed_columns().end());
       }
     }
     P = frames.depth_camera().Info().P;
@@ -126,7 +127,7 @@ struct MovingCarFrames {
   }
 
   std::vector<vehicle::DepthImage> depth;
-  std::vector<std::vector<std::uint8_t>> changed;
+  std::vector<std::vector<std::pair<int, int>>> changed;
   std::array<double, 12> P{};
 };
 

@@ -474,10 +474,6 @@ void CameraRenderer::KeepHistory(const DepthImage* depth, DepthRowHistory* histo
                                                          std::max(changed.second, hit.second)}
                                              : hit;
   }
-  history->changed_rows_.resize(depth_columns_hit_.size());
-  for (std::size_t v = 0; v < depth_columns_hit_.size(); ++v) {
-    history->changed_rows_[v] = history->changed_[v].first < history->changed_[v].second;
-  }
   history->prism_columns_ = depth_columns_hit_;
   history->buffer_ = depth->mm.data();
   history->valid_ = true;

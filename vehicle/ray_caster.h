@@ -281,13 +281,10 @@ class DepthRowHistory {
   // the previous frame's prisms and this frame's wrote; empty where that is not known (every
   // pixel may differ).
   std::span<const std::pair<int, int>> changed_columns() const { return changed_; }
-  // Per image row: 1 where changed_columns() is not empty, else 0; empty where that is not known.
-  std::span<const std::uint8_t> changed_rows() const { return changed_rows_; }
   // Something else wrote the buffer (a black frame, noise): the next frame is rendered whole.
   void Forget() {
     valid_ = false;
     changed_.clear();
-    changed_rows_.clear();
   }
 
  private:
@@ -297,7 +294,6 @@ class DepthRowHistory {
   // per row: the columns [begin, end) the last frame's prisms wrote depth in (0, 0: none)
   std::vector<std::pair<int, int>> prism_columns_;
   std::vector<std::pair<int, int>> changed_;
-  std::vector<std::uint8_t> changed_rows_;
 };
 
 // Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u].
