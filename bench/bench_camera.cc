@@ -285,6 +285,26 @@ void BM_RenderDepthWithHistory(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderDepthWithHistory)->Unit(benchmark::kMicrosecond);
 
+// The same with the scene's other car moving, as cars do in the loop: 2 cm forward and 1 cm to
+// the left per frame, a cycle of 16 frames (frame 0 follows the last one).
+void BM_RenderDepthWithHistoryMoving(benchmark::State& state) {
+  const Scene& scene = TheScene();
+  vehicle::CameraRenderer camera = Renderer(scene.depth_rays);
+  vehicle::DepthImage depth;
+  vehicle::DepthRowHistory history;
+  std::vector<vehicle::Prism> prisms = scene.prisms;
+  int k = 0;
+  for (auto _ : state) {
+    prisms[0].footprint.pose.x_m = scene.prisms[0].footprint.pose.x_m + 0.02 * k;
+    prisms[0].footprint.pose.y_m = scene.prisms[0].footprint.pose.y_m + 0.01 * k;
+    camera.RenderDepth(scene.pose, prisms, &depth, &history);
+    benchmark::DoNotOptimize(depth.mm.data());
+    benchmark::ClobberMemory();
+    k = (k + 1) % 16;
+  }
+}
+BENCHMARK(BM_RenderDepthWithHistoryMoving)->Unit(benchmark::kMicrosecond);
+
 // An RGB-D frame with the seeded noise on (both images).
 void BM_RenderRgbdWithNoise(benchmark::State& state) {
   const Scene& scene = TheScene();

@@ -13,6 +13,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "stack/obstacle_grid.h"
@@ -20,6 +22,7 @@
 #include "stack/tests/track_frames.h"
 #include "vehicle/camera_model.h"
 #include "vehicle/ray_caster.h"
+#include "world/floor_raster.h"
 
 namespace autonomsim::stack {
 namespace {
@@ -72,14 +75,14 @@ void BM_PointCloudObstacleGridMemo(benchmark::State& state) {
 }
 BENCHMARK(BM_PointCloudObstacleGridMemo)->Unit(benchmark::kMicrosecond);
 
-// The same, told which rows may have changed (none: the same frame again), as the renderer's
-// DepthRowHistory tells the node: no row is compared.
+// The same, told which columns may have changed (none: the same frame again), as the renderer's
+// DepthRowHistory tells the node: nothing is compared.
 void BM_PointCloudObstacleGridMemoTold(benchmark::State& state) {
   const CloudScene& scene = TheCloudScene();
   const PointCloudParams cloud_params;
   const ObstacleGridParams grid_params;
   DepthGridMemo memo;
-  const std::vector<std::uint8_t> none(PointCloud640::kHeight, 0);
+  const std::vector<std::pair<int, int>> none(PointCloud640::kHeight, {0, 0});
   StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo);
   for (auto _ : state) {
     Grid234 grid = StepDepthToGrid(cloud_params, grid_params, scene.view(), scene.P, &memo, none);
@@ -87,6 +90,64 @@ void BM_PointCloudObstacleGridMemoTold(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_PointCloudObstacleGridMemoTold)->Unit(benchmark::kMicrosecond);
+
+// A car crossing ahead frame after frame, as the loop's depth camera renders it into one buffer
+// with its DepthRowHistory: the frames and what the history said changed since the frame before
+// (a cycle: frame 0 follows the last one).
+struct MovingCarFrames {
+  MovingCarFrames() {
+    const testing::TrackFrames frames;
+    const world::Pose2 pose = frames.PoseOnRoute("outer_loop", 3.3);
+    vehicle::CameraRenderer renderer(
+        std::make_shared<const vehicle::CameraRays>(frames.depth_camera()),
+        std::make_shared<const vehicle::FloorTexture>(world::RasterizeFloor(frames.track())),
+        vehicle::SceneAppearance{}.surround());
+    const double c = std::cos(pose.yaw_rad), s = std::sin(pose.yaw_rad);
+    vehicle::DepthImage buffer;
+    vehicle::DepthRowHistory history;
+    constexpr int kFrames = 16;
+    for (int pass = 0; pass < 2; ++pass) {  // the second pass knows frame 0's predecessor
+      for (int k = 0; k < kFrames; ++k) {
+        // 1.0 to 1.3 m ahead, drifting from right to left at 2 cm and 1.5 cm per frame
+        const double x_m = 1.0 + 0.02 * k, y_m = -0.12 + 0.015 * k;
+        const world::Pose2 X_map_other{pose.x_m + c * x_m - s * y_m, pose.y_m + s * x_m + c * y_m,
+                                       pose.yaw_rad + 0.02 * k};
+        const vehicle::Prism car{world::OrientedBox{X_map_other, 0.525, 0.296}, 0.2,
+                                 vehicle::SceneAppearance{}.car_body(1)};
+        renderer.RenderDepth(pose, {&car, 1}, &buffer, &history);
+        if (pass == 0) continue;
+        depth.push_back(buffer);
+        changed.emplace_back(history.changed_columns().begin(), history.changed_columns().end());
+      }
+    }
+    P = frames.depth_camera().Info().P;
+  }
+  DepthImageView view(std::size_t k) const {
+    return DepthImageView{depth[k].width, depth[k].height, depth[k].mm};
+  }
+
+  std::vector<vehicle::DepthImage> depth;
+  std::vector<std::vector<std::pair<int, int>>> changed;
+  std::array<double, 12> P{};
+};
+
+// The fused grid node on MovingCarFrames, told what changed as the loop tells it: one frame per
+// iteration.
+void BM_PointCloudObstacleGridMemoMoving(benchmark::State& state) {
+  static const MovingCarFrames frames;
+  const PointCloudParams cloud_params;
+  const ObstacleGridParams grid_params;
+  DepthGridMemo memo;
+  StepDepthToGrid(cloud_params, grid_params, frames.view(frames.depth.size() - 1), frames.P, &memo);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    Grid234 grid = StepDepthToGrid(cloud_params, grid_params, frames.view(k), frames.P, &memo,
+                                   frames.changed[k]);
+    benchmark::DoNotOptimize(grid);
+    k = (k + 1) % frames.depth.size();
+  }
+}
+BENCHMARK(BM_PointCloudObstacleGridMemoMoving)->Unit(benchmark::kMicrosecond);
 
 void BM_PointCloudThenObstacleGrid(benchmark::State& state) {
   const CloudScene& scene = TheCloudScene();

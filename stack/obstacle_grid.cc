@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "world/validation.h"
 
@@ -43,18 +44,21 @@ GridConstants MakeGridConstants(const ObstacleGridParams& p) {
                        .y_cells = detail::CellEdges(p.cell_size_m, Grid234::kCellsY)};
 }
 
-// Counts one image row of camera-frame points. Two passes: the transform and the box test, which
-// the compiler vectorizes (fixed trip count, no aliasing, no early exits), then the cells of the
-// points inside the box, if any.
-AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restrict x,
-                                    const float* __restrict y, const float* __restrict z,
-                                    FrameCounts* counts) {
-  alignas(64) float dx[kWidth];
-  alignas(64) float dy[kWidth];
-  alignas(64) std::uint8_t inside[kWidth];
+// Counts kCount camera-frame points (neighbouring pixels of one image row): add(cell, n) for each
+// run of n neighbouring points in one cell (cell kDropped: in the box, past its far edges; n may
+// be 0). Two passes: the transform and the box test, which the compiler vectorizes (fixed trip
+// count, no aliasing, no early exits), then the cells of the points inside the box, if any.
+template <int kCount, class Add>
+[[gnu::always_inline]] inline void CountPoints(const GridConstants& g, const float* __restrict x,
+                                               const float* __restrict y, const float* __restrict z,
+                                               Add add) {
+  static_assert(kCount % 8 == 0);
+  alignas(64) float dx[kCount];
+  alignas(64) float dy[kCount];
+  alignas(64) std::uint8_t inside[kCount];
   std::uint8_t any_inside = 0;
   const std::array<float, 12>& m = g.m;
-  for (int i = 0; i < kWidth; ++i) {
+  for (int i = 0; i < kCount; ++i) {
     // the real code's order: M0·x + M1·y + M2·z + t·1, left to right
     const float bx = m[0] * x[i] + m[1] * y[i] + m[2] * z[i] + m[3];
     const float by = m[4] * x[i] + m[5] * y[i] + m[6] * z[i] + m[7];
@@ -71,7 +75,7 @@ AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restr
   int cell = kDropped;
   std::uint32_t run = 0;
   float x_lo = 1.0f, x_hi = 0.0f, y_lo = 1.0f, y_hi = 0.0f;  // the run's cell: none yet
-  for (int word = 0; word < kWidth; word += 8) {
+  for (int word = 0; word < kCount; word += 8) {
     std::uint64_t bits;
     std::memcpy(&bits, inside + word, sizeof bits);
     if (bits == 0) continue;
@@ -81,7 +85,7 @@ AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restr
         ++run;
         continue;
       }
-      (*counts)[cell] += run;
+      add(cell, run);
       run = 1;
       // dx, dy >= 0 here: the real code's uint8_t conversion truncates, i.e. floors
       const int gx = g.x_cells.Index(dx[i]);
@@ -98,7 +102,55 @@ AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restr
       }
     }
   }
-  (*counts)[cell] += run;
+  add(cell, run);
+}
+
+// A whole row's points into the frame's counts.
+AUTONOMSIM_ROW_KERNEL void CountRow(const GridConstants& g, const float* __restrict x,
+                                    const float* __restrict y, const float* __restrict z,
+                                    FrameCounts* counts) {
+  CountPoints<kWidth>(g, x, y, z, [counts](int cell, std::uint32_t n) { (*counts)[cell] += n; });
+}
+
+// A segment's points (detail::kSegmentWidth of them) as runs, none of count 0, into runs[0, k);
+// returns k (at most kSegmentWidth: a run holds a point).
+AUTONOMSIM_ROW_KERNEL int CountSegment(const GridConstants& g, const float* __restrict x,
+                                       const float* __restrict y, const float* __restrict z,
+                                       detail::CellRun* __restrict runs) {
+  int k = 0;
+  CountPoints<detail::kSegmentWidth>(g, x, y, z, [runs, &k](int cell, std::uint32_t n) {
+    if (n != 0) {
+      runs[k++] = detail::CellRun{static_cast<std::uint16_t>(cell), static_cast<std::uint16_t>(n)};
+    }
+  });
+  return k;
+}
+
+// A memo segment's runs: its own, or `more` where they are more than it holds.
+std::span<const detail::CellRun> RunsOf(const detail::MemoSegment& segment,
+                                        const std::vector<detail::CellRun>& more) {
+  if (segment.runs > detail::MemoSegment::kFewRuns) return more;
+  return {segment.few_runs.data(), segment.runs};
+}
+
+// Replaces a segment's runs, and what they added to `total`, with those of its depth values (its
+// depth_mm, pixels [col0, col0 + kSegmentWidth) of `row`).
+void RecountSegment(const detail::CloudConstants& k, const GridConstants& g, int row, int col0,
+                    detail::MemoSegment* segment, std::vector<detail::CellRun>* more,
+                    FrameCounts* total) {
+  constexpr int kSegment = detail::kSegmentWidth;
+  for (const detail::CellRun& run : RunsOf(*segment, *more)) (*total)[run.cell] -= run.count;
+  alignas(64) float x[kSegment], y[kSegment], z[kSegment];
+  std::array<detail::CellRun, kSegment> runs;
+  detail::CameraPointsOfSegment(k, row, col0, segment->depth_mm.data(), x, y, z);
+  const int n = CountSegment(g, x, y, z, runs.data());
+  segment->runs = static_cast<std::uint16_t>(n);
+  if (n > detail::MemoSegment::kFewRuns) {
+    more->assign(runs.begin(), runs.begin() + n);
+  } else {
+    std::copy(runs.begin(), runs.begin() + n, segment->few_runs.begin());
+  }
+  for (const detail::CellRun& run : RunsOf(*segment, *more)) (*total)[run.cell] += run.count;
 }
 
 Grid234 Finish(const FrameCounts& counts) {
@@ -225,7 +277,7 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P,
-                        DepthGridMemo* memo, std::span<const std::uint8_t> changed_rows) {
+                        DepthGridMemo* memo, std::span<const std::pair<int, int>> changed_columns) {
   const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
   const GridConstants g = MakeGridConstants(params);
   detail::CheckDepthImage(depth);
@@ -235,38 +287,41 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
       g.x_min, g.x_max, g.y_min, g.y_max, g.z_min,    g.z_max,
       k.fx,    k.fy,    k.cx,    k.cy,    k.m_per_mm, static_cast<float>(params.cell_size_m)};
   std::copy(rest.begin(), rest.end(), key.begin() + 12);
-  Require(changed_rows.empty() || changed_rows.size() == PointCloud640::kHeight, [&] {
-    return "obstacle grid: " + Num(changed_rows.size()) + " changed-row flags for " +
+  Require(changed_columns.empty() || changed_columns.size() == PointCloud640::kHeight, [&] {
+    return "obstacle grid: " + Num(changed_columns.size()) + " changed column ranges for " +
            Num(PointCloud640::kHeight) + " rows";
   });
-  const bool valid = memo->valid_ && memo->key_ == key;
-  if (!valid) {
+  const bool reset = !memo->valid_ || memo->key_ != key;
+  constexpr int kSegments = DepthGridMemo::kSegmentsPerRow;
+  if (reset) {
     memo->valid_ = true;
     memo->key_ = key;
-    memo->depth_.assign(depth.mm.begin(), depth.mm.end());
-    memo->rows_.assign(PointCloud640::kHeight, {});
+    memo->segments_.assign(PointCloud640::kHeight * kSegments, detail::MemoSegment{});
+    memo->more_runs_.assign(PointCloud640::kHeight * kSegments, {});
+    memo->counts_.fill(0);
   }
-  FrameCounts counts{};
-  FrameCounts row_counts;
-  alignas(64) float x[kWidth], y[kWidth], z[kWidth];
+  constexpr int kSegment = detail::kSegmentWidth;
   for (int row = 0; row < PointCloud640::kHeight; ++row) {
-    const std::uint16_t* in = depth.mm.data() + row * kWidth;
-    std::uint16_t* last = memo->depth_.data() + row * kWidth;
-    auto& cells = memo->rows_[static_cast<std::size_t>(row)];
-    const bool may_differ = changed_rows.empty() || changed_rows[row] != 0;
-    if (!valid || (may_differ && std::memcmp(in, last, kWidth * sizeof(std::uint16_t)) != 0)) {
-      std::memcpy(last, in, kWidth * sizeof(std::uint16_t));
-      row_counts.fill(0);
-      detail::CameraPointsOfRow(k, row, in, x, y, z);
-      CountRow(g, x, y, z, &row_counts);
-      cells.clear();
-      for (std::size_t c = 0; c < row_counts.size(); ++c) {
-        if (row_counts[c] != 0) cells.emplace_back(static_cast<std::uint16_t>(c), row_counts[c]);
-      }
+    auto [begin, end] = changed_columns.empty() ? std::pair{0, kWidth} : changed_columns[row];
+    Require(begin >= 0 && begin <= end && end <= kWidth, [&] {
+      return "obstacle grid: row " + Num(row) + "'s changed columns [" + Num(begin) + ", " +
+             Num(end) + ") are not a range within [0, 640]";
+    });
+    if (reset) {
+      begin = 0;
+      end = kWidth;
     }
-    for (const auto& [cell, n] : cells) counts[cell] += n;
+    for (int segment = begin / kSegment; segment * kSegment < end; ++segment) {
+      const std::uint16_t* in = depth.mm.data() + row * kWidth + segment * kSegment;
+      const std::size_t s = static_cast<std::size_t>(row * kSegments + segment);
+      detail::MemoSegment& last = memo->segments_[s];
+      const std::size_t bytes = kSegment * sizeof(std::uint16_t);
+      if (!reset && std::memcmp(in, last.depth_mm.data(), bytes) == 0) continue;
+      std::memcpy(last.depth_mm.data(), in, bytes);
+      RecountSegment(k, g, row, segment * kSegment, &last, &memo->more_runs_[s], &memo->counts_);
+    }
   }
-  return Finish(counts);
+  return Finish(memo->counts_);
 }
 
 void ObstacleLayerParams::Validate() const {

@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "stack/costmap.h"
@@ -97,12 +98,34 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P);
 
+namespace detail {
+
+// A cell of Grid234 (Index; or Grid234::kCells for the points in the box past its far edges,
+// which the grid drops) and how many neighbouring points of a row fell in it.
+struct CellRun {
+  std::uint16_t cell;
+  std::uint16_t count;
+};
+
+// A segment of a depth row as DepthGridMemo keeps it: its depth values in the last frame and the
+// runs of points they counted (a cell may appear more than once), held next to the depth, which
+// is read anyway, where they are few (a segment of a car's face meets a few cells).
+struct MemoSegment {
+  static constexpr int kFewRuns = 7;
+  std::array<std::uint16_t, kSegmentWidth> depth_mm;
+  std::uint16_t runs;  // how many; the memo holds them elsewhere where they are more than kFewRuns
+  std::array<CellRun, kFewRuns> few_runs;
+};
+
+}  // namespace detail
+
 // What a depth-to-grid node remembers between frames so that it counts only what changed: the
-// depth rows of the last frame and what each added to the grid. A row whose depth values are the
-// same as last time adds what it added then (the bare floor's rows repeat in every frame that has
-// no obstacle in them; only rows that see a car or an obstacle are counted again). Exact: a row's
-// counts are a function of its depth values alone, and the counts are summed as integers, so the
-// grid is the one StepDepthToGrid computes from scratch (tested). Forgets everything when the
+// last frame's depth, what each segment of a row (detail::kSegmentWidth pixels) added to the grid,
+// and their sum. A segment whose depth values are the same as last time adds what it added then
+// (the bare floor repeats in every frame; another car covers a few segments of a row, and only
+// those are counted again). Exact: each pixel's cell is decided by its own depth value alone, with
+// the same float arithmetic whichever segment holds it, and the counts are summed as integers, so
+// the grid is the one StepDepthToGrid computes from scratch (tested). Forgets everything when the
 // parameters change.
 class DepthGridMemo {
  public:
@@ -111,21 +134,25 @@ class DepthGridMemo {
  private:
   friend Grid234 StepDepthToGrid(const PointCloudParams&, const ObstacleGridParams&,
                                  const DepthImageView&, const std::array<double, 12>&,
-                                 DepthGridMemo*, std::span<const std::uint8_t>);
-  std::array<float, 24> key_{};  // the constants the rows were counted with
+                                 DepthGridMemo*, std::span<const std::pair<int, int>>);
+  static constexpr int kSegmentsPerRow = PointCloud640::kWidth / detail::kSegmentWidth;
+  std::array<float, 24> key_{};  // the constants the segments were counted with
   bool valid_{false};
-  std::vector<std::uint16_t> depth_;  // the last frame's depth, row-major
-  // per row: the cells it counted into and how many (the slot past the last cell included)
-  std::vector<std::vector<std::pair<std::uint16_t, std::uint32_t>>> rows_;
+  std::vector<detail::MemoSegment> segments_;  // [row · kSegmentsPerRow + segment]
+  // per segment, the same index: its runs where they are more than MemoSegment::kFewRuns
+  std::vector<std::vector<detail::CellRun>> more_runs_;
+  std::array<std::uint32_t, Grid234::kCells + 1> counts_{};  // the sum of every segment's runs
 };
 
-// StepDepthToGrid counting only the rows that differ from the memo's (which it then updates).
-// `changed_rows`, if not empty, is one flag per row from whoever wrote the image (e.g.
-// vehicle::DepthRowHistory): a row flagged 0 is promised to be the one the memo saw last and is
-// not compared.
+// StepDepthToGrid counting only the segments that differ from the memo's (which it then updates).
+// `changed_columns`, if not empty, is one range of columns [begin, end) per row from whoever wrote
+// the image (e.g. vehicle::DepthRowHistory; 0 <= begin <= end <= 640): a pixel outside its row's
+// range is promised to be the one the memo saw last, and only the segments that meet the range
+// are compared. Empty: every pixel may differ.
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,
                         const DepthImageView& depth, const std::array<double, 12>& P,
-                        DepthGridMemo* memo, std::span<const std::uint8_t> changed_rows = {});
+                        DepthGridMemo* memo,
+                        std::span<const std::pair<int, int>> changed_columns = {});
 
 // The largest optical depth (metres, as a depth camera measures it) that a pixel can have and
 // still be counted by the grid: a depth value d back-projects to a point d · m_per_mm ahead of the

@@ -44,23 +44,41 @@ void CheckDepthImage(const DepthImageView& depth) {
   });
 }
 
+namespace {
+// Pixels [col0, col0 + kCount) of a row: written so that the compiler vectorizes it (a fixed trip
+// count, no aliasing); each lane does exactly the real code's float operations, in its order, so
+// the result is the same bits whichever of the row's pixels a call covers.
+template <int kCount>
+[[gnu::always_inline]] inline void CameraPoints(const CloudConstants& k, int row, int col0,
+                                                const std::uint16_t* __restrict mm,
+                                                float* __restrict x_m, float* __restrict y_m,
+                                                float* __restrict z_m) {
+  const float row_f = static_cast<float>(row);
+  for (int i = 0; i < kCount; ++i) {
+    const float d = static_cast<float>(mm[i]);
+    const float u = static_cast<float>(col0 + i) * d;
+    const float v = row_f * d;
+    const float x = (u - k.cx * d) / k.fx;
+    const float y = (v - k.cy * d) / k.fy;
+    x_m[i] = d * k.m_per_mm;
+    y_m[i] = -x * k.m_per_mm;
+    z_m[i] = -y * k.m_per_mm;
+  }
+}
+}  // namespace
+
 AUTONOMSIM_ROW_KERNEL void CameraPointsOfRow(const CloudConstants& k, int row,
                                              const std::uint16_t* __restrict mm,
                                              float* __restrict x_m, float* __restrict y_m,
                                              float* __restrict z_m) {
-  // Written so that the compiler vectorizes it (a fixed trip count, no aliasing); each lane does
-  // exactly the real code's float operations, in its order, so the result is the same bits.
-  const float row_f = static_cast<float>(row);
-  for (int col = 0; col < PointCloud640::kWidth; ++col) {
-    const float d = static_cast<float>(mm[col]);
-    const float u = static_cast<float>(col) * d;
-    const float v = row_f * d;
-    const float x = (u - k.cx * d) / k.fx;
-    const float y = (v - k.cy * d) / k.fy;
-    x_m[col] = d * k.m_per_mm;
-    y_m[col] = -x * k.m_per_mm;
-    z_m[col] = -y * k.m_per_mm;
-  }
+  CameraPoints<PointCloud640::kWidth>(k, row, 0, mm, x_m, y_m, z_m);
+}
+
+AUTONOMSIM_ROW_KERNEL void CameraPointsOfSegment(const CloudConstants& k, int row, int col0,
+                                                 const std::uint16_t* __restrict mm,
+                                                 float* __restrict x_m, float* __restrict y_m,
+                                                 float* __restrict z_m) {
+  CameraPoints<kSegmentWidth>(k, row, col0, mm, x_m, y_m, z_m);
 }
 
 }  // namespace detail

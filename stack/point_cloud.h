@@ -97,10 +97,20 @@ CloudConstants MakeCloudConstants(const PointCloudParams& params, const std::arr
 void CheckDepthImage(const DepthImageView& depth);  // 640×480 with a matching buffer
 
 // The camera-frame points of one image row (PointCloud640::kWidth pixels), as separate x, y, z
-// arrays. The one place the cloud's arithmetic lives: the cloud and the fused depth→grid path
-// (obstacle_grid.h) both call it, so they compute the same bits.
+// arrays. The cloud's arithmetic lives in one place, which this and CameraPointsOfSegment share:
+// the cloud and the fused depth→grid path (obstacle_grid.h) call them, so they compute the same
+// bits.
 void CameraPointsOfRow(const CloudConstants& k, int row, const std::uint16_t* mm, float* x_m,
                        float* y_m, float* z_m);
+
+// The same for kSegmentWidth pixels of a row, columns [col0, col0 + kSegmentWidth), `mm` pointing
+// at the first: each pixel's point is the one CameraPointsOfRow gives it. The grid's memo counts a
+// row in such segments (obstacle_grid.h: DepthGridMemo); col0 is a multiple of kSegmentWidth.
+// Measured on the 10-car fleet: 64 spends as little in the memo as 32 does, 128 a little more.
+inline constexpr int kSegmentWidth = 64;
+static_assert(PointCloud640::kWidth % kSegmentWidth == 0 && kSegmentWidth % 8 == 0);
+void CameraPointsOfSegment(const CloudConstants& k, int row, int col0, const std::uint16_t* mm,
+                           float* x_m, float* y_m, float* z_m);
 
 }  // namespace detail
 }  // namespace autonomsim::stack

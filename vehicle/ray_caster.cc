@@ -462,22 +462,33 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
     std::fill(tile_stamp_.begin(), tile_stamp_.end(), 0u);
     frame_ = 1;
   }
-  depth_rows_hit_.assign(static_cast<std::size_t>(h), 0);
+  depth_columns_hit_.assign(static_cast<std::size_t>(h), {w, 0});
   RenderFloor(X_map_car, color, depth, color_region, history, labels);
   // Without a depth image, only the colour region's pixels of a prism are needed.
   const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
   for (std::size_t k = 0; k < prisms.size(); ++k) {
     RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels, depth_of_interest_m);
   }
-  if (history != nullptr) {
-    // rows that differ from the bare floor now or did in the last frame
-    for (int v = 0; v < h; ++v) {
-      history->changed_[v] |= depth_rows_hit_[v];
+  if (history != nullptr) KeepHistory(depth, history);
+}
+
+void CameraRenderer::KeepHistory(const DepthImage* depth, DepthRowHistory* history) {
+  // RestoreFloorDepth left the last frame's prisms' columns in changed_; this frame's join them:
+  // the pixels that differ from the bare floor now or did in the last frame
+  for (std::size_t v = 0; v < depth_columns_hit_.size(); ++v) {
+    std::pair<int, int>& hit = depth_columns_hit_[v];
+    if (hit.first >= hit.second) {
+      hit = {0, 0};
+      continue;
     }
-    history->prism_rows_ = depth_rows_hit_;
-    history->buffer_ = depth->mm.data();
-    history->valid_ = true;
+    std::pair<int, int>& changed = history->changed_[v];
+    changed = changed.first < changed.second ? std::pair{std::min(changed.first, hit.first),
+                                                         std::max(changed.second, hit.second)}
+                                             : hit;
   }
+  history->prism_columns_ = depth_columns_hit_;
+  history->buffer_ = depth->mm.data();
+  history->valid_ = true;
 }
 
 // One frame's colouring of the floor and the surround: where it writes (colour: 3 bytes per pixel
@@ -619,17 +630,20 @@ void CameraRenderer::RestoreFloorDepth(DepthImage* depth, DepthRowHistory* histo
   const CameraRays& r = *rays_;
   const std::size_t h = static_cast<std::size_t>(r.height());
   if (history != nullptr && history->valid_ && history->buffer_ == depth->mm.data() &&
-      history->prism_rows_.size() == h) {
-    // the buffer holds the last frame: only its prisms' rows go back to the floor
+      history->prism_columns_.size() == h) {
+    // the buffer holds the last frame: only the pixels its prisms wrote go back to the floor
     const std::size_t w = static_cast<std::size_t>(r.width());
     for (std::size_t v = 0; v < h; ++v) {
-      if (history->prism_rows_[v] == 0) continue;
-      std::memcpy(depth->mm.data() + v * w, r.floor_depth_mm().data() + v * w, w * 2);
+      const auto [begin, end] = history->prism_columns_[v];
+      if (begin == end) continue;
+      const std::size_t i = v * w + static_cast<std::size_t>(begin);
+      std::memcpy(depth->mm.data() + i, r.floor_depth_mm().data() + i,
+                  static_cast<std::size_t>(end - begin) * 2);
     }
-    history->changed_ = history->prism_rows_;
+    history->changed_ = history->prism_columns_;
   } else {
     std::memcpy(depth->mm.data(), r.floor_depth_mm().data(), depth->mm.size() * 2);
-    if (history != nullptr) history->changed_.assign(h, 1);
+    if (history != nullptr) history->changed_.assign(h, {0, r.width()});
   }
 }
 
@@ -964,6 +978,12 @@ void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, Col
   }
 }
 
+void CameraRenderer::NoteDepthColumns(int v, int first, int last) {
+  std::pair<int, int>& hit = depth_columns_hit_[static_cast<std::size_t>(v)];
+  hit.first = std::min(hit.first, first);
+  hit.second = std::max(hit.second, last);
+}
+
 void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
                                         DepthImage* depth) {
   // TracePrismRow's depth, four pixels at a time: without colour or labels the face the ray
@@ -975,10 +995,13 @@ void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_be
   std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
   float* nearest = nearest_t_.data();
   PrismTrace::Hits hits;
+  int first = u_end, last = u_begin;  // the columns written, four at a time
   for (int u = u_begin; u < u_end; u += kLanes) {
     const int i = v * w + u;
     const int n = std::min(kLanes, u_end - u);
     if (!trace.Test(i, n, nearest, &hits)) continue;
+    first = std::min(first, u);
+    last = u + n;
     // DepthMillimetres in float, as TracePrismRow: 0 outside the clip range (converted only
     // inside it)
     const I4 in_clip = (hits.t >= near_m) & (hits.t <= far_m);
@@ -988,8 +1011,8 @@ void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_be
       nearest[i + k] = hits.t[k];
       if (depth_mm != nullptr) depth_mm[i + k] = static_cast<std::uint16_t>(mm[k]);
     }
-    if (depth_mm != nullptr) depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
   }
+  if (depth_mm != nullptr && first < last) NoteDepthColumns(v, first, last);
 }
 
 void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end,
@@ -1001,10 +1024,13 @@ void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, 
   std::uint8_t* out = color != nullptr ? color->bgr.data() : nullptr;
   std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
   PrismTrace::Hits hits;
+  int first = u_end, last = u_begin;  // the columns written, four at a time
   for (int u = u_begin; u < u_end; u += kLanes) {
     const int i = v * w + u;
     const int n = std::min(kLanes, u_end - u);
     if (!trace.Test(i, n, nearest_t_.data(), &hits)) continue;
+    first = std::min(first, u);
+    last = u + n;
     for (int k = 0; k < n; ++k) {
       if (!hits.hit[k]) continue;
       const auto face = static_cast<std::size_t>(PrismTrace::EntryFace(hits, k));
@@ -1017,12 +1043,12 @@ void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, 
             trace.face_label[face];
       }
       if (depth_mm != nullptr) {
-        depth_rows_hit_[static_cast<std::size_t>(v)] = 1;
         depth_mm[p] = t >= near_m && t <= far_m ? static_cast<std::uint16_t>(t * 1000.0f + 0.5f)
                                                 : std::uint16_t{0};
       }
     }
   }
+  if (depth_mm != nullptr && first < last) NoteDepthColumns(v, first, last);
 }
 
 void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, std::uint64_t seed,

@@ -7,7 +7,7 @@
 // constants of the camera (CameraRays, computed once, lens distortion included). A frame then
 // costs, per floor pixel, one 2D rigid transform and one raster look-up (and a block of 16 pixels
 // over the bare floor between the painted lines costs one look-up in all), and the empty floor's
-// depth image is a copy (only of the rows a prism changed, for a consumer that keeps its buffer).
+// depth image is a copy (only of the pixels a prism changed, for a consumer that keeps its buffer).
 // Prisms are culled to those in front of the camera; each one's corners bound it on the image, and
 // only the pixels of the tiles under that bound get the exact ray–prism test, which keeps the
 // nearest surface.
@@ -25,6 +25,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "vehicle/camera_model.h"
@@ -274,15 +275,19 @@ struct RowSpans {
 };
 
 // What a consumer keeps with a depth buffer it renders one camera into frame after frame, so that
-// the renderer rewrites only the rows that can have changed: the bare floor's depth is the same in
-// every frame, and only the rows a prism covered in the last frame or covers in this one differ
-// from it. After each frame, changed_rows() says which rows may differ from the previous frame in
-// the same buffer (all of them after the first frame, or after Forget()).
+// the renderer rewrites only the pixels that can have changed: the bare floor's depth is the same
+// in every frame, and only the pixels a prism covered in the last frame or covers in this one
+// differ from it. It keeps, per row, the columns between the first and the last pixel the last
+// frame's prisms wrote (another car usually covers a small part of a row). After each frame,
+// changed_columns() says which pixels of each row may differ from the previous frame in the same
+// buffer (all of them after the first frame, or after Forget()).
 class DepthRowHistory {
  public:
-  // Per image row: 1 where this frame's depth may differ from the previous frame's, else 0;
-  // empty where that is not known (every row may differ).
-  std::span<const std::uint8_t> changed_rows() const { return changed_; }
+  // Per image row: the columns [begin, end) outside which this frame's depth is the previous
+  // frame's (begin == end == 0: the whole row is), the smallest range holding the columns that
+  // the previous frame's prisms and this frame's wrote; empty where that is not known (every
+  // pixel may differ).
+  std::span<const std::pair<int, int>> changed_columns() const { return changed_; }
   // Something else wrote the buffer (a black frame, noise): the next frame is rendered whole.
   void Forget() {
     valid_ = false;
@@ -293,8 +298,9 @@ class DepthRowHistory {
   friend class CameraRenderer;
   bool valid_{false};
   const std::uint16_t* buffer_{nullptr};  // the buffer it describes
-  std::vector<std::uint8_t> prism_rows_;  // per row: the last frame's prisms wrote depth there
-  std::vector<std::uint8_t> changed_;
+  // per row: the columns [begin, end) the last frame's prisms wrote depth in (0, 0: none)
+  std::vector<std::pair<int, int>> prism_columns_;
+  std::vector<std::pair<int, int>> changed_;
 };
 
 // Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u].
@@ -328,11 +334,11 @@ class CameraRenderer {
   void Render(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
               DepthImage* depth, const RowSpans& color_region);
   // The depth image alone, into a buffer that `history` describes (DepthRowHistory): only the
-  // rows the last frame's prisms covered are set back to the bare floor. The image is exactly
-  // Render's wherever Render's is at most `depth_of_interest_m` (optical z, metres): a prism
-  // wholly farther is left out, for a consumer that reads nothing farther (the obstacle grid,
-  // stack::FarthestCountedDepth_m); what it would have hidden is farther still. The default
-  // leaves nothing out.
+  // columns of each row that the last frame's prisms wrote are set back to the bare floor. The
+  // image is exactly Render's wherever Render's is at most `depth_of_interest_m` (optical z,
+  // metres): a prism wholly farther is left out, for a consumer that reads nothing farther (the
+  // obstacle grid, stack::FarthestCountedDepth_m); what it would have hidden is farther still.
+  // The default leaves nothing out.
   void RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms, DepthImage* depth,
                    DepthRowHistory* history,
                    double depth_of_interest_m = std::numeric_limits<double>::infinity());
@@ -378,10 +384,12 @@ class CameraRenderer {
                   DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,
                   const LabelOut* labels = nullptr,
                   double depth_of_interest_m = std::numeric_limits<double>::infinity());
+  // After a frame rendered into the buffer `history` describes: what changed, what to restore.
+  void KeepHistory(const DepthImage* depth, DepthRowHistory* history);
   // Colour (or, with `labels`, labels) and depth of the floor and the surround.
   void RenderFloor(const world::Pose2& X_map_car, ColorImage* color, DepthImage* depth,
                    const RowSpans* color_region, DepthRowHistory* history, const LabelOut* labels);
-  // RenderFloor's steps: the bare floor's depth (only the rows `history` says can differ), then
+  // RenderFloor's steps: the bare floor's depth (only the pixels `history` says can differ), then
   // the surround's colour and the floor's, texel by texel or a block of the common colour at once.
   struct FloorPass;
   void RestoreFloorDepth(DepthImage* depth, DepthRowHistory* history) const;
@@ -405,6 +413,8 @@ class CameraRenderer {
   // `region`, if given) traced.
   void TracePrismTile(const PrismTrace& trace, std::size_t tile, ColorImage* color,
                       DepthImage* depth, const RowSpans* region, const LabelOut* labels);
+  // Columns [first, last) of row v got a prism's depth in this frame (depth_columns_hit_).
+  void NoteDepthColumns(int v, int first, int last);
   void InitTileDepth(std::size_t tile);
 
   std::shared_ptr<const CameraRays> rays_;
@@ -414,8 +424,9 @@ class CameraRenderer {
   std::vector<std::uint32_t> tile_stamp_;  // the frame in which a tile's nearest_t_ was set
   std::uint32_t frame_{0};
   std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;  // scratch
-  std::vector<std::uint8_t> depth_rows_hit_;  // per row: a prism wrote depth there this frame
-  std::vector<std::uint8_t> group_common_;    // per floor block group, this frame (RenderFloor)
+  // per row: the columns [begin, end) prisms wrote depth in this frame (begin >= end: none)
+  std::vector<std::pair<int, int>> depth_columns_hit_;
+  std::vector<std::uint8_t> group_common_;  // per floor block group, this frame (RenderFloor)
   bool common_floor_blocks_on_{true};
   std::uint64_t common_floor_blocks_{0};
 };

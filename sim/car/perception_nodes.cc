@@ -44,8 +44,8 @@ struct BirdViewMessage {
 // What a node keeps between frames: scratch buffers only (a result depends on its frame alone).
 struct DepthScratch {
   vehicle::DepthImage depth;
-  vehicle::DepthRowHistory history;  // the renderer rewrites only rows that can have changed
-  stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the rows that changed
+  vehicle::DepthRowHistory history;  // the renderer rewrites only pixels that can have changed
+  stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the segments that changed
 };
 
 // `depth_of_interest_m`: what the consumer reads (CameraFrame::RenderDepth).
@@ -101,7 +101,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                            p,
                            stack::StepDepthToGrid(
                                p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
-                               p.P, &scratch->grid_memo, scratch->history.changed_rows()),
+                               p.P, &scratch->grid_memo, scratch->history.changed_columns()),
                            frame.stamp);
                      });
     return obstacles;

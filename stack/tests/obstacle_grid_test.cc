@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -468,16 +470,21 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
           StepDepthToGrid(cloud_params, params, View(frame.depth), P(), &kept[hardware_scale]),
           fused)
           << poses[i].first << " s " << poses[i].second;
-      // with the rows that changed since the memo's last frame flagged (as the renderer's
-      // DepthRowHistory says them), the others not compared
-      std::vector<std::uint8_t> changed(PointCloud640::kHeight, 1);
+      // told the columns of each row that changed since the memo's last frame (from the first
+      // to the last pixel that did), the others not compared
+      std::vector<std::pair<int, int>> changed(PointCloud640::kHeight, {0, kW});
       std::vector<std::uint16_t>& last = last_depth[hardware_scale];
       if (!last.empty()) {
         for (int row = 0; row < PointCloud640::kHeight; ++row) {
-          changed[row] =
-              !std::equal(frame.depth.mm.begin() + row * 640,
-                          frame.depth.mm.begin() + (row + 1) * 640, last.begin() + row * 640);
-          skipped_rows += changed[row] == 0;
+          int begin = kW, end = 0;
+          for (int col = 0; col < kW; ++col) {
+            if (frame.depth.mm[row * kW + col] != last[row * kW + col]) {
+              begin = std::min(begin, col);
+              end = col + 1;
+            }
+          }
+          changed[row] = begin < end ? std::pair{begin, end} : std::pair{0, 0};
+          skipped_rows += begin >= end;
         }
       }
       last = frame.depth.mm;
@@ -504,11 +511,97 @@ TEST_F(ObstacleGridFramesTest, FusedIsBitIdenticalToCloudThenGrid) {
   const testing::RgbdFrame boxed = frames_->Render(pose, box);
   const Grid234 bare_grid = StepDepthToGrid({}, params, View(bare.depth), P(), &memo_trusting);
   ASSERT_NE(StepDepthToGrid({}, params, View(boxed.depth), P()), bare_grid);
-  const std::vector<std::uint8_t> none(PointCloud640::kHeight, 0);
+  const std::vector<std::pair<int, int>> none(PointCloud640::kHeight, {0, 0});
   EXPECT_EQ(StepDepthToGrid({}, params, View(boxed.depth), P(), &memo_trusting, none), bare_grid);
   EXPECT_THROW(StepDepthToGrid({}, params, View(boxed.depth), P(), &memo_trusting,
-                               std::vector<std::uint8_t>(3, 1)),
+                               std::vector<std::pair<int, int>>(3, {0, kW})),
                std::invalid_argument);
+  for (const std::pair<int, int>& bad : {std::pair{0, kW + 1}, std::pair{-1, 4}, std::pair{9, 8}}) {
+    std::vector<std::pair<int, int>> columns(PointCloud640::kHeight, {0, 0});
+    columns[100] = bad;
+    EXPECT_THROW(StepDepthToGrid({}, params, View(boxed.depth), P(), &memo_trusting, columns),
+                 std::invalid_argument)
+        << bad.first << ", " << bad.second;
+  }
+}
+
+TEST_F(ObstacleGridFramesTest, TheSegmentMemoIsTheWholeGridWithPatchesAtRowEndsAndSegmentEdges) {
+  // A box ahead on the lane, and over it, frame after frame, patches of depth that move, grow,
+  // appear and disappear: at the start and the end of rows, one or two columns wide across a
+  // segment's edge, exactly one segment, whole rows, and frames with none. Their depths (450 to
+  // 849 mm, a new pattern each frame) put points in many cells of the box, at the row ends too.
+  const world::Pose2 pose = frames_->PoseOnRoute("outer_loop", 3.3);
+  const std::vector<vehicle::Prism> box{BoxAhead(pose, 0.7, 0.1, 0.2)};
+  const vehicle::DepthImage base = frames_->Render(pose, box).depth;
+  constexpr int kSegment = detail::kSegmentWidth;
+  struct Patch {
+    int c0, c1, r0, r1;  // columns [c0, c1), rows [r0, r1)
+  };
+  const auto patches_of = [](int k) {
+    std::vector<Patch> patches;
+    if (k == 7 || k == 13) return patches;  // none: every patch disappears
+    patches.push_back({0, 20 + 4 * k, 150, 200});
+    patches.push_back({kW - 1 - 3 * k, kW, 180 + 2 * k, 260 + 2 * k});
+    const int edge = kSegment * (1 + k % (kW / kSegment - 1));
+    patches.push_back({edge - 1, edge + 1, 120, 300});
+    patches.push_back(k % 2 == 0 ? Patch{kSegment - 1, kSegment, 90, 330}
+                                 : Patch{kSegment, kSegment + 1, 90, 330});
+    if (k % 5 == 0) patches.push_back({0, kW, 200 + k, 205 + k});
+    if (k % 3 == 1) patches.push_back({2 * kSegment, 3 * kSegment, 100, 340});
+    return patches;
+  };
+  const ObstacleGridParams params;
+  std::array<DepthGridMemo, 2> told, untold;  // one per scale
+  DepthGridMemo alternating;                  // both scales: it forgets at each change
+  std::vector<std::pair<int, int>> painted_before(kH, {0, 0});
+  int frames = 0, partial_cells = 0, told_rows = 0;
+  for (int k = 0; k < 24; ++k) {
+    vehicle::DepthImage depth = base;
+    std::vector<std::pair<int, int>> painted(kH, {kW, 0});
+    for (const Patch& patch : patches_of(k)) {
+      for (int row = patch.r0; row < patch.r1; ++row) {
+        for (int col = patch.c0; col < patch.c1; ++col) {
+          depth.mm[row * kW + col] =
+              static_cast<std::uint16_t>(450 + (col * 7 + row * 13 + k * 29) % 400);
+        }
+        painted[row] = {std::min(painted[row].first, patch.c0),
+                        std::max(painted[row].second, patch.c1)};
+      }
+    }
+    // what the renderer's DepthRowHistory would say: the columns painted now or in the last frame
+    std::vector<std::pair<int, int>> changed(kH);
+    for (int row = 0; row < kH; ++row) {
+      if (painted[row].first >= painted[row].second) painted[row] = {0, 0};
+      const auto [b0, e0] = painted_before[row];
+      const auto [b1, e1] = painted[row];
+      changed[row] = b0 == e0   ? painted[row]
+                     : b1 == e1 ? painted_before[row]
+                                : std::pair{std::min(b0, b1), std::max(e0, e1)};
+      told_rows +=
+          changed[row].first < changed[row].second && changed[row].second - changed[row].first < kW;
+    }
+    painted_before = painted;
+    for (bool hardware_scale : {false, true}) {
+      const PointCloudParams cloud_params{.hardware_scale = hardware_scale};
+      const std::string where = "frame " + std::to_string(k) + (hardware_scale ? " HW" : " SW");
+      const Grid234 whole = StepDepthToGrid(cloud_params, params, View(depth), P());
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(depth), P(), &told[hardware_scale],
+                                k == 0 ? std::vector<std::pair<int, int>>{} : changed),
+                whole)
+          << where << ", told the changed columns";
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(depth), P(), &untold[hardware_scale]),
+                whole)
+          << where << ", told nothing";
+      EXPECT_EQ(StepDepthToGrid(cloud_params, params, View(depth), P(), &alternating, changed),
+                whole)
+          << where << ", after the other scale";
+      for (int c = 0; c < Grid234::kCells; ++c)
+        partial_cells += whole.data[c] > 0 && whole.data[c] < 255;
+      ++frames;
+    }
+  }
+  EXPECT_GT(partial_cells, frames * 20);  // many cells hold counts that the patches changed
+  EXPECT_GT(told_rows, 24 * 100);         // most rows are told a part of them changed
 }
 
 // Random depths everywhere (a fixed seed): points all over the box, at every rounding.

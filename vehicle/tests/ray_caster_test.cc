@@ -13,6 +13,9 @@
 #include <memory>
 #include <numbers>
 #include <set>
+#include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace autonomsim::vehicle {
@@ -640,13 +643,33 @@ TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLook
   EXPECT_GT(fast.common_floor_blocks(), 24u * 2000u);
 }
 
+// Every pixel where `image` differs from `previous` lies within its row's changed columns.
+void ExpectChangedColumnsHoldEveryChange(const DepthImage& image, const DepthImage& previous,
+                                         std::span<const std::pair<int, int>> changed,
+                                         const std::string& where) {
+  ASSERT_EQ(changed.size(), static_cast<std::size_t>(image.height)) << where;
+  for (int v = 0; v < image.height; ++v) {
+    const auto [begin, end] = changed[static_cast<std::size_t>(v)];
+    ASSERT_TRUE(begin >= 0 && begin <= end && end <= image.width) << where << " row " << v;
+    ASSERT_TRUE(begin < end || begin == 0) << where << " row " << v << ": none is (0, 0)";
+    for (int u = 0; u < image.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * image.width + u;
+      if (image.mm[i] != previous.mm[i]) {
+        ASSERT_TRUE(u >= begin && u < end) << where << " pixel (" << u << ", " << v
+                                           << ") changed outside [" << begin << ", " << end << ")";
+      }
+    }
+  }
+}
+
 TEST(RayCasterTest, ADepthBufferWithItsHistoryIsRewrittenOnlyWhereItCanHaveChanged) {
   // A box drives into view, across and out again; one buffer, frame after frame.
   const CameraParams params = DepthCameraParams();
+  const int w = params.width_px;
   CameraRenderer renderer = MakeRenderer(params, BlackFloor());
   DepthImage buffer, previous, whole;
   DepthRowHistory history;
-  int unflagged = 0;
+  int unchanged_rows = 0;
   for (int k = 0; k < 30; ++k) {
     std::vector<Prism> prisms;
     if (k >= 3 && k < 25) prisms.push_back(Box(1.2, -0.8 + 0.08 * k, 0.2 * k, 0.525, 0.296, 0.2));
@@ -654,32 +677,68 @@ TEST(RayCasterTest, ADepthBufferWithItsHistoryIsRewrittenOnlyWhereItCanHaveChang
     renderer.RenderDepth(world::Pose2{}, prisms, &buffer, &history);
     renderer.Render(world::Pose2{}, prisms, nullptr, &whole);
     ASSERT_EQ(buffer.mm, whole.mm) << "frame " << k;
-    const std::span<const std::uint8_t> changed = history.changed_rows();
-    ASSERT_EQ(changed.size(), static_cast<std::size_t>(params.height_px));
-    for (int v = 0; v < params.height_px; ++v) {
-      const auto row = [&](const DepthImage& image) {
-        return std::vector<std::uint16_t>(image.mm.begin() + v * params.width_px,
-                                          image.mm.begin() + (v + 1) * params.width_px);
-      };
-      if (k == 0) {
-        EXPECT_EQ(changed[v], 1) << "the first frame is all new";
-      } else if (row(whole) != row(previous)) {
-        ASSERT_EQ(changed[v], 1) << "frame " << k << " row " << v;
-      }
-      unflagged += changed[v] == 0;
+    const std::span<const std::pair<int, int>> changed = history.changed_columns();
+    if (k == 0) {
+      EXPECT_EQ(std::count(changed.begin(), changed.end(), std::pair{0, w}), params.height_px)
+          << "the first frame is all new";
+    } else {
+      ExpectChangedColumnsHoldEveryChange(whole, previous, changed, "frame " + std::to_string(k));
     }
+    unchanged_rows += std::count(changed.begin(), changed.end(), std::pair{0, 0});
     previous = whole;
   }
-  EXPECT_GT(unflagged, 29 * 200);  // rows without the box are not rewritten
+  EXPECT_GT(unchanged_rows, 29 * 200);  // rows without the box are not rewritten
   // After Forget the next frame is whole again and says so.
   history.Forget();
-  EXPECT_TRUE(history.changed_rows().empty());
+  EXPECT_TRUE(history.changed_columns().empty());
   std::fill(buffer.mm.begin(), buffer.mm.end(), 7);
   renderer.RenderDepth(world::Pose2{}, {}, &buffer, &history);
   renderer.Render(world::Pose2{}, {}, nullptr, &whole);
   EXPECT_EQ(buffer.mm, whole.mm);
-  EXPECT_EQ(std::count(history.changed_rows().begin(), history.changed_rows().end(), 1),
+  EXPECT_EQ(std::count(history.changed_columns().begin(), history.changed_columns().end(),
+                       std::pair{0, w}),
             params.height_px);
+}
+
+TEST(RayCasterTest, ADepthBufferRestoredWhereTheLastFramesPrismsWereIsTheFullRenderEveryFrame) {
+  // Prisms moving, appearing and disappearing, several in the same rows: a car crossing the whole
+  // view (half out of it at either end), a box that comes and goes, one at the right edge that
+  // flickers, a wall across the view for one frame and a box around the camera for another. Each
+  // frame of the one buffer is a fresh renderer's full render, and only the columns near the
+  // prisms are said to have changed.
+  const CameraParams params = DepthCameraParams();
+  const int w = params.width_px;
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  CameraRenderer fresh = MakeRenderer(params, BlackFloor());
+  DepthImage buffer, previous, whole;
+  DepthRowHistory history;
+  int untouched_rows = 0, part_rows = 0, whole_rows = 0;
+  for (int k = 0; k < 32; ++k) {
+    std::vector<Prism> prisms;
+    prisms.push_back(Box(1.5, 1.0 - 0.065 * k, 0.1 * k, 0.525, 0.296, 0.2));
+    if ((k >= 5 && k < 12) || (k >= 18 && k < 22)) {
+      prisms.push_back(Box(0.9, 0.3 * std::sin(0.7 * k), 0.3, 0.2, 0.2, 0.3));
+    }
+    if (k % 2 == 0) prisms.push_back(Box(0.8 + 0.01 * k, -0.62, 0.0, 0.2, 0.2, 0.25));
+    if (k == 15) prisms.push_back(Box(2.5, 0.0, 0.0, 0.1, 6.0, 0.5));
+    if (k == 26) prisms.push_back(Box(0.0, 0.0, 0.0, 2.0, 2.0, 1.0));  // the camera inside
+    renderer.RenderDepth(world::Pose2{}, prisms, &buffer, &history);
+    fresh.Render(world::Pose2{}, prisms, nullptr, &whole);
+    ASSERT_EQ(buffer.mm, whole.mm) << "frame " << k;
+    if (k > 0) {
+      ExpectChangedColumnsHoldEveryChange(whole, previous, history.changed_columns(),
+                                          "frame " + std::to_string(k));
+    }
+    for (const auto& [begin, end] : history.changed_columns()) {
+      untouched_rows += end == begin;
+      part_rows += end > begin && end - begin < w;
+      whole_rows += end - begin == w;
+    }
+    previous = whole;
+  }
+  // the prisms cover part of a row, except in frame 0 and the wall's and the enclosing box's
+  // frames and those after them
+  EXPECT_GT(part_rows, 31 * 50);
 }
 
 TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsWritten) {
