@@ -947,8 +947,10 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   }
 }
 
-bool CameraRenderer::MaySee(const world::Pose2& X_map_car, const Prism& prism) const {
-  return VisibleBounds(*rays_, PlaceInBase(X_map_car, prism)).has_value();
+bool CameraRenderer::MaySee(const world::Pose2& X_map_car, const Prism& prism,
+                            double depth_of_interest_m) const {
+  const std::optional<RayBounds> bounds = VisibleBounds(*rays_, PlaceInBase(X_map_car, prism));
+  return bounds && bounds->z_near <= depth_of_interest_m;
 }
 
 void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, ColorImage* color,

@@ -357,9 +357,10 @@ class CameraRenderer {
 
   // Whether `prism` may cover a pixel of the image with the car at X_map_car: false only for a
   // prism the renderer would draw nothing of (behind the camera, beyond the far clip, beside the
-  // view), so that a consumer may tell two frames apart by the car's pose and the prisms it may
-  // see.
-  bool MaySee(const world::Pose2& X_map_car, const Prism& prism) const;
+  // view, or wholly beyond `depth_of_interest_m` as RenderDepth leaves it out), so that a consumer
+  // may tell two frames apart by the car's pose and the prisms it may see.
+  bool MaySee(const world::Pose2& X_map_car, const Prism& prism,
+              double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
 
   // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
   // their pixels up, a group of them at a time where the group's circle allows: on by default;

@@ -41,11 +41,47 @@ struct BirdViewMessage {
   Time stamp{};
 };
 
-// What a node keeps between frames: scratch buffers only (a result depends on its frame alone).
+// What a frame's images are a function of, where they come from the scene alone (no noise, not
+// the GL backend: CameraFrame::LabelsFromScene, DepthFromScene): the car's pose, the blackout and
+// the prisms the camera may see (nearer than what the consumer reads), in the frame's order. A
+// node keeps its last frame's and its result: a car that stands while nothing it sees moves (a
+// queue at an intersection) has the same result again, without rendering.
+struct SceneKey {
+  world::Pose2 pose;
+  bool blackout{false};
+  int variant{0};                      // what else the node's result depends on
+  std::vector<vehicle::Prism> prisms;  // those it may see
+};
+
+SceneKey SceneOf(const CameraFrame& frame, double depth_of_interest_m, int variant) {
+  SceneKey key{.pose = frame.X_map_car, .blackout = frame.blackout, .variant = variant};
+  for (const vehicle::Prism& prism : frame.prisms) {
+    if (frame.MaySee(prism, depth_of_interest_m)) key.prisms.push_back(prism);
+  }
+  return key;
+}
+
+bool SameScene(const SceneKey& a, const SceneKey& b) {
+  const auto same_pose = [](const world::Pose2& p, const world::Pose2& q) {
+    return p.x_m == q.x_m && p.y_m == q.y_m && p.yaw_rad == q.yaw_rad;
+  };
+  const auto same_prism = [&](const vehicle::Prism& p, const vehicle::Prism& q) {
+    return same_pose(p.footprint.pose, q.footprint.pose) &&
+           p.footprint.length_m == q.footprint.length_m &&
+           p.footprint.width_m == q.footprint.width_m && p.height_m == q.height_m && p.bgr == q.bgr;
+  };
+  return same_pose(a.pose, b.pose) && a.blackout == b.blackout && a.variant == b.variant &&
+         std::equal(a.prisms.begin(), a.prisms.end(), b.prisms.begin(), b.prisms.end(), same_prism);
+}
+
+// What a node keeps between frames: scratch buffers, and (the fused node) the last frame's scene
+// and grid.
 struct DepthScratch {
   vehicle::DepthImage depth;
   vehicle::DepthRowHistory history;  // the renderer rewrites only pixels that can have changed
   stack::DepthGridMemo grid_memo;    // the fused node's: it counts only the segments that changed
+  std::optional<SceneKey> last;      // the fused node's last frame (DepthFromScene), and its grid
+  stack::Grid234 last_grid;
 };
 
 // `depth_of_interest_m`: what the consumer reads (CameraFrame::RenderDepth).
@@ -78,6 +114,21 @@ stack::Grid234 Report(const GridParams& params, stack::Grid234 grid, Time stamp)
   return grid;
 }
 
+// The fused node's grid of a frame: its last one again where the scene it may see (nearer than
+// the grid reads) is the last frame's, else counted from the frame's depth.
+stack::Grid234 FusedGrid(const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
+  std::optional<SceneKey> key;
+  if (frame.DepthFromScene()) {
+    key = SceneOf(frame, p.depth_of_interest_m, 0);
+    if (scratch->last && SameScene(*scratch->last, *key)) return scratch->last_grid;
+  }
+  scratch->last_grid =
+      stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
+                             p.P, &scratch->grid_memo, scratch->history.changed_columns());
+  scratch->last = std::move(key);
+  return scratch->last_grid;
+}
+
 TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfig& config,
                                          const std::map<std::string, NodeMappingConfig>& mapping,
                                          const SensorSuite& sensors,
@@ -97,12 +148,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
     AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image,
                      obstacles, std::move(params), std::make_shared<DepthScratch>(),
                      [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
-                       return Report(
-                           p,
-                           stack::StepDepthToGrid(
-                               p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
-                               p.P, &scratch->grid_memo, scratch->history.changed_columns()),
-                           frame.stamp);
+                       return Report(p, FusedGrid(p, frame, scratch), frame.stamp);
                      });
     return obstacles;
   }
@@ -144,31 +190,9 @@ struct LaneScratch {
       : detector(std::move(tables)) {}
   stack::LaneDetector detector;  // its class image and cell index
   vehicle::ColorImage color;
-  // A frame's labels are a function of the car's pose, the blackout and the prisms the camera may
-  // see (CameraFrame::LabelsFromScene): a car that stands while nothing in view moves (a queue at
-  // an intersection) has the same sums as in its last frame.
-  struct Key {
-    world::Pose2 pose;
-    bool blackout{false};
-    stack::BirdsEyeClasses count{};
-    std::vector<vehicle::Prism> prisms;  // those it may see, in the frame's order
-  };
-  std::optional<Key> last;
+  std::optional<SceneKey> last;  // the last frame's (LabelsFromScene), and its sums
   stack::BirdsEyeRowSums last_sums;
 };
-
-bool SameKey(const LaneScratch::Key& a, const LaneScratch::Key& b) {
-  const auto same_pose = [](const world::Pose2& p, const world::Pose2& q) {
-    return p.x_m == q.x_m && p.y_m == q.y_m && p.yaw_rad == q.yaw_rad;
-  };
-  const auto same_prism = [&](const vehicle::Prism& p, const vehicle::Prism& q) {
-    return same_pose(p.footprint.pose, q.footprint.pose) &&
-           p.footprint.length_m == q.footprint.length_m &&
-           p.footprint.width_m == q.footprint.width_m && p.height_m == q.height_m && p.bgr == q.bgr;
-  };
-  return same_pose(a.pose, b.pose) && a.blackout == b.blackout && a.count == b.count &&
-         std::equal(a.prisms.begin(), a.prisms.end(), b.prisms.begin(), b.prisms.end(), same_prism);
-}
 
 // The bird's-eye row sums of a frame. The detector reads a function of each pixel's colour alone,
 // its line class, so the renderer labels the pixels it reads with their colour's class (a few
@@ -179,11 +203,8 @@ void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scr
                  stack::BirdsEyeClasses count = stack::BirdsEyeClasses::kNonZero) {
   stack::LaneDetector& detector = scratch->detector;
   if (frame.LabelsFromScene()) {
-    LaneScratch::Key key{.pose = frame.X_map_car, .blackout = frame.blackout, .count = count};
-    for (const vehicle::Prism& prism : frame.prisms) {
-      if (frame.MaySee(prism)) key.prisms.push_back(prism);
-    }
-    if (scratch->last && SameKey(*scratch->last, key)) {
+    SceneKey key = SceneOf(frame, std::numeric_limits<double>::infinity(), static_cast<int>(count));
+    if (scratch->last && SameScene(*scratch->last, key)) {
       *sums = scratch->last_sums;
       return;
     }

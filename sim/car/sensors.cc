@@ -180,8 +180,10 @@ void CameraSensor::Render(const CameraFrame& frame, vehicle::ColorImage* color,
 
 bool CameraFrame::LabelsFromScene() const { return CameraOf(*this).LabelsFromScene(); }
 
-bool CameraFrame::MaySee(const vehicle::Prism& prism) const {
-  return CameraOf(*this).MaySee(*this, prism);
+bool CameraFrame::DepthFromScene() const { return CameraOf(*this).DepthFromScene(); }
+
+bool CameraFrame::MaySee(const vehicle::Prism& prism, double depth_of_interest_m) const {
+  return CameraOf(*this).MaySee(*this, prism, depth_of_interest_m);
 }
 
 bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
@@ -207,7 +209,7 @@ void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* de
                                vehicle::DepthRowHistory* history,
                                double depth_of_interest_m) const {
   // not the bare floor plus prisms, or not rendered row by row
-  if (frame.blackout || params_.noise.AltersDepth() || gl_ != nullptr) {
+  if (frame.blackout || !DepthFromScene()) {
     Render(frame, nullptr, depth);
     history->Forget();
     return;

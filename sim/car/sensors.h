@@ -134,7 +134,11 @@ struct CameraFrame {
   // whether `prism` may cover a pixel of this frame (vehicle::CameraRenderer::MaySee): two such
   // frames with the same pose, blackout and prisms it may see have the same labels.
   bool LabelsFromScene() const;
-  bool MaySee(const vehicle::Prism& prism) const;
+  bool MaySee(const vehicle::Prism& prism,
+              double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
+  // The same for RenderDepth: false where its image is not the scene's alone (depth noise, the GL
+  // backend).
+  bool DepthFromScene() const;
   const std::string& topic() const;
   std::int64_t bytes() const;  // of the message on the topic
 };
@@ -159,8 +163,10 @@ class CameraSensor {
   bool RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                     const vehicle::ColourLabel& label, vehicle::LabelView out) const;
   bool LabelsFromScene() const { return !params_.noise.AltersColor() && gl_ == nullptr; }
-  bool MaySee(const CameraFrame& frame, const vehicle::Prism& prism) const {
-    return renderer_.MaySee(frame.X_map_car, prism);
+  bool DepthFromScene() const { return !params_.noise.AltersDepth() && gl_ == nullptr; }
+  bool MaySee(const CameraFrame& frame, const vehicle::Prism& prism,
+              double depth_of_interest_m) const {
+    return renderer_.MaySee(frame.X_map_car, prism, depth_of_interest_m);
   }
 
  private:

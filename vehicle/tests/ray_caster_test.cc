@@ -519,6 +519,16 @@ TEST(RayCasterTest, ADepthOfInterestLeavesOutOnlyPrismsWhollyBeyondIt) {
     }
     EXPECT_GT(within, 10000) << "frame " << k;
     EXPECT_GT(left_out, 1000) << "frame " << k;
+    // MaySee with the depth of interest names the prisms that matter: the others changed nothing
+    std::vector<Prism> seen;
+    for (const Prism& prism : prisms) {
+      if (renderer.MaySee(car, prism, kInterest_m)) seen.push_back(prism);
+    }
+    EXPECT_TRUE(seen.size() >= 1 && seen.size() < prisms.size()) << seen.size();
+    DepthImage only_seen;
+    DepthRowHistory fresh;
+    renderer.RenderDepth(car, seen, &only_seen, &fresh, kInterest_m);
+    EXPECT_EQ(only_seen.mm, limited.mm) << "frame " << k;
   }
 }
 
