@@ -162,6 +162,7 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
   common_index_ =
       static_cast<std::uint8_t>(std::max_element(uses.begin(), uses.end()) - uses.begin());
   IndexCommonCells();
+  CountOthers();
 }
 
 void FloorTexture::IndexColours(const world::FloorRaster& raster) {
@@ -211,6 +212,19 @@ void FloorTexture::IndexCommonCells() {
               std::uint64_t{1} << (x % 64);
         }
       }
+    }
+  }
+}
+
+void FloorTexture::CountOthers() {
+  const std::size_t stride = static_cast<std::size_t>(width_) + 1;
+  others_before_.assign(stride * (static_cast<std::size_t>(height_) + 1), 0);
+  for (std::size_t r = 0; r < static_cast<std::size_t>(height_); ++r) {
+    std::uint16_t in_row = 0;  // this row's other texels up to column c
+    for (std::size_t c = 0; c < static_cast<std::size_t>(width_); ++c) {
+      in_row = static_cast<std::uint16_t>(in_row + (index_[r * width_ + c] != common_index_));
+      others_before_[(r + 1) * stride + c + 1] =
+          static_cast<std::uint16_t>(others_before_[r * stride + c + 1] + in_row);
     }
   }
 }
@@ -569,17 +583,30 @@ struct CameraRenderer::FloorPass {
 
   // Whether a whole block whose circle lies on texels of the common colour is that colour: the
   // circle's texture square, widened by a texel for the float arithmetic (the centre's transform
-  // is the pixels' own, and its error is below 1e-3 texel), must be inside the raster and hold
-  // nothing else. For x >= 0, truncation is floor, and every pixel's texel lies between those of
-  // the square's corners.
+  // is the pixels' own, and its error is below 1e-3 texel), must hold nothing else (inside the
+  // raster, or beyond it where that is the common colour too). For x >= 0, truncation is floor, and
+  // every pixel's texel lies between those of the square's corners.
   bool Common(const CameraRays::FloorBlock& block) const {
     if (!blocks_on || block.radius < 0.0f) return false;
     const float col = a00 * block.centre_x + a01 * block.centre_y + a02;
     const float row = a10 * block.centre_x + a11 * block.centre_y + a12;
     const float reach = block.radius * texels_per_m + 1.0f;
-    return col - reach >= 0.0f && row - reach >= 0.0f &&
-           col + reach < static_cast<float>(tex.width()) &&
-           row + reach < static_cast<float>(tex.height()) && tex.CommonWithin(col, row, reach);
+    if (col - reach >= 0.0f && row - reach >= 0.0f &&
+        col + reach < static_cast<float>(tex.width()) &&
+        row + reach < static_cast<float>(tex.height())) {
+      return tex.CommonWithin(col, row, reach);
+    }
+    // A square reaching beyond the raster: LookUp gives a pixel there the bare floor's colour, so
+    // where that is the common colour, the square's part inside the raster decides (exactly).
+    // Near the track's edge a lane camera sees beyond the raster in a quarter of its blocks.
+    if (!tex.outside_is_common()) return false;
+    const float c_lo = std::max(col - reach, 0.0f);
+    const float r_lo = std::max(row - reach, 0.0f);
+    const float c_hi = std::min(col + reach, static_cast<float>(tex.width() - 1));
+    const float r_hi = std::min(row + reach, static_cast<float>(tex.height() - 1));
+    if (!(c_lo <= c_hi && r_lo <= r_hi)) return true;  // wholly beyond
+    return tex.CommonIn(static_cast<int>(c_lo), static_cast<int>(r_lo), static_cast<int>(c_hi),
+                        static_cast<int>(r_hi));
   }
 
   // The `count` blocks of pixels from pixel i of row v on (kBlockSize each): the common colour.

@@ -155,10 +155,26 @@ class FloorTexture {
                      static_cast<std::size_t>(x >> 6)];
     return ((word >> (x & 63)) & 1u) != 0;
   }
+  // Whether the bare floor beyond the raster (outside_index()) is the common colour.
+  bool outside_is_common() const { return index_.back() == common_index_; }
+  // Whether every texel of columns [c0, c1] and rows [r0, r1] (inclusive, inside the raster) has
+  // common_index(); exact, for a rectangle of fewer than 65536 texels (false for a larger one):
+  // four look-ups in a summed-area table of the other colours' texels, kept in 16 bits (the
+  // differences are exact modulo 2^16, and the count they give is below it).
+  bool CommonIn(int c0, int r0, int c1, int r1) const {
+    if ((c1 - c0 + 1) * (r1 - r0 + 1) >= 65536) return false;
+    const std::size_t stride = static_cast<std::size_t>(width_) + 1;
+    const auto at = [&](int r, int c) {
+      return others_before_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(c)];
+    };
+    return static_cast<std::uint16_t>(at(r1 + 1, c1 + 1) - at(r0, c1 + 1) - at(r1 + 1, c0) +
+                                      at(r0, c0)) == 0;
+  }
 
  private:
   void IndexColours(const world::FloorRaster& raster);  // index_ and palette_
   void IndexCommonCells();                              // common_near_ from index_
+  void CountOthers();                                   // others_before_ from index_
   int width_;
   int height_;
   double m_per_px_;
@@ -171,6 +187,9 @@ class FloorTexture {
   // bit x of word [(d · cells_y_ + y) · words_per_row_ + x / 64]: every texel of the cells within
   // d (Chebyshev) of cell (x, y) has common_index_; d = 0..kMaxReachCells.
   std::vector<std::uint64_t> common_near_;
+  // [r · (width_ + 1) + c]: how many texels of rows [0, r) and columns [0, c) are not of
+  // common_index_, modulo 2^16.
+  std::vector<std::uint16_t> others_before_;
 };
 
 // Per-pixel geometry of one camera on a car, in the car's base frame: immutable, and shareable by

@@ -653,6 +653,34 @@ TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLook
   EXPECT_GT(fast.common_floor_blocks(), 24u * 2000u);
 }
 
+// Where the bare floor beyond the raster is the common colour, a block whose circle reaches
+// beyond the raster is decided by its part inside (issue 38: a lane camera near the track's edge
+// sees beyond it in a quarter of its blocks). Looking out of the raster from near its edge, the
+// images are the pixel-by-pixel ones either way, and more blocks are filled when the colours match.
+TEST(RayCasterTest, BeyondTheRasterTheBareFloorOfTheCommonColourFillsBlocks) {
+  const CameraParams params = ColorCameraParams();
+  std::uint64_t filled[2] = {0, 0};
+  for (int same = 0; same < 2; ++same) {
+    world::FloorRaster raster = BlackFloor(4.0);
+    raster.floor_bgr = same != 0 ? Bgr{0, 0, 0} : Bgr{10, 20, 30};
+    for (int k = -6; k <= 6; ++k) Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
+    CameraRenderer fast = MakeRenderer(params, raster);
+    CameraRenderer each_pixel = MakeRenderer(params, raster);
+    each_pixel.set_common_floor_blocks(false);
+    for (int k = 0; k < 16; ++k) {
+      // near the raster's edges (±2 m), looking out or along them
+      const double a = k * (std::numbers::pi / 8.0);
+      const world::Pose2 pose{1.5 * std::cos(a), 1.5 * std::sin(a), a + 0.3 * (k % 3 - 1)};
+      ColorImage fast_image, reference;
+      fast.Render(pose, {}, &fast_image, nullptr);
+      each_pixel.Render(pose, {}, &reference, nullptr);
+      ASSERT_EQ(fast_image.bgr, reference.bgr) << "pose " << k << ", same colour " << same;
+    }
+    filled[same] = fast.common_floor_blocks();
+  }
+  EXPECT_GT(filled[1], filled[0] + 16u * 500u) << filled[0] << " " << filled[1];
+}
+
 // Every pixel where `image` differs from `previous` lies within its row's changed columns.
 void ExpectChangedColumnsHoldEveryChange(const DepthImage& image, const DepthImage& previous,
                                          std::span<const std::pair<int, int>> changed,
