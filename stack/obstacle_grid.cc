@@ -233,6 +233,10 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
   return Finish(counts);
 }
 
+// FarthestCountedDepth_m's slack for the rounding to millimetres (0.5 mm) and the float
+// arithmetic (below 1e-5 m at these distances), with room to spare: ours, not the lab's.
+constexpr double kCountedDepthSlack_m = 0.01;
+
 double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
                               const ObstacleGridParams& params) {
   params.Validate();
@@ -258,7 +262,7 @@ double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
   }
   // ahead = d · m_per_mm for a depth value d in millimetres, which is the depth in metres · 1000
   const double depth_m = ahead_m / (static_cast<double>(cloud_params.m_per_mm()) * 1000.0);
-  return depth_m + 0.01;
+  return depth_m + kCountedDepthSlack_m;
 }
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,

@@ -52,6 +52,7 @@ struct Prism {
   world::OrientedBox footprint;  // map frame
   double height_m{0.0};
   Bgr bgr{0, 0, 0};
+  friend bool operator==(const Prism&, const Prism&) = default;
 };
 
 // The colour of each face of a prism as the cameras see it: its colour shaded by one fixed light

@@ -18,6 +18,7 @@ struct Pose2 {
 
   Vec2 position() const { return {x_m, y_m}; }
   Vec2 heading() const { return {std::cos(yaw_rad), std::sin(yaw_rad)}; }
+  friend bool operator==(const Pose2&, const Pose2&) = default;  // exactly, bit for bit
 };
 
 // Axis-aligned box in the map frame; used for the intersection areas and stop zones, which the
@@ -51,6 +52,7 @@ struct OrientedBox {
   double width_m{0.0};
 
   std::vector<Vec2> Corners() const;  // counter-clockwise
+  friend bool operator==(const OrientedBox&, const OrientedBox&) = default;
 };
 
 // The free distance between two rectangles: 0 when they touch or overlap.

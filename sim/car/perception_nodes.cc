@@ -51,6 +51,7 @@ struct SceneKey {
   bool blackout{false};
   int variant{0};                      // what else the node's result depends on
   std::vector<vehicle::Prism> prisms;  // those it may see
+  friend bool operator==(const SceneKey&, const SceneKey&) = default;  // exactly, bit for bit
 };
 
 SceneKey SceneOf(const CameraFrame& frame, double depth_of_interest_m, int variant) {
@@ -59,19 +60,6 @@ SceneKey SceneOf(const CameraFrame& frame, double depth_of_interest_m, int varia
     if (frame.MaySee(prism, depth_of_interest_m)) key.prisms.push_back(prism);
   }
   return key;
-}
-
-bool SameScene(const SceneKey& a, const SceneKey& b) {
-  const auto same_pose = [](const world::Pose2& p, const world::Pose2& q) {
-    return p.x_m == q.x_m && p.y_m == q.y_m && p.yaw_rad == q.yaw_rad;
-  };
-  const auto same_prism = [&](const vehicle::Prism& p, const vehicle::Prism& q) {
-    return same_pose(p.footprint.pose, q.footprint.pose) &&
-           p.footprint.length_m == q.footprint.length_m &&
-           p.footprint.width_m == q.footprint.width_m && p.height_m == q.height_m && p.bgr == q.bgr;
-  };
-  return same_pose(a.pose, b.pose) && a.blackout == b.blackout && a.variant == b.variant &&
-         std::equal(a.prisms.begin(), a.prisms.end(), b.prisms.begin(), b.prisms.end(), same_prism);
 }
 
 // What a node keeps between frames: scratch buffers, and (the fused node) the last frame's scene
@@ -120,7 +108,7 @@ stack::Grid234 FusedGrid(const GridParams& p, const CameraFrame& frame, DepthScr
   std::optional<SceneKey> key;
   if (frame.DepthFromScene()) {
     key = SceneOf(frame, p.depth_of_interest_m, 0);
-    if (scratch->last && SameScene(*scratch->last, *key)) return scratch->last_grid;
+    if (scratch->last && *scratch->last == *key) return scratch->last_grid;
   }
   scratch->last_grid =
       stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
@@ -204,7 +192,7 @@ void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scr
   stack::LaneDetector& detector = scratch->detector;
   if (frame.LabelsFromScene()) {
     SceneKey key = SceneOf(frame, std::numeric_limits<double>::infinity(), static_cast<int>(count));
-    if (scratch->last && SameScene(*scratch->last, key)) {
+    if (scratch->last && *scratch->last == key) {
       *sums = scratch->last_sums;
       return;
     }
