@@ -197,8 +197,7 @@ void BM_RenderColorLaneRegion(benchmark::State& state) {
   for (const auto& [begin, end] : region.columns) region_px += end - begin;
   state.counters["region_px"] = region_px;
   state.counters["block_px"] = benchmark::Counter(
-      static_cast<double>(color_camera.common_floor_blocks()) * vehicle::CameraRays::kBlockSize,
-      benchmark::Counter::kAvgIterations);
+      static_cast<double>(color_camera.common_floor_pixels()), benchmark::Counter::kAvgIterations);
 }
 // /1: bare floor blocks filled at once (the default); /0: every pixel looked up
 BENCHMARK(BM_RenderColorLaneRegion)

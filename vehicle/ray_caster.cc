@@ -609,18 +609,18 @@ struct CameraRenderer::FloorPass {
                         static_cast<int>(r_hi));
   }
 
-  // The `count` blocks of pixels from pixel i of row v on (kBlockSize each): the common colour.
+  // The `count` pixels from pixel i of row v on: the common colour.
   void FillCommon(int v, int i, int count) const {
     if (count <= 0) return;
     if (labels != nullptr) {
-      std::memset(LabelRow(v) + i, common_label,
-                  static_cast<std::size_t>(count) * CameraRays::kBlockSize);
+      std::memset(LabelRow(v) + i, common_label, static_cast<std::size_t>(count));
       return;
     }
-    for (int b = 0; b < count; ++b) {
-      std::memcpy(out + 3 * (i + b * CameraRays::kBlockSize), common_block.data(),
-                  common_block.size());
+    constexpr int kBlock = CameraRays::kBlockSize;
+    for (; count >= kBlock; count -= kBlock, i += kBlock) {
+      std::memcpy(out + 3 * i, common_block.data(), common_block.size());
     }
+    std::memcpy(out + 3 * i, common_block.data(), 3 * static_cast<std::size_t>(count));
   }
 
   const CameraRays& rays;
@@ -698,10 +698,11 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
   const CameraRays::FloorBlock* groups = r.floor_block_groups().data();
   group_common_.assign(r.floor_block_groups().size(), 0);
   std::uint8_t* const group_status = group_common_.data();
-  // Per run, the blocks wholly inside it [k_begin, k_end) one by one, a stretch of common ones
-  // filled at once; the partial blocks at its ends looked up. (The count is kept in a local: the
-  // byte stores may alias any member, which the compiler would then reload after each.)
-  std::uint64_t common_blocks = 0;
+  // Per run, the blocks it reaches one by one, a stretch of common ones filled at once and the
+  // others looked up. A block the run covers in part (at its ends, where a region's edge cuts a
+  // row) is common if the whole block is. (The count is kept in a local: the byte stores may alias
+  // any member, which the compiler would then reload after each.)
+  std::uint64_t common_pixels = 0;
   for (const CameraRays::Run& run : runs) {
     const int row = run.begin / w;  // a run lies in one row
     const int row_start = row * w;
@@ -713,28 +714,22 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
         status = pass.Common(groups[group_row + static_cast<std::size_t>(k)]) ? 1 : 2;
       return status == 1 || pass.Common(blocks[row * blocks_per_row + k]);
     };
-    const int k_begin = (run.begin - row_start + kBlock - 1) / kBlock;
-    const int k_end = (run.end - row_start) / kBlock;
-    if (k_begin >= k_end) {
-      pass.LookUp(row, run.begin, run.end);
-      continue;
-    }
-    if (run.begin < row_start + k_begin * kBlock) {
-      pass.LookUp(row, run.begin, row_start + k_begin * kBlock);
-    }
-    int common_from = k_begin;  // the stretch of common blocks [common_from, k)
+    const int k_begin = (run.begin - row_start) / kBlock;
+    const int k_end = (run.end - row_start + kBlock - 1) / kBlock;
+    int common_from = run.begin;  // the stretch of common pixels [common_from, block's start)
     for (int k = k_begin; k < k_end; ++k) {
       if (common(k)) continue;
-      pass.FillCommon(row, row_start + common_from * kBlock, k - common_from);
-      common_blocks += static_cast<std::uint64_t>(k - common_from);
-      pass.LookUp(row, row_start + k * kBlock, row_start + (k + 1) * kBlock);
-      common_from = k + 1;
+      const int from = std::max(run.begin, row_start + k * kBlock);
+      const int to = std::min(run.end, row_start + (k + 1) * kBlock);
+      pass.FillCommon(row, common_from, from - common_from);
+      common_pixels += static_cast<std::uint64_t>(from - common_from);
+      pass.LookUp(row, from, to);
+      common_from = to;
     }
-    pass.FillCommon(row, row_start + common_from * kBlock, k_end - common_from);
-    common_blocks += static_cast<std::uint64_t>(k_end - common_from);
-    if (row_start + k_end * kBlock < run.end) pass.LookUp(row, row_start + k_end * kBlock, run.end);
+    pass.FillCommon(row, common_from, run.end - common_from);
+    common_pixels += static_cast<std::uint64_t>(run.end - common_from);
   }
-  common_floor_blocks_ += common_blocks;
+  common_floor_pixels_ += common_pixels;
 }
 
 void CameraRenderer::InitTileDepth(std::size_t tile_index) {

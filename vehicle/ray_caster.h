@@ -387,8 +387,8 @@ class CameraRenderer {
   // off, every floor pixel is looked up (the reference that tests and benchmarks compare with).
   // The images are the same either way.
   void set_common_floor_blocks(bool on) { common_floor_blocks_on_ = on; }
-  // How many blocks were filled that way, over every frame so far.
-  std::uint64_t common_floor_blocks() const { return common_floor_blocks_; }
+  // How many pixels were filled that way, over every frame so far.
+  std::uint64_t common_floor_pixels() const { return common_floor_pixels_; }
 
  private:
   // std::invalid_argument unless `region` has a row per image row.
@@ -449,7 +449,7 @@ class CameraRenderer {
   std::vector<std::pair<int, int>> depth_columns_hit_;
   std::vector<std::uint8_t> group_common_;  // per floor block group, this frame (RenderFloor)
   bool common_floor_blocks_on_{true};
-  std::uint64_t common_floor_blocks_{0};
+  std::uint64_t common_floor_pixels_{0};
 };
 
 // Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a

@@ -647,10 +647,20 @@ TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLook
     fast.Render(pose, prisms, &a, nullptr);
     each_pixel.Render(pose, prisms, &b, nullptr);
     ASSERT_EQ(a.bgr, b.bgr) << "pose " << k;
+    // a region whose edges cut rows anywhere in a block (a lane detector's trapezoid): a block
+    // the region covers in part is filled where the whole block is of the common colour
+    RowSpans region;
+    for (int v = 0; v < params.height_px; ++v) {
+      region.columns.emplace_back(std::min(params.width_px, (v * 7 + k) % 61 + v / 3),
+                                  std::max(0, params.width_px - (v * 5 + 3 * k) % 37 - v / 4));
+    }
+    fast.Render(pose, prisms, &a, nullptr, region);
+    each_pixel.Render(pose, prisms, &b, nullptr, region);
+    ASSERT_EQ(a.bgr, b.bgr) << "pose " << k << " in the region";
   }
-  EXPECT_EQ(each_pixel.common_floor_blocks(), 0u);
+  EXPECT_EQ(each_pixel.common_floor_pixels(), 0u);
   // most of a 640x480 view is bare floor: 40 blocks a row, hundreds of rows
-  EXPECT_GT(fast.common_floor_blocks(), 24u * 2000u);
+  EXPECT_GT(fast.common_floor_pixels(), 24u * 2000u * CameraRays::kBlockSize);
 }
 
 // Where the bare floor beyond the raster is the common colour, a block whose circle reaches
@@ -676,9 +686,10 @@ TEST(RayCasterTest, BeyondTheRasterTheBareFloorOfTheCommonColourFillsBlocks) {
       each_pixel.Render(pose, {}, &reference, nullptr);
       ASSERT_EQ(fast_image.bgr, reference.bgr) << "pose " << k << ", same colour " << same;
     }
-    filled[same] = fast.common_floor_blocks();
+    filled[same] = fast.common_floor_pixels();
   }
-  EXPECT_GT(filled[1], filled[0] + 16u * 500u) << filled[0] << " " << filled[1];
+  EXPECT_GT(filled[1], filled[0] + 16u * 500u * CameraRays::kBlockSize)
+      << filled[0] << " " << filled[1];
 }
 
 // Every pixel where `image` differs from `previous` lies within its row's changed columns.
