@@ -6,6 +6,10 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
@@ -28,10 +32,6 @@ constexpr int kAlphaCount = kInterTabSize * kInterTabSize;
 constexpr int kWarpBlockSize = 32;
 // OpenCV's 8-bit HSV: 12 fractional bits in its division tables.
 constexpr int kHsvShift = 12;
-// Our skipping granularity: output tiles of 16 × 16 px, source cells of 8 × 8 px. Assumed: small
-// enough that a line's tiles are few, large enough that the bookkeeping costs little.
-constexpr int kTileSize = 16;
-constexpr int kCellSize = 8;
 
 // Two bytes read with memcpy as (first | second << 8), whatever the machine's byte order.
 constexpr std::uint32_t LittleEndianPair(std::uint16_t read) {
@@ -503,47 +503,53 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
 void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   constexpr int W = kLaneImageWidth;
   constexpr int H = kLaneImageHeight;
+  constexpr int padded_w = kClassStride;
   const std::vector<int>& sx = source.sx;
   const std::vector<int>& sy = source.sy;
   // Active pixels (some of the 2×2 source square inside the image; the rest stay 0, the border
-  // value), grouped by output tile, with the source cells each tile reads and the source pixels
-  // each row needs.
-  constexpr int padded_w = kClassStride;
+  // value), counted per square's top left (padded), then placed in that order, and the source
+  // pixels each row needs.
+  const auto active = [&](int i) { return sx[i] < W && sx[i] + 1 >= 0 && sy[i] < H && sy[i] + 1 >= 0; };
+  const auto square = [&](int i) { return (sy[i] + 1) * padded_w + sx[i] + 1; };
+  square_start_.assign(static_cast<std::size_t>(H + 1) * padded_w + 1, 0);
   std::vector<int> need_begin(H, W), need_end(H, 0);
-  for (int ty = 0; ty < H; ty += kTileSize) {
-    for (int tx = 0; tx < W; tx += kTileSize) {
-      Tile tile{static_cast<std::uint32_t>(pixel_dst_.size()), 0, 0, 0, 0, 0};
-      int x_lo = W, x_hi = -1, y_lo = H, y_hi = -1;
-      for (int y = ty; y < std::min(ty + kTileSize, H); ++y) {
-        for (int x = tx; x < std::min(tx + kTileSize, W); ++x) {
-          const int i = y * W + x;
-          if (sx[i] >= W || sx[i] + 1 < 0 || sy[i] >= H || sy[i] + 1 < 0) continue;
-          pixel_dst_.push_back(static_cast<std::uint32_t>(i));
-          pixel_src_.push_back(static_cast<std::uint32_t>((sy[i] + 1) * padded_w + sx[i] + 1));
-          pixel_lut_.push_back(static_cast<std::uint16_t>(source.alpha[i] * 16));
-          const int c0 = std::max(sx[i], 0), c1 = std::min(sx[i] + 1, W - 1);
-          const int r0 = std::max(sy[i], 0), r1 = std::min(sy[i] + 1, H - 1);
-          x_lo = std::min(x_lo, c0);
-          x_hi = std::max(x_hi, c1);
-          y_lo = std::min(y_lo, r0);
-          y_hi = std::max(y_hi, r1);
-          for (int r = r0; r <= r1; ++r) {
-            need_begin[r] = std::min(need_begin[r], c0);
-            need_end[r] = std::max(need_end[r], c1 + 1);
-          }
-        }
-      }
-      tile.end = static_cast<std::uint32_t>(pixel_dst_.size());
-      if (tile.end == tile.begin) continue;
-      tile.cell_x0 = static_cast<std::uint16_t>(x_lo / kCellSize);
-      tile.cell_x1 = static_cast<std::uint16_t>(x_hi / kCellSize);
-      tile.cell_y0 = static_cast<std::uint16_t>(y_lo / kCellSize);
-      tile.cell_y1 = static_cast<std::uint16_t>(y_hi / kCellSize);
-      tiles_.push_back(tile);
+  for (int i = 0; i < W * H; ++i) {
+    if (!active(i)) continue;
+    ++square_start_[static_cast<std::size_t>(square(i)) + 1];
+    const int c0 = std::max(sx[i], 0), c1 = std::min(sx[i] + 1, W - 1);
+    for (int r = std::max(sy[i], 0); r <= std::min(sy[i] + 1, H - 1); ++r) {
+      need_begin[r] = std::min(need_begin[r], c0);
+      need_end[r] = std::max(need_end[r], c1 + 1);
     }
+  }
+  std::partial_sum(square_start_.begin(), square_start_.end(), square_start_.begin());
+  const std::size_t n = square_start_.back();
+  pixel_dst_.resize(n);
+  pixel_src_.resize(n);
+  pixel_lut_.resize(n);
+  std::vector<std::uint32_t> next(square_start_.begin(), square_start_.end() - 1);
+  for (int i = 0; i < W * H; ++i) {
+    if (!active(i)) continue;
+    const std::uint32_t k = next[static_cast<std::size_t>(square(i))]++;
+    pixel_dst_[k] = static_cast<std::uint32_t>(i);
+    pixel_src_[k] = static_cast<std::uint32_t>(square(i));
+    pixel_lut_[k] = static_cast<std::uint16_t>(source.alpha[i] * 16);
   }
   for (int r = 0; r < H; ++r) {
     if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
+  }
+  // The words of each padded row the spans reach; a square row t reads rows t and t + 1. (A
+  // square's left column lies in one of its rows' spans: they were widened to hold it.)
+  std::vector<std::pair<int, int>> words(H + 2, {kLineWords, 0});
+  for (const SourceSpan& span : spans_) {
+    words[span.row + 1] = {(span.col_begin + 1) / 64, span.col_end / 64 + 1};
+  }
+  for (int t = 0; t <= H; ++t) {
+    const int begin = std::min(words[t].first, words[t + 1].first);
+    const int end = std::max(words[t].second, words[t + 1].second);
+    if (begin >= end) continue;
+    square_rows_.push_back({static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(begin),
+                            static_cast<std::uint32_t>(end)});
   }
 }
 
@@ -570,11 +576,9 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
 LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
     : tables_(std::move(tables)) {
   Require(tables_ != nullptr, "LaneDetector needs its tables");
-  classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2), 0);
-  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
-  const int cells_y = (kLaneImageHeight + kCellSize - 1) / kCellSize;
-  cell_any_.assign(static_cast<std::size_t>(cells_x) * cells_y, 0);
-  cell_prefix_.assign(static_cast<std::size_t>(cells_x + 1) * (cells_y + 1), 0);
+  classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2) + 64, 0);
+  line_bits_.assign(static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2),
+                    0);
 }
 
 ClassImageRegion LaneDetector::MutableClassRegion() {
@@ -589,10 +593,7 @@ ClassImageRegion LaneDetector::MutableClassRegion() {
 void LaneDetector::Classify(const cv::Mat& bgr) {
   const LaneDetectorTables& tables = *tables_;
   const int v_min = tables.v_min_;
-  constexpr int W = kLaneImageWidth;
   constexpr int padded_w = kClassStride;
-  const int cells_x = (W + kCellSize - 1) / kCellSize;
-  std::fill(cell_any_.begin(), cell_any_.end(), 0);
   // No pixel darker than both ranges' V bounds is a line pixel: most of the floor is black.
   // Eight pixels (24 bytes) at a time, the dark ones are told apart with word arithmetic: a byte
   // above n shows in the high bit of (byte + 127 - n) | byte (for n <= 127; a carry out of a byte
@@ -610,7 +611,6 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
   for (const SourceSpan& span : tables.spans_) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(span.row);
     std::uint8_t* out = classes_.data() + (span.row + 1) * padded_w + 1;
-    std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
     for (int c = span.col_begin; c < span.col_end;) {
       if (word_test && c + 8 <= span.col_end && all_dark(p + 3 * c)) {
         std::memset(out + c, 0, 8);
@@ -618,66 +618,50 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
         continue;
       }
       for (const int block_end = std::min(c + 8, span.col_end); c < block_end; ++c) {
-        const std::uint8_t cls = tables.ClassOf(p[3 * c], p[3 * c + 1], p[3 * c + 2]);
-        out[c] = cls;
-        if (cls != 0) cells[c / kCellSize] = 1;
+        out[c] = tables.ClassOf(p[3 * c], p[3 * c + 1], p[3 * c + 2]);
       }
     }
   }
-  IndexLineCells();
+  FindLinePixels();
 }
 
-void LaneDetector::FindLineCells() {
-  constexpr int padded_w = kClassStride;
-  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
-  std::fill(cell_any_.begin(), cell_any_.end(), 0);
+namespace {
+
+// Bit k of the result: byte k of in[0, 64) is not 0.
+std::uint64_t NonZeroBytes64(const std::uint8_t* in) {
+#if defined(__SSE2__)
+  const __m128i zero = _mm_setzero_si128();
+  std::uint64_t bits = 0;
+  for (int k = 0; k < 4; ++k) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 16 * k));
+    const auto zeros = static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(v, zero)));
+    bits |= static_cast<std::uint64_t>(~zeros & 0xFFFFu) << (16 * k);
+  }
+  return bits;
+#else
+  std::uint64_t bits = 0;
+  for (int k = 0; k < 64; ++k) bits |= static_cast<std::uint64_t>(in[k] != 0) << k;
+  return bits;
+#endif
+}
+
+}  // namespace
+
+void LaneDetector::FindLinePixels() {
+  constexpr int kWords = LaneDetectorTables::kLineWords;
   for (const SourceSpan& span : tables_->spans_) {
-    const std::uint8_t* in = classes_.data() + (span.row + 1) * padded_w + 1;
-    std::uint8_t* cells = cell_any_.data() + (span.row / kCellSize) * cells_x;
-    static_assert(kCellSize == 8, "a cell's row is one 64-bit word");
-    // the cells wholly inside the span a word each, then the partial ones at its ends
-    const int first_full = (span.col_begin + kCellSize - 1) / kCellSize;
-    const int end_full = span.col_end / kCellSize;
-    for (int k = first_full; k < end_full; ++k) {
-      std::uint64_t word;
-      std::memcpy(&word, in + k * kCellSize, sizeof word);
-      cells[k] |= static_cast<std::uint8_t>(word != 0);
-    }
-    const auto partial = [&](int begin, int end) {
-      for (int c = begin; c < end; ++c)
-        cells[c / kCellSize] |= static_cast<std::uint8_t>(in[c] != 0);
-    };
-    if (first_full > end_full) {  // the span lies inside one cell
-      partial(span.col_begin, span.col_end);
-    } else {
-      partial(span.col_begin, first_full * kCellSize);
-      partial(end_full * kCellSize, span.col_end);
+    const int padded_row = span.row + 1;
+    const std::uint8_t* in = classes_.data() + padded_row * kClassStride;
+    std::uint64_t* bits = line_bits_.data() + padded_row * kWords;
+    const int begin = span.col_begin + 1, end = span.col_end + 1;  // padded columns
+    for (int w = begin / 64; w <= (end - 1) / 64; ++w) {
+      // 64 bytes from the word's first column: the row's, and beyond its end the next row's (the
+      // padded image has a row below the last span's and 64 bytes more), masked off
+      const int lo = std::max(begin - 64 * w, 0), hi = std::min(end - 64 * w, 64);
+      const std::uint64_t keep = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
+      bits[w] = NonZeroBytes64(in + 64 * w) & keep;
     }
   }
-  IndexLineCells();
-}
-
-void LaneDetector::IndexLineCells() {
-  // Inclusive prefix counts: cell_prefix_[(y + 1) · (cells_x + 1) + x + 1] = Σ over [0, y] × [0,
-  // x].
-  const int cells_x = (kLaneImageWidth + kCellSize - 1) / kCellSize;
-  const int cells_y = static_cast<int>(cell_any_.size()) / cells_x;
-  for (int y = 0; y < cells_y; ++y) {
-    int row_sum = 0;
-    for (int x = 0; x < cells_x; ++x) {
-      row_sum += cell_any_[y * cells_x + x];
-      cell_prefix_[(y + 1) * (cells_x + 1) + x + 1] =
-          cell_prefix_[y * (cells_x + 1) + x + 1] + row_sum;
-    }
-  }
-}
-
-bool LaneDetector::AnyLineCell(const Tile& tile) const {
-  const int stride = (kLaneImageWidth + kCellSize - 1) / kCellSize + 1;
-  const auto at = [&](int y, int x) { return cell_prefix_[y * stride + x]; };
-  return at(tile.cell_y1 + 1, tile.cell_x1 + 1) - at(tile.cell_y0, tile.cell_x1 + 1) -
-             at(tile.cell_y1 + 1, tile.cell_x0) + at(tile.cell_y0, tile.cell_x0) >
-         0;
 }
 
 void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
@@ -703,10 +687,11 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
   const std::uint32_t* pixel_src = tables.pixel_src_.data();
   const std::uint32_t* pixel_dst = tables.pixel_dst_.data();
   const std::uint16_t* pixel_lut = tables.pixel_lut_.data();
+  const std::uint32_t* square_start = tables.square_start_.data();
   constexpr int stride = kClassStride;
-  for (const Tile& tile : tables.tiles_) {
-    if (!AnyLineCell(tile)) continue;
-    for (std::uint32_t i = tile.begin; i < tile.end; ++i) {
+  constexpr int kWords = LaneDetectorTables::kLineWords;
+  const auto visit_squares = [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t i = begin; i < end; ++i) {
       // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
       // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
       // products land on distinct bits, so nothing carries into bits 24-27)
@@ -715,11 +700,29 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
       std::memcpy(&top, p, sizeof top);
       std::memcpy(&bottom, p + stride, sizeof bottom);
       const std::uint32_t quad = LittleEndianPair(top) | (LittleEndianPair(bottom) << 16);
-      if (quad == 0) continue;
       constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
       const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
       const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
       visit(pixel_dst[i], pixel_lut[i], yellow_bits, white_bits);
+    }
+  };
+  // Per top row t of the squares: a square whose left column is c holds a line pixel if column c
+  // or c + 1 of row t or t + 1 does, so the left columns to visit are the bits of
+  // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares.
+  for (const LaneDetectorTables::SquareRow& row : tables.square_rows_) {
+    const std::uint64_t* a = line_bits_.data() + row.t * kWords;
+    const std::uint64_t* b = a + kWords;
+    const std::uint32_t* starts = square_start + row.t * stride;
+    for (std::uint32_t w = row.word_begin; w < row.word_end; ++w) {
+      const std::uint64_t x = a[w] | b[w];
+      const std::uint64_t next = w + 1 < kWords ? a[w + 1] | b[w + 1] : 0;
+      std::uint64_t s = x | (x >> 1) | (next << 63);
+      while (s != 0) {
+        const int lo = std::countr_zero(s);
+        const int hi = lo + std::countr_one(s >> lo);
+        visit_squares(starts[64 * w + lo], starts[64 * w + hi]);
+        s = hi == 64 ? 0 : s & (~0ull << hi);
+      }
     }
   }
 }
@@ -732,7 +735,7 @@ void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums,
 }
 
 void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
-  FindLineCells();
+  FindLinePixels();
   SumWarpedClasses(sums, classes);
 }
 

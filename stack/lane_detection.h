@@ -421,14 +421,18 @@ class LaneDetectorTables {
   friend class LaneDetector;
   // The padded class image's row stride: one zero pixel each side, and a zero row above and below.
   static constexpr int kClassStride = kLaneImageWidth + 2;
-  struct Tile {
-    std::uint32_t begin, end;        // into the per-pixel arrays
-    std::uint16_t cell_x0, cell_y0;  // source cells read (inclusive)
-    std::uint16_t cell_x1, cell_y1;
+  // The class image's line pixels as bits: a row of kLineWords words per padded row, bit c of a
+  // row's words for padded column c.
+  static constexpr int kLineWords = (kClassStride + 63) / 64;
+  // The source squares' top rows t (padded) whose squares may hold a line pixel, with the words of
+  // rows t and t + 1 that the spans reach.
+  struct SquareRow {
+    std::uint32_t t;
+    std::uint32_t word_begin, word_end;
   };
   struct WarpSource;  // each output pixel's source pixel and bilinear weights (the constructor's)
-  // The active output pixels (whose source square touches the image) by tile, and the source
-  // spans they read.
+  // The active output pixels (whose source square touches the image) in the order of their
+  // squares, and the source spans they read.
   void IndexActivePixels(const WarpSource& source);
 
   LaneDetectionParams params_;
@@ -451,11 +455,14 @@ class LaneDetectorTables {
   // 0-1 those yellow bits and no white, bits 2-3 those white bits and no yellow.
   std::vector<std::uint8_t> exact_single_lut_;  // 1024 × 16
   std::optional<LanePnpPose> pnp_pose_;
-  // Active output pixels (whose source square touches the image), grouped by output tile.
-  std::vector<Tile> tiles_;
-  std::vector<std::uint32_t> pixel_dst_;  // output index
-  std::vector<std::uint32_t> pixel_src_;  // top-left neighbour in the padded class image
-  std::vector<std::uint16_t> pixel_lut_;  // alpha · 16
+  // Active output pixels (whose source square touches the image), ordered by their square's top
+  // left pixel in the padded class image (then by output index): the pixels of the squares whose
+  // top left is padded index p are [square_start_[p], square_start_[p + 1]).
+  std::vector<std::uint32_t> pixel_dst_;     // output index
+  std::vector<std::uint32_t> pixel_src_;     // top-left neighbour in the padded class image
+  std::vector<std::uint16_t> pixel_lut_;     // alpha · 16
+  std::vector<std::uint32_t> square_start_;  // (kLaneImageHeight + 1) · kClassStride + 1
+  std::vector<SquareRow> square_rows_;
   std::vector<SourceSpan> spans_;         // the source pixels the warp reads
 };
 
@@ -562,14 +569,11 @@ class LaneDetector {
   LanePoints Fit(const BirdsEyeRowSums& sums, LaneDetectionTrace* trace = nullptr);
 
  private:
-  using Tile = LaneDetectorTables::Tile;
   static constexpr int kClassStride = LaneDetectorTables::kClassStride;
 
-  // The classes of the source pixels into classes_, and the line cells from them.
+  // The classes of the source pixels into classes_, and the line bits from them.
   void Classify(const cv::Mat& bgr);
-  void FindLineCells();   // cell_any_ from classes_, then IndexLineCells
-  void IndexLineCells();  // cell_prefix_ from cell_any_
-  bool AnyLineCell(const Tile& tile) const;
+  void FindLinePixels();  // line_bits_ from classes_
   // The warp over classes_: visit(output index, alpha index · 16, yellow bits, white bits) for
   // each output pixel with a line pixel among its four source pixels (the others stay 0, the
   // border value); bit k of the bits: neighbour k (top left, top right, bottom left, bottom right).
@@ -580,10 +584,10 @@ class LaneDetector {
 
   std::shared_ptr<const LaneDetectorTables> tables_;
   // Scratch: per source pixel bit 0 yellow, bit 1 white, with a 1-pixel zero border; and per
-  // source cell whether it holds a line pixel, as an inclusive 2D prefix count.
+  // padded pixel whether it is a line pixel, as bits (LaneDetectorTables::kLineWords a row; the
+  // words outside the spans stay 0).
   std::vector<std::uint8_t> classes_;
-  std::vector<std::uint8_t> cell_any_;
-  std::vector<int> cell_prefix_;
+  std::vector<std::uint64_t> line_bits_;
   BirdsEyeRowSums sums_;
 };
 
