@@ -509,7 +509,9 @@ void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   // Active pixels (some of the 2×2 source square inside the image; the rest stay 0, the border
   // value), counted per square's top left (padded), then placed in that order, and the source
   // pixels each row needs.
-  const auto active = [&](int i) { return sx[i] < W && sx[i] + 1 >= 0 && sy[i] < H && sy[i] + 1 >= 0; };
+  const auto active = [&](int i) {
+    return sx[i] < W && sx[i] + 1 >= 0 && sy[i] < H && sy[i] + 1 >= 0;
+  };
   const auto square = [&](int i) { return (sy[i] + 1) * padded_w + sx[i] + 1; };
   square_start_.assign(static_cast<std::size_t>(H + 1) * padded_w + 1, 0);
   std::vector<int> need_begin(H, W), need_end(H, 0);
@@ -524,16 +526,16 @@ void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   }
   std::partial_sum(square_start_.begin(), square_start_.end(), square_start_.begin());
   const std::size_t n = square_start_.back();
-  pixel_dst_.resize(n);
-  pixel_src_.resize(n);
-  pixel_lut_.resize(n);
+  pixels_.resize(n);
+  static_assert(kLaneImageHeight <= 512 && kLaneImageWidth <= 1024 &&
+                (kLaneImageHeight + 2) * kClassStride <= (1 << 20) &&
+                kAlphaCount * 16 <= (1 << 14));
   std::vector<std::uint32_t> next(square_start_.begin(), square_start_.end() - 1);
   for (int i = 0; i < W * H; ++i) {
     if (!active(i)) continue;
     const std::uint32_t k = next[static_cast<std::size_t>(square(i))]++;
-    pixel_dst_[k] = static_cast<std::uint32_t>(i);
-    pixel_src_[k] = static_cast<std::uint32_t>(square(i));
-    pixel_lut_[k] = static_cast<std::uint16_t>(source.alpha[i] * 16);
+    pixels_[k] =
+        WarpPixel::Pack(static_cast<std::uint32_t>(square(i)), i / W, i % W, source.alpha[i] * 16);
   }
   for (int r = 0; r < H; ++r) {
     if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
@@ -577,8 +579,8 @@ LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
     : tables_(std::move(tables)) {
   Require(tables_ != nullptr, "LaneDetector needs its tables");
   classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2) + 64, 0);
-  line_bits_.assign(static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2),
-                    0);
+  line_bits_.assign(
+      static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2), 0);
 }
 
 ClassImageRegion LaneDetector::MutableClassRegion() {
@@ -674,45 +676,23 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
   std::uint8_t* white = masks->white.ptr<std::uint8_t>();
   const std::uint8_t* lut = tables_->warp_lut_.data();
-  ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
-    yellow[dst] = lut[alpha16 + yellow_bits];
-    white[dst] = lut[alpha16 + white_bits];
+  ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
+    yellow[row * kLaneImageWidth + col] = lut[alpha16 + yellow_bits];
+    white[row * kLaneImageWidth + col] = lut[alpha16 + white_bits];
   });
 }
 
-template <class Visit>
-void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
+void LaneDetector::FindLineSquares() {
   const LaneDetectorTables& tables = *tables_;
-  const std::uint8_t* classes = classes_.data();
-  const std::uint32_t* pixel_src = tables.pixel_src_.data();
-  const std::uint32_t* pixel_dst = tables.pixel_dst_.data();
-  const std::uint16_t* pixel_lut = tables.pixel_lut_.data();
-  const std::uint32_t* square_start = tables.square_start_.data();
-  constexpr int stride = kClassStride;
   constexpr int kWords = LaneDetectorTables::kLineWords;
-  const auto visit_squares = [&](std::uint32_t begin, std::uint32_t end) {
-    for (std::uint32_t i = begin; i < end; ++i) {
-      // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
-      // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
-      // products land on distinct bits, so nothing carries into bits 24-27)
-      const std::uint8_t* p = classes + pixel_src[i];
-      std::uint16_t top, bottom;
-      std::memcpy(&top, p, sizeof top);
-      std::memcpy(&bottom, p + stride, sizeof bottom);
-      const std::uint32_t quad = LittleEndianPair(top) | (LittleEndianPair(bottom) << 16);
-      constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
-      const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
-      const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
-      visit(pixel_dst[i], pixel_lut[i], yellow_bits, white_bits);
-    }
-  };
+  line_squares_.clear();
   // Per top row t of the squares: a square whose left column is c holds a line pixel if column c
   // or c + 1 of row t or t + 1 does, so the left columns to visit are the bits of
   // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares.
   for (const LaneDetectorTables::SquareRow& row : tables.square_rows_) {
     const std::uint64_t* a = line_bits_.data() + row.t * kWords;
     const std::uint64_t* b = a + kWords;
-    const std::uint32_t* starts = square_start + row.t * stride;
+    const std::uint32_t* starts = tables.square_start_.data() + row.t * kClassStride;
     for (std::uint32_t w = row.word_begin; w < row.word_end; ++w) {
       const std::uint64_t x = a[w] | b[w];
       const std::uint64_t next = w + 1 < kWords ? a[w + 1] | b[w + 1] : 0;
@@ -720,9 +700,37 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) const {
       while (s != 0) {
         const int lo = std::countr_zero(s);
         const int hi = lo + std::countr_one(s >> lo);
-        visit_squares(starts[64 * w + lo], starts[64 * w + hi]);
+        line_squares_.push_back({starts[64 * w + lo], starts[64 * w + hi]});
         s = hi == 64 ? 0 : s & (~0ull << hi);
       }
+    }
+  }
+}
+
+template <class Visit>
+void LaneDetector::ForEachWarpedLinePixel(Visit visit) {
+  FindLineSquares();
+  const std::uint8_t* classes = classes_.data();
+  const std::uint64_t* pixels = tables_->pixels_.data();
+  using WarpPixel = LaneDetectorTables::WarpPixel;
+  constexpr int stride = kClassStride;
+  for (const auto& [begin, end] : line_squares_) {
+    for (std::uint32_t i = begin; i < end; ++i) {
+      // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
+      // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
+      // products land on distinct bits, so nothing carries into bits 24-27)
+      const std::uint64_t pixel = pixels[i];
+      const std::uint8_t* p = classes + (pixel & 0xFFFFFu);
+      std::uint16_t top, bottom;
+      std::memcpy(&top, p, sizeof top);
+      std::memcpy(&bottom, p + stride, sizeof bottom);
+      const std::uint32_t quad = LittleEndianPair(top) | (LittleEndianPair(bottom) << 16);
+      constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
+      const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
+      const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
+      visit(static_cast<int>((pixel >> WarpPixel::kRowShift) & 0x1FFu),
+            static_cast<int>((pixel >> WarpPixel::kColShift) & 0x3FFu),
+            static_cast<int>(pixel >> WarpPixel::kLutShift), yellow_bits, white_bits);
     }
   }
 }
@@ -741,17 +749,16 @@ void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClas
 
 void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
   *sums = BirdsEyeRowSums{};
-  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, std::uint32_t dst) {
-    const std::uint32_t row = dst / kLaneImageWidth;
+  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, int row, int col) {
     ++rows[row].count;
-    rows[row].col_sum += dst - row * kLaneImageWidth;
+    rows[row].col_sum += col;
   };
   if (classes == BirdsEyeClasses::kNonZero) {
     // counting the non-zero outputs where ComputeMasks writes them
     const std::uint8_t* lut = tables_->warp_lut_.data();
-    ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
-      if (lut[alpha16 + yellow_bits] != 0) add(sums->yellow, dst);
-      if (lut[alpha16 + white_bits] != 0) add(sums->white, dst);
+    ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
+      if (lut[alpha16 + yellow_bits] != 0) add(sums->yellow, row, col);
+      if (lut[alpha16 + white_bits] != 0) add(sums->white, row, col);
     });
     return;
   }
@@ -760,13 +767,13 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
   // beside both colours looks up the 256 KB one.
   const std::uint8_t* lut = tables_->exact_lut_.data();
   const std::uint8_t* single = tables_->exact_single_lut_.data();
-  ForEachWarpedLinePixel([&](std::uint32_t dst, int alpha16, int yellow_bits, int white_bits) {
+  ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
     const std::uint8_t cls = white_bits == 0 ? single[alpha16 + yellow_bits] & 3
                              : yellow_bits == 0
                                  ? single[alpha16 + white_bits] >> 2
                                  : lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
-    if (cls == 1) add(sums->yellow, dst);
-    if (cls == 2) add(sums->white, dst);
+    if (cls == 1) add(sums->yellow, row, col);
+    if (cls == 2) add(sums->white, row, col);
   });
 }
 

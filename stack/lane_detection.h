@@ -457,13 +457,20 @@ class LaneDetectorTables {
   std::optional<LanePnpPose> pnp_pose_;
   // Active output pixels (whose source square touches the image), ordered by their square's top
   // left pixel in the padded class image (then by output index): the pixels of the squares whose
-  // top left is padded index p are [square_start_[p], square_start_[p + 1]).
-  std::vector<std::uint32_t> pixel_dst_;     // output index
-  std::vector<std::uint32_t> pixel_src_;     // top-left neighbour in the padded class image
-  std::vector<std::uint16_t> pixel_lut_;     // alpha · 16
+  // top left is padded index p are pixels_[square_start_[p], square_start_[p + 1]).
+  // One word per pixel, read with one load: bits 0-19 the top-left neighbour in the padded class
+  // image, 20-28 the output row, 29-38 the output column, 39-52 the alpha index · 16.
+  struct WarpPixel {
+    static constexpr int kRowShift = 20, kColShift = 29, kLutShift = 39;
+    static std::uint64_t Pack(std::uint32_t src, int row, int col, int lut) {
+      return src | (std::uint64_t(row) << kRowShift) | (std::uint64_t(col) << kColShift) |
+             (std::uint64_t(lut) << kLutShift);
+    }
+  };
+  std::vector<std::uint64_t> pixels_;
   std::vector<std::uint32_t> square_start_;  // (kLaneImageHeight + 1) · kClassStride + 1
   std::vector<SquareRow> square_rows_;
-  std::vector<SourceSpan> spans_;         // the source pixels the warp reads
+  std::vector<SourceSpan> spans_;  // the source pixels the warp reads
 };
 
 // The line classes of a source image (LaneDetectorTables::ClassOf of each pixel's colour), as a
@@ -574,11 +581,13 @@ class LaneDetector {
   // The classes of the source pixels into classes_, and the line bits from them.
   void Classify(const cv::Mat& bgr);
   void FindLinePixels();  // line_bits_ from classes_
-  // The warp over classes_: visit(output index, alpha index · 16, yellow bits, white bits) for
-  // each output pixel with a line pixel among its four source pixels (the others stay 0, the
+  // The warp over classes_: visit(output row, column, alpha index · 16, yellow bits, white bits)
+  // for each output pixel with a line pixel among its four source pixels (the others stay 0, the
   // border value); bit k of the bits: neighbour k (top left, top right, bottom left, bottom right).
   template <class Visit>
-  void ForEachWarpedLinePixel(Visit visit) const;
+  void ForEachWarpedLinePixel(Visit visit);
+  // line_squares_ from line_bits_: the ranges of pixels_ whose square holds a line pixel.
+  void FindLineSquares();
   // The row sums of the bird's-eye masks, from classes_.
   void SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes);
 
@@ -588,6 +597,7 @@ class LaneDetector {
   // words outside the spans stay 0).
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint64_t> line_bits_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> line_squares_;
   BirdsEyeRowSums sums_;
 };
 
