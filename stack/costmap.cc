@@ -236,6 +236,9 @@ void Inflation::Apply(Costmap2D* grid) const {
   const int nx = grid->size_x_cells();
   const int ny = grid->size_y_cells();
   std::vector<std::uint8_t>& costs = grid->mutable_costs();
+  // Only LETHAL cells inflate: a grid without one (a rolling window with nothing in it, most of
+  // the time) is left as it is.
+  if (std::find(costs.begin(), costs.end(), kLethalObstacle) == costs.end()) return;
   const int far = cell_radius_ + 1;  // "no obstacle within the radius"
 
   std::vector<int> column_distance(costs.size());

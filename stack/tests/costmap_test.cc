@@ -149,6 +149,11 @@ TEST(CostmapInflationTest, InflationOfASparseWindowEqualsBruteForce) {
   ExpectInflationEqualsBruteForce(100, 100, 20, 12, 6);
 }
 
+TEST(CostmapInflationTest, AGridWithoutALethalCellIsLeftAsItIs) {
+  // lower costs and unknown cells only: nothing inflates (Apply returns early on such a grid)
+  ExpectInflationEqualsBruteForce(40, 30, 40, 30, 0);
+}
+
 // --- obstacle layer ----------------------------------------------------------------------------
 
 TEST(CostmapObstacleLayerTest, MarksLethalAndClearFree) {
