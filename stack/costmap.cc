@@ -96,6 +96,35 @@ class RowEnvelope {
   std::vector<std::int64_t> first_x_;
 };
 
+// Per cell, the distance in cells to the nearest LETHAL cell of its column, capped at `far`: a pass
+// down and a pass up each column, run a row at a time for all columns together, so that both read
+// and write the grid in memory order (column by column, each step strides a whole row: that was
+// most of the global costmap's inflation at start, issue 38). The same integers either way.
+std::vector<int> ColumnDistances(const std::vector<std::uint8_t>& costs, int nx, int ny, int far) {
+  std::vector<int> distance(costs.size());
+  std::vector<int> running(static_cast<std::size_t>(nx), far);
+  for (int y = 0; y < ny; ++y) {
+    const std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
+    int* row_distance = distance.data() + static_cast<std::size_t>(y) * nx;
+    for (int x = 0; x < nx; ++x) {
+      int& d = running[static_cast<std::size_t>(x)];
+      d = row_costs[x] == kLethalObstacle ? 0 : std::min(d + 1, far);
+      row_distance[x] = d;
+    }
+  }
+  std::fill(running.begin(), running.end(), far);
+  for (int y = ny - 1; y >= 0; --y) {
+    const std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
+    int* row_distance = distance.data() + static_cast<std::size_t>(y) * nx;
+    for (int x = 0; x < nx; ++x) {
+      int& d = running[static_cast<std::size_t>(x)];
+      d = row_costs[x] == kLethalObstacle ? 0 : std::min(d + 1, far);
+      row_distance[x] = std::min(row_distance[x], d);
+    }
+  }
+  return distance;
+}
+
 }  // namespace
 
 // --- Costmap2D ---------------------------------------------------------------------------------
@@ -241,21 +270,7 @@ void Inflation::Apply(Costmap2D* grid) const {
   if (std::find(costs.begin(), costs.end(), kLethalObstacle) == costs.end()) return;
   const int far = cell_radius_ + 1;  // "no obstacle within the radius"
 
-  std::vector<int> column_distance(costs.size());
-  for (int x = 0; x < nx; ++x) {
-    int d = far;
-    for (int y = 0; y < ny; ++y) {
-      const std::size_t i = static_cast<std::size_t>(y) * nx + x;
-      d = costs[i] == kLethalObstacle ? 0 : std::min(d + 1, far);
-      column_distance[i] = d;
-    }
-    d = far;
-    for (int y = ny - 1; y >= 0; --y) {
-      const std::size_t i = static_cast<std::size_t>(y) * nx + x;
-      d = costs[i] == kLethalObstacle ? 0 : std::min(d + 1, far);
-      column_distance[i] = std::min(column_distance[i], d);
-    }
-  }
+  const std::vector<int> column_distance = ColumnDistances(costs, nx, ny, far);
 
   // Per row, only the columns with an obstacle within the radius along their column count (most
   // of a rolling window is free): the least dx² + g² over them, by their parabolas' lower envelope.

@@ -252,6 +252,7 @@ struct LaneDetectionParams {
   // A known threshold set, finite warp points forming a proper quadrilateral, counts >= 0,
   // line_min_px <= yellow_min_px, step > 0, shift >= 0, at least one anchor row and repeat.
   void Validate() const;
+  bool operator==(const LaneDetectionParams&) const = default;
 };
 
 // The message (reference §5): 30 × (float32 x, y) in base_link + uint64 valid = 248 bytes.

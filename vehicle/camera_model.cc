@@ -1,5 +1,6 @@
 #include "vehicle/camera_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -191,15 +192,36 @@ Eigen::Isometry3d CameraModel::X_map_camera(const world::Pose2& X_map_car) const
   return Lift(X_map_car) * X_base_camera_;
 }
 
-std::optional<Eigen::Vector2d> CameraModel::NormalizedRay(double u, double v) const {
+Eigen::Vector2d CameraModel::DistortedRay(double u, double v) const {
   const auto& K = params_.K;
   const double yd = (v - K[5]) / K[4];
   const double xd = (u - K[2] - K[1] * yd) / K[0];
-  const Eigen::Vector2d target(xd, yd);
+  return {xd, yd};
+}
+
+std::optional<Eigen::Vector2d> CameraModel::WithinModel(
+    const std::optional<Eigen::Vector2d>& ray) const {
+  if (!ray || ray->squaredNorm() > max_radius_sq_) return std::nullopt;
+  return ray;
+}
+
+std::optional<Eigen::Vector2d> CameraModel::NormalizedRay(double u, double v) const {
+  const Eigen::Vector2d target = DistortedRay(u, v);
   if (!distort_) return target;
-  const std::optional<Eigen::Vector2d> x = world::Undistort(params_.D, target);
-  if (!x || x->squaredNorm() > max_radius_sq_) return std::nullopt;
-  return x;
+  return WithinModel(world::Undistort(params_.D, target));
+}
+
+void CameraModel::NormalizedRaysOfRow(int v,
+                                      std::vector<std::optional<Eigen::Vector2d>>* rays) const {
+  std::vector<Eigen::Vector2d> targets(static_cast<std::size_t>(width()));
+  for (int u = 0; u < width(); ++u) targets[static_cast<std::size_t>(u)] = DistortedRay(u, v);
+  rays->resize(targets.size());
+  if (!distort_) {
+    std::copy(targets.begin(), targets.end(), rays->begin());
+    return;
+  }
+  world::UndistortAll(params_.D, targets, *rays);
+  for (std::optional<Eigen::Vector2d>& ray : *rays) ray = WithinModel(ray);
 }
 
 std::optional<Eigen::Vector2d> CameraModel::Project(const Eigen::Vector3d& p_camera) const {

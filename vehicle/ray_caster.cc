@@ -251,10 +251,12 @@ void CameraRays::ComputePixelRays() {
     v->resize(n);
   }
   floor_depth_mm_.resize(n);
+  std::vector<std::optional<Eigen::Vector2d>> rays;
   for (int v = 0; v < height_; ++v) {
+    camera_.NormalizedRaysOfRow(v, &rays);
     for (int u = 0; u < width_; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-      const std::optional<Eigen::Vector2d> ray = camera_.NormalizedRay(u, v);
+      const std::optional<Eigen::Vector2d>& ray = rays[static_cast<std::size_t>(u)];
       Require(ray.has_value(), [&] {
         return params.name + ": the lens distortion D cannot be inverted at pixel (" +
                std::to_string(u) + ", " + std::to_string(v) + ")";

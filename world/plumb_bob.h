@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <optional>
+#include <span>
 
 namespace autonomsim::world {
 
@@ -17,6 +18,13 @@ Eigen::Vector2d Distort(const PlumbBob& D, const Eigen::Vector2d& undistorted);
 // Distorted → undistorted, by Newton's method from the distorted point (the distortion is mild
 // near the axis); nullopt where it does not converge or crosses a fold of the model.
 std::optional<Eigen::Vector2d> Undistort(const PlumbBob& D, const Eigen::Vector2d& distorted);
+
+// Undistort of every point of `distorted` into `undistorted` (of the same size; else
+// std::invalid_argument), bit for bit, several points at a time: each point's iterations are a
+// chain of dependent square roots and divisions, and independent points side by side let the
+// processor overlap them (a camera's ray table, 307 k points, in ~half the time: issue 38).
+void UndistortAll(const PlumbBob& D, std::span<const Eigen::Vector2d> distorted,
+                  std::span<std::optional<Eigen::Vector2d>> undistorted);
 
 // Whether the radial factor r · (1 + k1 r² + k2 r⁴ + k3 r⁶) still grows at r² = r2: beyond the
 // first radius where it stops, the model no longer describes a lens.

@@ -215,16 +215,17 @@ stack::LanePoints Report(const LaneParams& params, stack::LanePoints lanes, Time
 TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig& config,
                                         const std::map<std::string, NodeMappingConfig>& mapping,
                                         const SensorSuite& sensors, TopicId<CameraFrame> image,
+                                        LaneTablesCache& lane_tables,
                                         std::function<void(const stack::LanePoints&, Time)> hook) {
   // depth 1: the LaneController subscribes with depth 1 (autonomros_lane_detection/src/
   // lane_controller.cpp:179); the ROS 2 lane detector publishes with depth 1
   // (lane_detector.cpp:31-32)
   const auto lanes = graph.AddTopic<stack::LanePoints>(
       {.name = kLanePointsTopic, .type = msg::LanePoints(), .depth = 1});
-  LaneParams params{.tables = std::make_shared<const stack::LaneDetectorTables>(
-                        config.lane_detection, LaneCalibration(sensors.color_camera().model())),
-                    .reads = nullptr,
-                    .hook = std::move(hook)};
+  LaneParams params{
+      .tables = lane_tables.Get(config.lane_detection, sensors.color_camera().model()),
+      .reads = nullptr,
+      .hook = std::move(hook)};
   params.reads = std::make_shared<const vehicle::RowSpans>(
       LaneDetectorReads(*params.tables, sensors.color_camera().model().height()));
   params.line_class = LaneLineClass(params.tables);
@@ -301,14 +302,26 @@ stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera)
   return calibration;
 }
 
+std::shared_ptr<const stack::LaneDetectorTables> LaneTablesCache::Get(
+    const stack::LaneDetectionParams& params, const vehicle::CameraModel& camera) {
+  for (const Built& built : built_) {
+    if (built.params == params && built.camera == camera.params()) return built.tables;
+  }
+  auto tables = std::make_shared<const stack::LaneDetectorTables>(params, LaneCalibration(camera));
+  built_.push_back(Built{params, camera.params(), tables});
+  return tables;
+}
+
 PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
                                     const std::map<std::string, NodeMappingConfig>& mapping,
                                     const SensorSuite& sensors, TopicId<CameraFrame> image,
-                                    TopicId<CameraFrame> depth_image, PerceptionHooks hooks) {
+                                    TopicId<CameraFrame> depth_image, LaneTablesCache& lane_tables,
+                                    PerceptionHooks hooks) {
   PerceptionTopics topics;
   topics.obstacles =
       AddObstacleNodes(graph, config, mapping, sensors, depth_image, std::move(hooks.on_grid));
-  topics.lanes = AddLaneNodes(graph, config, mapping, sensors, image, std::move(hooks.on_lanes));
+  topics.lanes =
+      AddLaneNodes(graph, config, mapping, sensors, image, lane_tables, std::move(hooks.on_lanes));
   return topics;
 }
 

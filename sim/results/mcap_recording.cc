@@ -5,12 +5,12 @@
 
 #include <Eigen/Geometry>
 #include <array>
-#include <opencv2/imgcodecs.hpp>
 #include <utility>
 
 #include "sim/car/perception_config.h"
 #include "sim/car/stack_config.h"
 #include "sim/car/stack_messages.h"
+#include "sim/results/image_encoding.h"
 #include "stack/controller_server.h"
 #include "stack/lane_detection.h"
 #include "stack/localization_ekf.h"
@@ -297,7 +297,7 @@ void McapRecording::TapCameras(CarTaps& car, NodeGraph& graph, const SensorSuite
         mat = cv::Mat(car.depth.height, car.depth.width, CV_16UC1, car.depth.mm.data());
       }
       if (options_.png_images) {
-        cv::imencode(".png", mat, car.png);
+        car.png = EncodePng(mat);
         Write(*image, now,
               [&](mcap::CdrWriter& w) { ros2::EncodeCompressedImage(w, header, "png", car.png); });
         return;

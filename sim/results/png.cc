@@ -1,24 +1,22 @@
 #include "sim/results/png.h"
 
 #include <cstdint>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "sim/core/files.h"
+#include "sim/results/image_encoding.h"
 
 namespace autonomsim::sim {
 
 void WritePng(const std::filesystem::path& file, const cv::Mat& image) {
   std::vector<std::uint8_t> png;
-  bool encoded = false;
   try {
-    encoded = cv::imencode(".png", image, png);
-  } catch (const cv::Exception& e) {
+    png = EncodePng(image);
+  } catch (const std::runtime_error& e) {
     throw OutputError("cannot write " + file.string() + ": " + e.what());
   }
-  if (!encoded) throw OutputError("cannot write " + file.string() + ": PNG encoding failed");
   WriteFile(file, std::string(png.begin(), png.end()));
 }
 

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <map>
 #include <numbers>
-#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <string_view>
 
@@ -15,6 +14,7 @@
 #include "sim/core/files.h"
 #include "sim/core/random.h"
 #include "sim/results/camera_views.h"
+#include "sim/results/image_encoding.h"
 #include "sim/results/report/report_assets.h"
 #include "sim/results/scene_views.h"
 #include "sim/results/track_figure.h"
@@ -50,13 +50,12 @@ std::string Base64(const std::vector<std::uint8_t>& bytes) {
   return out;
 }
 
+// The camera views' JPEG quality: the page's size against the pictures' artefacts.
+constexpr int kReportJpegQuality = 88;
+
 std::string DataUrl(const cv::Mat& image, const std::string& format) {
-  std::vector<std::uint8_t> bytes;
-  const std::vector<int> params =
-      format == "jpeg" ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, 88} : std::vector<int>{};
-  if (!cv::imencode(format == "jpeg" ? ".jpg" : ".png", image, bytes, params)) {
-    throw std::runtime_error("report: cannot encode an image as " + format);
-  }
+  const std::vector<std::uint8_t> bytes =
+      format == "jpeg" ? EncodeJpeg(image, kReportJpegQuality) : EncodePng(image);
   return "data:image/" + format + ";base64," + Base64(bytes);
 }
 

@@ -154,6 +154,30 @@ TEST(CameraModelTest, NormalizedRayInvertsProjectOverTheWholeImage) {
   EXPECT_LT(worst, 1e-9);
 }
 
+// The ray table is built a row at a time (CameraRays): the same bits as pixel by pixel, with the
+// lens and without it, and where a wide lens's model folds (nullopt) as well.
+TEST(CameraModelTest, NormalizedRaysOfARowAreThoseOfItsPixels) {
+  CameraParams wide = ColorCameraParams();
+  wide.K[0] = wide.K[4] = 150.0;  // a wider view reaches beyond the model's monotone range
+  for (const CameraParams& params : {ColorCameraParams(), DepthCameraParams(), wide}) {
+    const CameraModel camera(params);
+    std::vector<std::optional<Eigen::Vector2d>> rays;
+    for (int v = 0; v < camera.height(); v += 3) {
+      camera.NormalizedRaysOfRow(v, &rays);
+      ASSERT_EQ(rays.size(), static_cast<std::size_t>(camera.width()));
+      for (int u = 0; u < camera.width(); ++u) {
+        const auto ray = camera.NormalizedRay(u, v);
+        const auto& of_row = rays[static_cast<std::size_t>(u)];
+        ASSERT_EQ(of_row.has_value(), ray.has_value()) << params.name << " " << u << "," << v;
+        if (ray) {
+          ASSERT_EQ(of_row->x(), ray->x()) << params.name << " " << u << "," << v;
+          ASSERT_EQ(of_row->y(), ray->y()) << params.name << " " << u << "," << v;
+        }
+      }
+    }
+  }
+}
+
 TEST(CameraModelTest, NothingBehindTheCameraProjects) {
   const CameraModel camera(DepthCameraParams());
   EXPECT_FALSE(camera.Project({0.0, 0.0, -1.0}).has_value());
