@@ -29,6 +29,9 @@ packages=(
   # with llvmpipe, which renders without a GPU or a display (EGL_PLATFORM_SURFACELESS_MESA)
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   libzstd-dev zlib1g-dev  # sim/mcap: zstd chunks and CRC-32 (zlib's crc32) in MCAP recordings
+  # track.png and the report's pictures: written with libpng and libjpeg directly (OpenCV's
+  # imgcodecs loads some 130 libraries before main; sim/results/image_encoding.h)
+  libpng-dev libjpeg-dev
 )
 
 missing=()
