@@ -540,19 +540,6 @@ void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   for (int r = 0; r < H; ++r) {
     if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
   }
-  // The words of each padded row the spans reach; a square row t reads rows t and t + 1. (A
-  // square's left column lies in one of its rows' spans: they were widened to hold it.)
-  std::vector<std::pair<int, int>> words(H + 2, {kLineWords, 0});
-  for (const SourceSpan& span : spans_) {
-    words[span.row + 1] = {(span.col_begin + 1) / 64, span.col_end / 64 + 1};
-  }
-  for (int t = 0; t <= H; ++t) {
-    const int begin = std::min(words[t].first, words[t + 1].first);
-    const int end = std::max(words[t].second, words[t + 1].second);
-    if (begin >= end) continue;
-    square_rows_.push_back({static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(begin),
-                            static_cast<std::uint32_t>(end)});
-  }
 }
 
 std::uint8_t LaneDetectorTables::ClassOf(std::uint8_t blue, std::uint8_t green,
@@ -581,6 +568,7 @@ LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
   classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2) + 64, 0);
   line_bits_.assign(
       static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2), 0);
+  line_words_.assign(kLaneImageHeight + 2, 0);
 }
 
 ClassImageRegion LaneDetector::MutableClassRegion() {
@@ -656,13 +644,16 @@ void LaneDetector::FindLinePixels() {
     const std::uint8_t* in = classes_.data() + padded_row * kClassStride;
     std::uint64_t* bits = line_bits_.data() + padded_row * kWords;
     const int begin = span.col_begin + 1, end = span.col_end + 1;  // padded columns
+    std::uint16_t words = 0;
     for (int w = begin / 64; w <= (end - 1) / 64; ++w) {
       // 64 bytes from the word's first column: the row's, and beyond its end the next row's (the
       // padded image has a row below the last span's and 64 bytes more), masked off
       const int lo = std::max(begin - 64 * w, 0), hi = std::min(end - 64 * w, 64);
       const std::uint64_t keep = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
       bits[w] = NonZeroBytes64(in + 64 * w) & keep;
+      words |= static_cast<std::uint16_t>(bits[w] != 0) << w;
     }
+    line_words_[static_cast<std::size_t>(padded_row)] = words;
   }
 }
 
@@ -688,12 +679,16 @@ void LaneDetector::FindLineSquares() {
   line_squares_.clear();
   // Per top row t of the squares: a square whose left column is c holds a line pixel if column c
   // or c + 1 of row t or t + 1 does, so the left columns to visit are the bits of
-  // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares.
-  for (const LaneDetectorTables::SquareRow& row : tables.square_rows_) {
-    const std::uint64_t* a = line_bits_.data() + row.t * kWords;
+  // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares. Only the
+  // words of x that hold a bit, and those before them (the bit that s carries over), are read.
+  for (std::uint32_t t = 0; t <= static_cast<std::uint32_t>(kLaneImageHeight); ++t) {
+    const unsigned x_words = line_words_[t] | line_words_[t + 1];
+    if (x_words == 0) continue;
+    const std::uint64_t* a = line_bits_.data() + t * kWords;
     const std::uint64_t* b = a + kWords;
-    const std::uint32_t* starts = tables.square_start_.data() + row.t * kClassStride;
-    for (std::uint32_t w = row.word_begin; w < row.word_end; ++w) {
+    const std::uint32_t* starts = tables.square_start_.data() + t * kClassStride;
+    for (unsigned words = x_words | (x_words >> 1); words != 0; words &= words - 1) {
+      const int w = std::countr_zero(words);
       const std::uint64_t x = a[w] | b[w];
       const std::uint64_t next = w + 1 < kWords ? a[w + 1] | b[w + 1] : 0;
       std::uint64_t s = x | (x >> 1) | (next << 63);

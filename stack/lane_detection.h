@@ -425,12 +425,7 @@ class LaneDetectorTables {
   // The class image's line pixels as bits: a row of kLineWords words per padded row, bit c of a
   // row's words for padded column c.
   static constexpr int kLineWords = (kClassStride + 63) / 64;
-  // The source squares' top rows t (padded) whose squares may hold a line pixel, with the words of
-  // rows t and t + 1 that the spans reach.
-  struct SquareRow {
-    std::uint32_t t;
-    std::uint32_t word_begin, word_end;
-  };
+  static_assert(kLineWords <= 16, "a row's words with a line pixel are one 16-bit mask");
   struct WarpSource;  // each output pixel's source pixel and bilinear weights (the constructor's)
   // The active output pixels (whose source square touches the image) in the order of their
   // squares, and the source spans they read.
@@ -470,8 +465,7 @@ class LaneDetectorTables {
   };
   std::vector<std::uint64_t> pixels_;
   std::vector<std::uint32_t> square_start_;  // (kLaneImageHeight + 1) · kClassStride + 1
-  std::vector<SquareRow> square_rows_;
-  std::vector<SourceSpan> spans_;  // the source pixels the warp reads
+  std::vector<SourceSpan> spans_;            // the source pixels the warp reads
 };
 
 // The line classes of a source image (LaneDetectorTables::ClassOf of each pixel's colour), as a
@@ -598,6 +592,7 @@ class LaneDetector {
   // words outside the spans stay 0).
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint64_t> line_bits_;
+  std::vector<std::uint16_t> line_words_;  // per padded row: bit w, word w holds a line pixel
   std::vector<std::pair<std::uint32_t, std::uint32_t>> line_squares_;
   BirdsEyeRowSums sums_;
 };
