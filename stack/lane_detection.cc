@@ -621,10 +621,14 @@ namespace {
 std::uint64_t NonZeroBytes64(const std::uint8_t* in) {
 #if defined(__SSE2__)
   const __m128i zero = _mm_setzero_si128();
+  __m128i v[4];
+  for (int k = 0; k < 4; ++k) v[k] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 16 * k));
+  // most of the 64 bytes are 0 most of the time: one test for them all first
+  const __m128i any = _mm_or_si128(_mm_or_si128(v[0], v[1]), _mm_or_si128(v[2], v[3]));
+  if (_mm_movemask_epi8(_mm_cmpeq_epi8(any, zero)) == 0xFFFF) return 0;
   std::uint64_t bits = 0;
   for (int k = 0; k < 4; ++k) {
-    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 16 * k));
-    const auto zeros = static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(v, zero)));
+    const auto zeros = static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(v[k], zero)));
     bits |= static_cast<std::uint64_t>(~zeros & 0xFFFFu) << (16 * k);
   }
   return bits;
