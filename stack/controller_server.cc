@@ -145,9 +145,8 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
 
 CostQuery LocalCostmapCost(std::shared_ptr<const Costmap2D> costmap,
                            const world::Pose2& X_map_odom) {
-  return [costmap = std::move(costmap), X_map_odom](const world::Vec2& p_map) {
-    return costmap->CostAt(OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0}).position());
-  };
+  return [costmap = std::move(costmap), to_odom = OdomPointFromMap(X_map_odom)](
+             const world::Vec2& p_map) { return costmap->CostAt(to_odom(p_map)); };
 }
 
 }  // namespace autonomsim::stack

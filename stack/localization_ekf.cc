@@ -140,12 +140,19 @@ world::Pose2 MapFromOdom(const world::Pose2& X_map_odom, const world::Pose2& X_o
 }
 
 world::Pose2 OdomFromMap(const world::Pose2& X_map_odom, const world::Pose2& X_map_base) {
-  const double c = std::cos(X_map_odom.yaw_rad);
-  const double s = std::sin(X_map_odom.yaw_rad);
-  const double dx = X_map_base.x_m - X_map_odom.x_m;
-  const double dy = X_map_base.y_m - X_map_odom.y_m;
-  return {c * dx + s * dy, -s * dx + c * dy,
-          world::WrapAngle(X_map_base.yaw_rad - X_map_odom.yaw_rad)};
+  const world::Vec2 p_odom = OdomPointFromMap(X_map_odom)(X_map_base.position());
+  return {p_odom.x(), p_odom.y(), world::WrapAngle(X_map_base.yaw_rad - X_map_odom.yaw_rad)};
+}
+
+OdomPointFromMap::OdomPointFromMap(const world::Pose2& X_map_odom)
+    : p_map_odom_(X_map_odom.position()),
+      c_(std::cos(X_map_odom.yaw_rad)),
+      s_(std::sin(X_map_odom.yaw_rad)) {}
+
+world::Vec2 OdomPointFromMap::operator()(const world::Vec2& p_map) const {
+  const double dx = p_map.x() - p_map_odom_.x();
+  const double dy = p_map.y() - p_map_odom_.y();
+  return {c_ * dx + s_ * dy, -s_ * dx + c_ * dy};
 }
 
 LocalizationEkfState InitialLocalizationEkfState(const LocalizationEkfParams& params, Time start,

@@ -19,6 +19,7 @@ namespace {
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using world::Pose2;
+using world::Vec2;
 
 // The real car's start pose (reference §1).
 const Pose2 kStart{0.96, -2.18, 0.0};
@@ -135,6 +136,28 @@ TEST(LocalizationEkfTest, MapOdomHelpersAreInverse) {
   EXPECT_NEAR(back.x_m, 1.0, 1e-12);
   EXPECT_NEAR(back.y_m, 0.5, 1e-12);
   EXPECT_NEAR(back.yaw_rad, -0.2, 1e-12);
+}
+
+TEST(LocalizationEkfTest, OdomPointFromMapIsOdomFromMapsPositionBitForBit) {
+  // The collision check's cost query maps thousands of cells with one OdomPointFromMap; the
+  // results must be the very doubles of the per-point formula it replaced (one sincos each).
+  for (const double yaw : {0.0, 0.7, -2.9, 3.14159, 1e-9, -1.5707963267948966}) {
+    const Pose2 X_map_odom{0.96, -2.18, yaw};
+    const OdomPointFromMap to_odom(X_map_odom);
+    for (int k = 0; k < 50; ++k) {
+      const Vec2 p_map(-3.0 + 0.137 * k, 5.0 - 0.291 * k);
+      const Vec2 p_odom = to_odom(p_map);
+      const double c = std::cos(yaw);
+      const double s = std::sin(yaw);
+      const double dx = p_map.x() - 0.96;
+      const double dy = p_map.y() - -2.18;
+      EXPECT_EQ(p_odom.x(), c * dx + s * dy) << yaw << " " << k;
+      EXPECT_EQ(p_odom.y(), -s * dx + c * dy) << yaw << " " << k;
+      const Pose2 X_odom_p = OdomFromMap(X_map_odom, {p_map.x(), p_map.y(), 0.0});
+      EXPECT_EQ(p_odom.x(), X_odom_p.x_m);
+      EXPECT_EQ(p_odom.y(), X_odom_p.y_m);
+    }
+  }
 }
 
 TEST(LocalizationEkfTest, StartsAtTheOdomOriginWithMapOdomAtTheStartPose) {
