@@ -527,9 +527,10 @@ void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   std::partial_sum(square_start_.begin(), square_start_.end(), square_start_.begin());
   const std::size_t n = square_start_.back();
   pixels_.resize(n);
-  static_assert(kLaneImageHeight <= 512 && kLaneImageWidth <= 1024 &&
-                (kLaneImageHeight + 2) * kClassStride <= (1 << 20) &&
-                kAlphaCount * 16 <= (1 << 14));
+  static_assert(kLaneImageHeight <= (1 << WarpPixel::kRowBits) &&
+                kLaneImageWidth <= (1 << WarpPixel::kColBits) &&
+                (kLaneImageHeight + 2) * kClassStride <= (1 << WarpPixel::kSrcBits) &&
+                WarpPixel::kAlpha16Shift + 14 <= 64 && kAlphaCount * 16 <= (1 << 14));
   std::vector<std::uint32_t> next(square_start_.begin(), square_start_.end() - 1);
   for (int i = 0; i < W * H; ++i) {
     if (!active(i)) continue;
@@ -565,7 +566,7 @@ LaneDetector::LaneDetector(const LaneDetectionParams& params, const LaneCameraCa
 LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
     : tables_(std::move(tables)) {
   Require(tables_ != nullptr, "LaneDetector needs its tables");
-  classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2) + 64, 0);
+  classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2), 0);
   line_bits_.assign(
       static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2), 0);
   line_words_.assign(kLaneImageHeight + 2, 0);
@@ -651,7 +652,8 @@ void LaneDetector::FindLinePixels() {
     std::uint16_t words = 0;
     for (int w = begin / 64; w <= (end - 1) / 64; ++w) {
       // 64 bytes from the word's first column: the row's, and beyond its end the next row's (the
-      // padded image has a row below the last span's and 64 bytes more), masked off
+      // padded image has a row below the last span's, and 64 · kLineWords <= kClassStride + 63),
+      // masked off
       const int lo = std::max(begin - 64 * w, 0), hi = std::min(end - 64 * w, 64);
       const std::uint64_t keep = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
       bits[w] = NonZeroBytes64(in + 64 * w) & keep;
@@ -680,11 +682,12 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
 void LaneDetector::FindLineSquares() {
   const LaneDetectorTables& tables = *tables_;
   constexpr int kWords = LaneDetectorTables::kLineWords;
-  line_squares_.clear();
+  line_pixel_ranges_.clear();
   // Per top row t of the squares: a square whose left column is c holds a line pixel if column c
   // or c + 1 of row t or t + 1 does, so the left columns to visit are the bits of
   // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares. Only the
-  // words of x that hold a bit, and those before them (the bit that s carries over), are read.
+  // words of x that hold a bit, and those before them (the bit that s carries over), are scanned
+  // (each with the word after it, for that bit).
   for (std::uint32_t t = 0; t <= static_cast<std::uint32_t>(kLaneImageHeight); ++t) {
     const unsigned x_words = line_words_[t] | line_words_[t + 1];
     if (x_words == 0) continue;
@@ -699,7 +702,10 @@ void LaneDetector::FindLineSquares() {
       while (s != 0) {
         const int lo = std::countr_zero(s);
         const int hi = lo + std::countr_one(s >> lo);
-        line_squares_.push_back({starts[64 * w + lo], starts[64 * w + hi]});
+        // (a square no output pixel reads gives an empty range)
+        if (starts[64 * w + lo] != starts[64 * w + hi]) {
+          line_pixel_ranges_.push_back({starts[64 * w + lo], starts[64 * w + hi]});
+        }
         s = hi == 64 ? 0 : s & (~0ull << hi);
       }
     }
@@ -713,13 +719,13 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) {
   const std::uint64_t* pixels = tables_->pixels_.data();
   using WarpPixel = LaneDetectorTables::WarpPixel;
   constexpr int stride = kClassStride;
-  for (const auto& [begin, end] : line_squares_) {
+  for (const auto& [begin, end] : line_pixel_ranges_) {
     for (std::uint32_t i = begin; i < end; ++i) {
       // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
       // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
       // products land on distinct bits, so nothing carries into bits 24-27)
       const std::uint64_t pixel = pixels[i];
-      const std::uint8_t* p = classes + (pixel & 0xFFFFFu);
+      const std::uint8_t* p = classes + WarpPixel::Src(pixel);
       std::uint16_t top, bottom;
       std::memcpy(&top, p, sizeof top);
       std::memcpy(&bottom, p + stride, sizeof bottom);
@@ -727,9 +733,8 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) {
       constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
       const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
       const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
-      visit(static_cast<int>((pixel >> WarpPixel::kRowShift) & 0x1FFu),
-            static_cast<int>((pixel >> WarpPixel::kColShift) & 0x3FFu),
-            static_cast<int>(pixel >> WarpPixel::kLutShift), yellow_bits, white_bits);
+      visit(WarpPixel::Row(pixel), WarpPixel::Col(pixel), WarpPixel::Alpha16(pixel), yellow_bits,
+            white_bits);
     }
   }
 }

@@ -12,8 +12,8 @@
 // bird's-eye masks: LaneMasksReference (cv::cvtColor + cv::inRange + cv::warpPerspective, as the
 // real node writes it) and LaneDetector's own (per-pixel warp coordinates and OpenCV's fixed-point
 // bilinear weights precomputed once, since the homography is constant; only the source pixels the
-// warp reads are thresholded, with OpenCV's 8-bit HSV integer arithmetic; output tiles whose source
-// holds no line pixel are skipped).
+// warp reads are thresholded, with OpenCV's 8-bit HSV integer arithmetic; only the output pixels
+// whose 2×2 source square holds a line pixel are visited).
 #pragma once
 
 #include <Eigen/Core>
@@ -457,11 +457,17 @@ class LaneDetectorTables {
   // One word per pixel, read with one load: bits 0-19 the top-left neighbour in the padded class
   // image, 20-28 the output row, 29-38 the output column, 39-52 the alpha index · 16.
   struct WarpPixel {
-    static constexpr int kRowShift = 20, kColShift = 29, kLutShift = 39;
-    static std::uint64_t Pack(std::uint32_t src, int row, int col, int lut) {
+    static constexpr int kSrcBits = 20, kRowBits = 9, kColBits = 10;
+    static constexpr int kRowShift = kSrcBits, kColShift = kRowShift + kRowBits;
+    static constexpr int kAlpha16Shift = kColShift + kColBits;
+    static std::uint64_t Pack(std::uint32_t src, int row, int col, int alpha16) {
       return src | (std::uint64_t(row) << kRowShift) | (std::uint64_t(col) << kColShift) |
-             (std::uint64_t(lut) << kLutShift);
+             (std::uint64_t(alpha16) << kAlpha16Shift);
     }
+    static std::uint32_t Src(std::uint64_t w) { return w & ((1u << kSrcBits) - 1); }
+    static int Row(std::uint64_t w) { return (w >> kRowShift) & ((1u << kRowBits) - 1); }
+    static int Col(std::uint64_t w) { return (w >> kColShift) & ((1u << kColBits) - 1); }
+    static int Alpha16(std::uint64_t w) { return static_cast<int>(w >> kAlpha16Shift); }
   };
   std::vector<std::uint64_t> pixels_;
   std::vector<std::uint32_t> square_start_;  // (kLaneImageHeight + 1) · kClassStride + 1
@@ -581,7 +587,7 @@ class LaneDetector {
   // border value); bit k of the bits: neighbour k (top left, top right, bottom left, bottom right).
   template <class Visit>
   void ForEachWarpedLinePixel(Visit visit);
-  // line_squares_ from line_bits_: the ranges of pixels_ whose square holds a line pixel.
+  // line_pixel_ranges_ from line_bits_: the ranges of pixels_ whose square holds a line pixel.
   void FindLineSquares();
   // The row sums of the bird's-eye masks, from classes_.
   void SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes);
@@ -593,7 +599,7 @@ class LaneDetector {
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint64_t> line_bits_;
   std::vector<std::uint16_t> line_words_;  // per padded row: bit w, word w holds a line pixel
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> line_squares_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> line_pixel_ranges_;
   BirdsEyeRowSums sums_;
 };
 

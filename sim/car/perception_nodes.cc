@@ -176,7 +176,7 @@ struct LaneParams {
 struct LaneScratch {
   explicit LaneScratch(std::shared_ptr<const stack::LaneDetectorTables> tables)
       : detector(std::move(tables)) {}
-  stack::LaneDetector detector;  // its class image and cell index
+  stack::LaneDetector detector;  // its class image and line bits
   vehicle::ColorImage color;
   std::optional<SceneKey> last;  // the last frame's (LabelsFromScene), and its sums
   stack::BirdsEyeRowSums last_sums;

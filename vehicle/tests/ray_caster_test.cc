@@ -654,9 +654,19 @@ TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLook
       region.columns.emplace_back(std::min(params.width_px, (v * 7 + k) % 61 + v / 3),
                                   std::max(0, params.width_px - (v * 5 + 3 * k) % 37 - v / 4));
     }
+    std::fill(a.bgr.begin(), a.bgr.end(), std::uint8_t{77});  // what is not written stays
+    std::fill(b.bgr.begin(), b.bgr.end(), std::uint8_t{77});
     fast.Render(pose, prisms, &a, nullptr, region);
     each_pixel.Render(pose, prisms, &b, nullptr, region);
     ASSERT_EQ(a.bgr, b.bgr) << "pose " << k << " in the region";
+    // the same as labels (a label per colour, the lane nodes' path)
+    const ColourLabel label = [](const Bgr& bgr) {
+      return static_cast<std::uint8_t>(bgr[0] / 64 + 1);
+    };
+    std::vector<std::uint8_t> la(a.bgr.size() / 3, 0), lb(la.size(), 0);
+    fast.RenderLabels(pose, prisms, region, label, LabelView{la.data(), params.width_px});
+    each_pixel.RenderLabels(pose, prisms, region, label, LabelView{lb.data(), params.width_px});
+    ASSERT_EQ(la, lb) << "pose " << k << ", labels in the region";
   }
   EXPECT_EQ(each_pixel.common_floor_pixels(), 0u);
   // most of a 640x480 view is bare floor: 40 blocks a row, hundreds of rows
