@@ -101,27 +101,23 @@ class RowEnvelope {
 // and write the grid in memory order (column by column, each step strides a whole row: that was
 // most of the global costmap's inflation at start, issue 38). The same integers either way.
 std::vector<int> ColumnDistances(const std::vector<std::uint8_t>& costs, int nx, int ny, int far) {
-  std::vector<int> distance(costs.size());
-  std::vector<int> running(static_cast<std::size_t>(nx), far);
-  for (int y = 0; y < ny; ++y) {
-    const std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
-    int* row_distance = distance.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      int& d = running[static_cast<std::size_t>(x)];
-      d = row_costs[x] == kLethalObstacle ? 0 : std::min(d + 1, far);
-      row_distance[x] = d;
+  std::vector<int> distance(costs.size(), far);
+  std::vector<int> running(static_cast<std::size_t>(nx));
+  // one pass over the rows in `step`'s direction, each cell keeping the least distance so far
+  const auto pass = [&](int y_first, int y_end, int step) {
+    std::fill(running.begin(), running.end(), far);
+    for (int y = y_first; y != y_end; y += step) {
+      const std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
+      int* row_distance = distance.data() + static_cast<std::size_t>(y) * nx;
+      for (int x = 0; x < nx; ++x) {
+        int& d = running[static_cast<std::size_t>(x)];
+        d = row_costs[x] == kLethalObstacle ? 0 : std::min(d + 1, far);
+        row_distance[x] = std::min(row_distance[x], d);
+      }
     }
-  }
-  std::fill(running.begin(), running.end(), far);
-  for (int y = ny - 1; y >= 0; --y) {
-    const std::uint8_t* row_costs = costs.data() + static_cast<std::size_t>(y) * nx;
-    int* row_distance = distance.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      int& d = running[static_cast<std::size_t>(x)];
-      d = row_costs[x] == kLethalObstacle ? 0 : std::min(d + 1, far);
-      row_distance[x] = std::min(row_distance[x], d);
-    }
-  }
+  };
+  pass(0, ny, 1);        // down each column
+  pass(ny - 1, -1, -1);  // and up
   return distance;
 }
 

@@ -18,22 +18,23 @@ enum class NewtonStatus { kConverged, kFailed, kGoingOn };
 
 // One iteration of Undistort's Newton's method at *x: kConverged when Distort(D, *x) is within the
 // tolerance of `target` (*x unchanged), kFailed beyond a fold of the model or where *x turns
-// infinite, else *x moved by one step. In scalars, with the operations of Distort and of Eigen's
-// 2×2 determinant, inverse and product in their order, so that it gives the bits of the Eigen
-// form it replaced (residual = Distort(D, x) - target; x -= J.inverse() * residual).
+// infinite, else *x moved by one step. The step in scalars, with the operations of Eigen's 2×2
+// determinant, inverse and product in their order, so that it gives the bits of the Eigen form it
+// replaced (x -= J.inverse() * residual).
 NewtonStatus NewtonStep(const PlumbBob& D, const Eigen::Vector2d& target, Eigen::Vector2d* x) {
   const double k1 = D[0];
   const double k2 = D[1];
   const double p1 = D[2];
   const double p2 = D[3];
   const double k3 = D[4];
+  const Eigen::Vector2d residual = Distort(D, *x) - target;
+  if (residual.norm() < kUndistortTolerance) return NewtonStatus::kConverged;
+  const double eu = residual.x();
+  const double ev = residual.y();
   const double u = x->x();
   const double v = x->y();
   const double r2 = u * u + v * v;
   const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  const double eu = u * radial + 2.0 * p1 * u * v + p2 * (r2 + 2.0 * u * u) - target.x();
-  const double ev = v * radial + p1 * (r2 + 2.0 * v * v) + 2.0 * p2 * u * v - target.y();
-  if (std::sqrt(eu * eu + ev * ev) < kUndistortTolerance) return NewtonStatus::kConverged;
   const double g = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r²)
   const double j00 = radial + 2.0 * g * u * u + 2.0 * p1 * v + 6.0 * p2 * u;
   const double j01 = 2.0 * g * u * v + 2.0 * p1 * u + 2.0 * p2 * v;  // = j10

@@ -304,12 +304,9 @@ stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera)
 
 std::shared_ptr<const stack::LaneDetectorTables> LaneTablesCache::Get(
     const stack::LaneDetectionParams& params, const vehicle::CameraModel& camera) {
-  for (const Built& built : built_) {
-    if (built.params == params && built.camera == camera.params()) return built.tables;
-  }
-  auto tables = std::make_shared<const stack::LaneDetectorTables>(params, LaneCalibration(camera));
-  built_.push_back(Built{params, camera.params(), tables});
-  return tables;
+  return built_.Get({params, camera.params()}, [&] {
+    return std::make_shared<const stack::LaneDetectorTables>(params, LaneCalibration(camera));
+  });
 }
 
 PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,

@@ -25,10 +25,12 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/car/perception_config.h"
 #include "sim/car/sensors.h"
+#include "sim/core/built_once.h"
 #include "sim/platform/node_graph.h"
 #include "stack/lane_detection.h"
 #include "stack/obstacle_grid.h"
@@ -82,12 +84,8 @@ class LaneTablesCache {
                                                        const vehicle::CameraModel& camera);
 
  private:
-  struct Built {
-    stack::LaneDetectionParams params;
-    vehicle::CameraParams camera;
-    std::shared_ptr<const stack::LaneDetectorTables> tables;
-  };
-  std::vector<Built> built_;
+  BuiltOnce<std::pair<stack::LaneDetectionParams, vehicle::CameraParams>, stack::LaneDetectorTables>
+      built_;
 };
 
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).

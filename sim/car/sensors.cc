@@ -67,12 +67,9 @@ SensorEnvironment::SensorEnvironment(const vehicle::PhysicsWorld* physics,
 
 std::shared_ptr<const vehicle::CameraRays> SensorEnvironment::Rays(
     const vehicle::CameraParams& camera) {
-  for (const auto& [params, rays] : rays_) {
-    if (params == camera) return rays;
-  }
-  auto rays = std::make_shared<const vehicle::CameraRays>(vehicle::CameraModel(camera));
-  rays_.emplace_back(camera, rays);
-  return rays;
+  return rays_.Get(camera, [&] {
+    return std::make_shared<const vehicle::CameraRays>(vehicle::CameraModel(camera));
+  });
 }
 
 std::vector<vehicle::Prism> SensorEnvironment::PrismsSeenBy(int car_id) const {

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "sim/car/sensor_config.h"
+#include "sim/core/built_once.h"
 #include "sim/core/kernel.h"
 #include "sim/core/priorities.h"
 #include "sim/core/random.h"
@@ -81,7 +82,7 @@ class SensorEnvironment {
   const vehicle::PhysicsWorld* physics_;
   vehicle::SceneAppearance appearance_;
   std::shared_ptr<const vehicle::FloorTexture> floor_;
-  std::vector<std::pair<vehicle::CameraParams, std::shared_ptr<const vehicle::CameraRays>>> rays_;
+  BuiltOnce<vehicle::CameraParams, vehicle::CameraRays> rays_;
   std::shared_ptr<vehicle::GlScene> gl_scene_;
 };
 
