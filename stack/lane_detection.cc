@@ -420,6 +420,32 @@ std::vector<std::uint8_t> ExactValueTable() {
   return table;
 }
 
+// LaneDetectorTables::square_outputs_ from the two tables: per neighbour pattern, whether each
+// mask's output is set for no alpha, for every alpha, or depends on it.
+std::array<std::array<std::uint8_t, 256>, 2> SquareOutputs(const std::vector<std::uint8_t>& warp,
+                                                           const std::vector<std::uint8_t>& exact) {
+  constexpr std::uint8_t kNever = 0, kAlways = 1, kDepends = 2;
+  const auto state = [](int set_count) {
+    return set_count == 0 ? kNever : set_count == kAlphaCount ? kAlways : kDepends;
+  };
+  std::array<std::array<std::uint8_t, 256>, 2> outputs{};
+  for (int p = 0; p < 256; ++p) {
+    int nonzero[2] = {0, 0}, exactly[2] = {0, 0};
+    for (int a = 0; a < kAlphaCount; ++a) {
+      nonzero[0] += warp[static_cast<std::size_t>(a * 16 + (p & 15))] != 0;
+      nonzero[1] += warp[static_cast<std::size_t>(a * 16 + (p >> 4))] != 0;
+      const std::uint8_t cls = exact[static_cast<std::size_t>(a * 256 + p)];
+      exactly[0] += cls == 1;
+      exactly[1] += cls == 2;
+    }
+    outputs[static_cast<std::size_t>(BirdsEyeClasses::kNonZero)][p] =
+        static_cast<std::uint8_t>(state(nonzero[0]) | (state(nonzero[1]) << 2));
+    outputs[static_cast<std::size_t>(BirdsEyeClasses::kExact)][p] =
+        static_cast<std::uint8_t>(state(exactly[0]) | (state(exactly[1]) << 2));
+  }
+  return outputs;
+}
+
 }  // namespace
 
 // Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts the
@@ -494,6 +520,7 @@ LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
           exact_lut_[a * 256 + bits] | (exact_lut_[a * 256 + (bits << 4)] << 2));
     }
   }
+  square_outputs_ = SquareOutputs(warp_lut_, exact_lut_);
   IndexActivePixels(WarpSource(image_to_birds_eye_));
   if (params_.projection == LaneProjection::kPnpSwapped) {
     pnp_pose_ = LabPnpPose(camera_, params_.pnp_floor_points_m);
@@ -529,14 +556,13 @@ void LaneDetectorTables::IndexActivePixels(const WarpSource& source) {
   pixels_.resize(n);
   static_assert(kLaneImageHeight <= (1 << WarpPixel::kRowBits) &&
                 kLaneImageWidth <= (1 << WarpPixel::kColBits) &&
-                (kLaneImageHeight + 2) * kClassStride <= (1 << WarpPixel::kSrcBits) &&
-                WarpPixel::kAlpha16Shift + 14 <= 64 && kAlphaCount * 16 <= (1 << 14));
+                kAlphaCount <= (1 << WarpPixel::kAlphaBits) &&
+                WarpPixel::kAlphaShift + WarpPixel::kAlphaBits <= 32);
   std::vector<std::uint32_t> next(square_start_.begin(), square_start_.end() - 1);
   for (int i = 0; i < W * H; ++i) {
     if (!active(i)) continue;
     const std::uint32_t k = next[static_cast<std::size_t>(square(i))]++;
-    pixels_[k] =
-        WarpPixel::Pack(static_cast<std::uint32_t>(square(i)), i / W, i % W, source.alpha[i] * 16);
+    pixels_[k] = WarpPixel::Pack(i / W, i % W, source.alpha[i]);
   }
   for (int r = 0; r < H; ++r) {
     if (need_begin[r] < need_end[r]) spans_.push_back({r, need_begin[r], need_end[r]});
@@ -567,8 +593,11 @@ LaneDetector::LaneDetector(std::shared_ptr<const LaneDetectorTables> tables)
     : tables_(std::move(tables)) {
   Require(tables_ != nullptr, "LaneDetector needs its tables");
   classes_.assign(static_cast<std::size_t>(kClassStride) * (kLaneImageHeight + 2), 0);
-  line_bits_.assign(
-      static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2), 0);
+  const std::size_t words =
+      static_cast<std::size_t>(LaneDetectorTables::kLineWords) * (kLaneImageHeight + 2);
+  line_bits_.assign(words, 0);
+  yellow_bits_.assign(words, 0);
+  white_bits_.assign(words, 0);
   line_words_.assign(kLaneImageHeight + 2, 0);
 }
 
@@ -618,24 +647,38 @@ void LaneDetector::Classify(const cv::Mat& bgr) {
 
 namespace {
 
-// Bit k of the result: byte k of in[0, 64) is not 0.
-std::uint64_t NonZeroBytes64(const std::uint8_t* in) {
+// The mask of the bytes of in[0, 64) that are not 0 (bit k: byte k); and, if any is, those that
+// are 1 (yellow alone) and 2 (white alone).
+struct ClassBits {
+  std::uint64_t any{0}, yellow{0}, white{0};
+};
+ClassBits ClassBits64(const std::uint8_t* in) {
 #if defined(__SSE2__)
   const __m128i zero = _mm_setzero_si128();
   __m128i v[4];
   for (int k = 0; k < 4; ++k) v[k] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 16 * k));
   // most of the 64 bytes are 0 most of the time: one test for them all first
   const __m128i any = _mm_or_si128(_mm_or_si128(v[0], v[1]), _mm_or_si128(v[2], v[3]));
-  if (_mm_movemask_epi8(_mm_cmpeq_epi8(any, zero)) == 0xFFFF) return 0;
-  std::uint64_t bits = 0;
+  if (_mm_movemask_epi8(_mm_cmpeq_epi8(any, zero)) == 0xFFFF) return {};
+  const __m128i one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+  ClassBits bits;
   for (int k = 0; k < 4; ++k) {
-    const auto zeros = static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(v[k], zero)));
-    bits |= static_cast<std::uint64_t>(~zeros & 0xFFFFu) << (16 * k);
+    const auto mask = [&](__m128i equal) {
+      return static_cast<std::uint64_t>(static_cast<std::uint32_t>(_mm_movemask_epi8(equal)))
+             << (16 * k);
+    };
+    bits.any |= mask(_mm_cmpeq_epi8(v[k], zero)) ^ (0xFFFFull << (16 * k));
+    bits.yellow |= mask(_mm_cmpeq_epi8(v[k], one));
+    bits.white |= mask(_mm_cmpeq_epi8(v[k], two));
   }
   return bits;
 #else
-  std::uint64_t bits = 0;
-  for (int k = 0; k < 64; ++k) bits |= static_cast<std::uint64_t>(in[k] != 0) << k;
+  ClassBits bits;
+  for (int k = 0; k < 64; ++k) {
+    bits.any |= static_cast<std::uint64_t>(in[k] != 0) << k;
+    bits.yellow |= static_cast<std::uint64_t>(in[k] == 1) << k;
+    bits.white |= static_cast<std::uint64_t>(in[k] == 2) << k;
+  }
   return bits;
 #endif
 }
@@ -647,7 +690,7 @@ void LaneDetector::FindLinePixels() {
   for (const SourceSpan& span : tables_->spans_) {
     const int padded_row = span.row + 1;
     const std::uint8_t* in = classes_.data() + padded_row * kClassStride;
-    std::uint64_t* bits = line_bits_.data() + padded_row * kWords;
+    const std::size_t row_word = static_cast<std::size_t>(padded_row) * kWords;
     const int begin = span.col_begin + 1, end = span.col_end + 1;  // padded columns
     std::uint16_t words = 0;
     for (int w = begin / 64; w <= (end - 1) / 64; ++w) {
@@ -656,8 +699,13 @@ void LaneDetector::FindLinePixels() {
       // masked off
       const int lo = std::max(begin - 64 * w, 0), hi = std::min(end - 64 * w, 64);
       const std::uint64_t keep = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
-      bits[w] = NonZeroBytes64(in + 64 * w) & keep;
-      words |= static_cast<std::uint16_t>(bits[w] != 0) << w;
+      const ClassBits bits = ClassBits64(in + 64 * w);
+      const std::size_t i = row_word + static_cast<std::size_t>(w);
+      line_bits_[i] = bits.any & keep;
+      if (line_bits_[i] == 0) continue;
+      yellow_bits_[i] = bits.yellow & keep;
+      white_bits_[i] = bits.white & keep;
+      words |= static_cast<std::uint16_t>(1u << w);
     }
     line_words_[static_cast<std::size_t>(padded_row)] = words;
   }
@@ -673,59 +721,100 @@ void LaneDetector::ComputeMasks(const cv::Mat& bgr, BirdsEyeMasks* masks) {
   std::uint8_t* yellow = masks->yellow.ptr<std::uint8_t>();
   std::uint8_t* white = masks->white.ptr<std::uint8_t>();
   const std::uint8_t* lut = tables_->warp_lut_.data();
-  ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
-    yellow[row * kLaneImageWidth + col] = lut[alpha16 + yellow_bits];
-    white[row * kLaneImageWidth + col] = lut[alpha16 + white_bits];
-  });
+  using WarpPixel = LaneDetectorTables::WarpPixel;
+  ForEachLineSquare(
+      [&](const std::uint32_t* first, const std::uint32_t* last, int yellow_bits, int white_bits) {
+        for (const std::uint32_t* w = first; w != last; ++w) {
+          const int i = WarpPixel::Row(*w) * kLaneImageWidth + WarpPixel::Col(*w);
+          yellow[i] = lut[WarpPixel::Alpha16(*w) + yellow_bits];
+          white[i] = lut[WarpPixel::Alpha16(*w) + white_bits];
+        }
+      });
 }
 
 void LaneDetector::FindLineSquares() {
   const LaneDetectorTables& tables = *tables_;
   constexpr int kWords = LaneDetectorTables::kLineWords;
-  line_pixel_ranges_.clear();
+  uniform_runs_.clear();
+  mixed_squares_.clear();
   // Per top row t of the squares: a square whose left column is c holds a line pixel if column c
   // or c + 1 of row t or t + 1 does, so the left columns to visit are the bits of
-  // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares. Only the
-  // words of x that hold a bit, and those before them (the bit that s carries over), are scanned
-  // (each with the word after it, for that bit).
+  // s = x | x >> 1 (x: the two rows' bits), and each run of them is a range of squares; those
+  // whose four pixels are all of one colour alone, u & u >> 1 (u: both rows' bits of that
+  // colour), are taken out as runs of their own. Only the words of x that hold a bit, and those
+  // before them (the bit that s carries over), are scanned (each with the word after it, for
+  // that bit).
   for (std::uint32_t t = 0; t <= static_cast<std::uint32_t>(kLaneImageHeight); ++t) {
     const unsigned x_words = line_words_[t] | line_words_[t + 1];
     if (x_words == 0) continue;
-    const std::uint64_t* a = line_bits_.data() + t * kWords;
-    const std::uint64_t* b = a + kWords;
-    const std::uint32_t* starts = tables.square_start_.data() + t * kClassStride;
+    const std::size_t row_word = static_cast<std::size_t>(t) * kWords;
+    const std::uint32_t row_start = t * kClassStride;
+    const std::uint32_t* starts = tables.square_start_.data() + row_start;
+    // bits of rows t and t + 1 in word w: the line pixels; those of one colour alone (a word
+    // without line pixels holds none, whatever its colour words say)
+    const auto line = [&](int w) {
+      return line_bits_[row_word + w] | line_bits_[row_word + kWords + w];
+    };
+    const auto both_rows = [&](const std::vector<std::uint64_t>& colour, int w) -> std::uint64_t {
+      if (line_bits_[row_word + w] == 0 || line_bits_[row_word + kWords + w] == 0) return 0;
+      return colour[row_word + w] & colour[row_word + kWords + w];
+    };
     for (unsigned words = x_words | (x_words >> 1); words != 0; words &= words - 1) {
       const int w = std::countr_zero(words);
-      const std::uint64_t x = a[w] | b[w];
-      const std::uint64_t next = w + 1 < kWords ? a[w + 1] | b[w + 1] : 0;
-      std::uint64_t s = x | (x >> 1) | (next << 63);
-      while (s != 0) {
-        const int lo = std::countr_zero(s);
-        const int hi = lo + std::countr_one(s >> lo);
-        // (a square no output pixel reads gives an empty range)
-        if (starts[64 * w + lo] != starts[64 * w + hi]) {
-          line_pixel_ranges_.push_back({starts[64 * w + lo], starts[64 * w + hi]});
+      const bool last = w + 1 == kWords;
+      // the squares with a line pixel, and those all of one colour (the word after w for
+      // bit 63's square)
+      const std::uint64_t x = line(w);
+      const std::uint64_t any = x | (x >> 1) | (last ? 0 : line(w + 1) << 63);
+      const auto all = [&](const std::vector<std::uint64_t>& colour) {
+        const std::uint64_t u = both_rows(colour, w);
+        if (u == 0) return u;
+        return u & ((u >> 1) | (last ? 0 : both_rows(colour, w + 1) << 63));
+      };
+      const std::uint64_t yellow = all(yellow_bits_);
+      const std::uint64_t white = all(white_bits_);
+      const std::uint64_t mixed = any & ~(yellow | white);
+      const auto for_each_run = [&](std::uint64_t s, auto take) {
+        while (s != 0) {
+          const int lo = std::countr_zero(s);
+          const int hi = lo + std::countr_one(s >> lo);
+          // (squares no output pixel reads are left out)
+          if (starts[64 * w + lo] != starts[64 * w + hi]) take(64 * w + lo, 64 * w + hi);
+          s = hi == 64 ? 0 : s & (~0ull << hi);
         }
-        s = hi == 64 ? 0 : s & (~0ull << hi);
-      }
+      };
+      for_each_run(mixed, [&](int lo, int hi) {
+        mixed_squares_.push_back({row_start + static_cast<std::uint32_t>(lo),
+                                  row_start + static_cast<std::uint32_t>(hi)});
+      });
+      for_each_run(yellow, [&](int lo, int hi) {
+        uniform_runs_.push_back({starts[lo], starts[hi], kAllYellow});
+      });
+      for_each_run(white, [&](int lo, int hi) {
+        uniform_runs_.push_back({starts[lo], starts[hi], kAllWhite});
+      });
     }
   }
 }
 
 template <class Visit>
-void LaneDetector::ForEachWarpedLinePixel(Visit visit) {
+void LaneDetector::ForEachLineSquare(Visit visit) {
   FindLineSquares();
+  const std::uint32_t* pixels = tables_->pixels_.data();
+  for (const UniformRun& run : uniform_runs_) {
+    visit(pixels + run.begin, pixels + run.end, run.pattern & 15, run.pattern >> 4);
+  }
   const std::uint8_t* classes = classes_.data();
-  const std::uint64_t* pixels = tables_->pixels_.data();
-  using WarpPixel = LaneDetectorTables::WarpPixel;
+  const std::uint32_t* starts = tables_->square_start_.data();
   constexpr int stride = kClassStride;
-  for (const auto& [begin, end] : line_pixel_ranges_) {
-    for (std::uint32_t i = begin; i < end; ++i) {
+  for (const auto& [first, last] : mixed_squares_) {
+    for (std::uint32_t square = first; square < last; ++square) {
+      const std::uint32_t begin = starts[square], end = starts[square + 1];
+      if (begin == end) continue;
       // the 2×2 source classes c0 c1 / c2 c3 (each 0..3: yellow bit 0, white bit 1) as the bytes
       // of one word; a class bit of each byte gathered into 4 bits by one multiply (the partial
       // products land on distinct bits, so nothing carries into bits 24-27)
-      const std::uint64_t pixel = pixels[i];
-      const std::uint8_t* p = classes + WarpPixel::Src(pixel);
+      const std::uint8_t* p = classes + square;
       std::uint16_t top, bottom;
       std::memcpy(&top, p, sizeof top);
       std::memcpy(&bottom, p + stride, sizeof bottom);
@@ -733,8 +822,7 @@ void LaneDetector::ForEachWarpedLinePixel(Visit visit) {
       constexpr std::uint32_t kLowBits = 0x01010101u, kGather = 0x01020408u;
       const int yellow_bits = static_cast<int>(((quad & kLowBits) * kGather) >> 24);
       const int white_bits = static_cast<int>((((quad >> 1) & kLowBits) * kGather) >> 24);
-      visit(WarpPixel::Row(pixel), WarpPixel::Col(pixel), WarpPixel::Alpha16(pixel), yellow_bits,
-            white_bits);
+      visit(pixels + begin, pixels + end, yellow_bits, white_bits);
     }
   }
 }
@@ -753,32 +841,51 @@ void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClas
 
 void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
   *sums = BirdsEyeRowSums{};
-  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, int row, int col) {
-    ++rows[row].count;
-    rows[row].col_sum += col;
+  using Tables = LaneDetectorTables;
+  using WarpPixel = Tables::WarpPixel;
+  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, std::uint32_t w) {
+    BirdsEyeRowSums::Row& row = rows[static_cast<std::size_t>(WarpPixel::Row(w))];
+    ++row.count;
+    row.col_sum += WarpPixel::Col(w);
   };
-  if (classes == BirdsEyeClasses::kNonZero) {
-    // counting the non-zero outputs where ComputeMasks writes them
-    const std::uint8_t* lut = tables_->warp_lut_.data();
-    ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
-      if (lut[alpha16 + yellow_bits] != 0) add(sums->yellow, row, col);
-      if (lut[alpha16 + white_bits] != 0) add(sums->white, row, col);
-    });
-    return;
-  }
-  // the combined image's warp, counted where exactly 127 (yellow) or 255 (white). Where the four
-  // neighbours hold one colour (or none) the 16 KB single-colour table answers; only a pixel
-  // beside both colours looks up the 256 KB one.
-  const std::uint8_t* lut = tables_->exact_lut_.data();
+  const std::uint8_t* outputs = tables_->square_outputs_[static_cast<std::size_t>(classes)].data();
+  // the nonzero masks: each its own 0/255 image's warp. The exact classes: the combined image's
+  // warp, counted where exactly 127 (yellow) or 255 (white); where the four neighbours hold one
+  // colour (or none) the 16 KB single-colour table answers, and only a pixel beside both colours
+  // looks up the 256 KB one.
+  const std::uint8_t* warp = tables_->warp_lut_.data();
+  const std::uint8_t* exact = tables_->exact_lut_.data();
   const std::uint8_t* single = tables_->exact_single_lut_.data();
-  ForEachWarpedLinePixel([&](int row, int col, int alpha16, int yellow_bits, int white_bits) {
-    const std::uint8_t cls = white_bits == 0 ? single[alpha16 + yellow_bits] & 3
-                             : yellow_bits == 0
-                                 ? single[alpha16 + white_bits] >> 2
-                                 : lut[(alpha16 << 4) + yellow_bits + (white_bits << 4)];
-    if (cls == 1) add(sums->yellow, row, col);
-    if (cls == 2) add(sums->white, row, col);
-  });
+  const bool nonzero = classes == BirdsEyeClasses::kNonZero;
+  ForEachLineSquare(
+      [&](const std::uint32_t* first, const std::uint32_t* last, int yellow_bits, int white_bits) {
+        const int pattern = yellow_bits | (white_bits << 4);
+        const int yellow = outputs[pattern] & 3, white = outputs[pattern] >> 2;
+        if (yellow != Tables::kDepends && white != Tables::kDepends) {
+          // the same for each of the square's outputs (most squares: inside a line, or at its edge
+          // with the floor in the nonzero masks)
+          if (yellow == Tables::kAlways) {
+            for (const std::uint32_t* w = first; w != last; ++w) add(sums->yellow, *w);
+          }
+          if (white == Tables::kAlways) {
+            for (const std::uint32_t* w = first; w != last; ++w) add(sums->white, *w);
+          }
+          return;
+        }
+        for (const std::uint32_t* w = first; w != last; ++w) {
+          const int alpha16 = WarpPixel::Alpha16(*w);
+          if (nonzero) {
+            if (warp[alpha16 + yellow_bits] != 0) add(sums->yellow, *w);
+            if (warp[alpha16 + white_bits] != 0) add(sums->white, *w);
+            continue;
+          }
+          const std::uint8_t cls = white_bits == 0    ? single[alpha16 + yellow_bits] & 3
+                                   : yellow_bits == 0 ? single[alpha16 + white_bits] >> 2
+                                                      : exact[(alpha16 << 4) + pattern];
+          if (cls == 1) add(sums->yellow, *w);
+          if (cls == 2) add(sums->white, *w);
+        }
+      });
 }
 
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {

@@ -451,25 +451,35 @@ class LaneDetectorTables {
   // 0-1 those yellow bits and no white, bits 2-3 those white bits and no yellow.
   std::vector<std::uint8_t> exact_single_lut_;  // 1024 × 16
   std::optional<LanePnpPose> pnp_pose_;
+  // What the warp of a square whose neighbour pattern is p (yellow bits | white bits << 4) gives
+  // whatever the output's alpha: bits 0-1 the yellow output (nonzero mask, or exactly 127), bits
+  // 2-3 the white one (nonzero, or exactly 255), each kNever, kAlways or kDepends on the alpha.
+  // Per BirdsEyeClasses, from warp_lut_ and exact_lut_ (a square of one class, or of none, does
+  // not depend on it: the weights sum to one).
+  enum SquareOutput : std::uint8_t { kNever = 0, kAlways = 1, kDepends = 2 };
+  std::array<std::array<std::uint8_t, 256>, 2> square_outputs_{};
   // Active output pixels (whose source square touches the image), ordered by their square's top
   // left pixel in the padded class image (then by output index): the pixels of the squares whose
   // top left is padded index p are pixels_[square_start_[p], square_start_[p + 1]).
-  // One word per pixel, read with one load: bits 0-19 the top-left neighbour in the padded class
-  // image, 20-28 the output row, 29-38 the output column, 39-52 the alpha index · 16.
+  // One 32-bit word per pixel: bits 0-8 the output row, 9-18 the output column, 19-28 the alpha
+  // index.
   struct WarpPixel {
-    static constexpr int kSrcBits = 20, kRowBits = 9, kColBits = 10;
-    static constexpr int kRowShift = kSrcBits, kColShift = kRowShift + kRowBits;
-    static constexpr int kAlpha16Shift = kColShift + kColBits;
-    static std::uint64_t Pack(std::uint32_t src, int row, int col, int alpha16) {
-      return src | (std::uint64_t(row) << kRowShift) | (std::uint64_t(col) << kColShift) |
-             (std::uint64_t(alpha16) << kAlpha16Shift);
+    static constexpr int kRowBits = 9, kColBits = 10, kAlphaBits = 10;
+    static constexpr int kColShift = kRowBits, kAlphaShift = kColShift + kColBits;
+    static std::uint32_t Pack(int row, int col, int alpha) {
+      return static_cast<std::uint32_t>(row) | (static_cast<std::uint32_t>(col) << kColShift) |
+             (static_cast<std::uint32_t>(alpha) << kAlphaShift);
     }
-    static std::uint32_t Src(std::uint64_t w) { return w & ((1u << kSrcBits) - 1); }
-    static int Row(std::uint64_t w) { return (w >> kRowShift) & ((1u << kRowBits) - 1); }
-    static int Col(std::uint64_t w) { return (w >> kColShift) & ((1u << kColBits) - 1); }
-    static int Alpha16(std::uint64_t w) { return static_cast<int>(w >> kAlpha16Shift); }
+    static int Row(std::uint32_t w) { return static_cast<int>(w & ((1u << kRowBits) - 1)); }
+    static int Col(std::uint32_t w) {
+      return static_cast<int>((w >> kColShift) & ((1u << kColBits) - 1));
+    }
+    // the alpha index · 16 (an index into the 16-pattern tables)
+    static int Alpha16(std::uint32_t w) {
+      return static_cast<int>((w >> (kAlphaShift - 4)) & (((1u << kAlphaBits) - 1) << 4));
+    }
   };
-  std::vector<std::uint64_t> pixels_;
+  std::vector<std::uint32_t> pixels_;
   std::vector<std::uint32_t> square_start_;  // (kLaneImageHeight + 1) · kClassStride + 1
   std::vector<SourceSpan> spans_;            // the source pixels the warp reads
 };
@@ -582,12 +592,14 @@ class LaneDetector {
   // The classes of the source pixels into classes_, and the line bits from them.
   void Classify(const cv::Mat& bgr);
   void FindLinePixels();  // line_bits_ from classes_
-  // The warp over classes_: visit(output row, column, alpha index · 16, yellow bits, white bits)
-  // for each output pixel with a line pixel among its four source pixels (the others stay 0, the
-  // border value); bit k of the bits: neighbour k (top left, top right, bottom left, bottom right).
+  // The warp over classes_: visit(first, last, yellow bits, white bits) for source squares with
+  // a line pixel among their four pixels and the output pixels [first, last) that read them
+  // (LaneDetectorTables::WarpPixel words; the other outputs stay 0, the border value); bit k of
+  // the bits: neighbour k (top left, top right, bottom left, bottom right). A run of squares
+  // whose pixels are all of one colour alone is one visit.
   template <class Visit>
-  void ForEachWarpedLinePixel(Visit visit);
-  // line_pixel_ranges_ from line_bits_: the ranges of pixels_ whose square holds a line pixel.
+  void ForEachLineSquare(Visit visit);
+  // uniform_runs_ and mixed_squares_ from line_bits_.
   void FindLineSquares();
   // The row sums of the bird's-eye masks, from classes_.
   void SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes);
@@ -598,8 +610,20 @@ class LaneDetector {
   // words outside the spans stay 0).
   std::vector<std::uint8_t> classes_;
   std::vector<std::uint64_t> line_bits_;
+  // per word of line_bits_ that is not 0: its pixels of class 1 (yellow alone) and 2 (white
+  // alone); the others hold anything
+  std::vector<std::uint64_t> yellow_bits_, white_bits_;
   std::vector<std::uint16_t> line_words_;  // per padded row: bit w, word w holds a line pixel
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> line_pixel_ranges_;
+  // The squares with a line pixel: runs of those whose four pixels are one colour alone (the
+  // range of pixels_ that reads them, and their pattern: yellow bits | white bits << 4), and runs
+  // of the others (padded top-left indices [first, last)).
+  static constexpr std::uint8_t kAllYellow = 0x0F, kAllWhite = 0xF0;
+  struct UniformRun {
+    std::uint32_t begin, end;
+    std::uint8_t pattern;
+  };
+  std::vector<UniformRun> uniform_runs_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> mixed_squares_;
   BirdsEyeRowSums sums_;
 };
 

@@ -276,6 +276,30 @@ TEST(LaneMasks, BitIdenticalOnNoiseForBothThresholdSets) {
   }
 }
 
+// Squares whose four pixels are one colour alone are counted run by run (their outputs need no
+// bilinear weights: LaneDetector::FindLineSquares); stripes of each colour across the 64-pixel
+// words of the line bits, side by side, overlapping and one pixel wide, against the reference.
+TEST(LaneMasks, BitIdenticalOnOneColourStripesAcrossWordBoundaries) {
+  cv::Mat bgr = cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC3);
+  const cv::Scalar yellow(0, 235, 235), white(255, 255, 255);
+  bgr(cv::Rect(60, 0, 10, kLaneImageHeight)).setTo(yellow);  // padded columns 61-70
+  bgr(cv::Rect(70, 0, 4, kLaneImageHeight)).setTo(white);    // beside it
+  bgr(cv::Rect(126, 0, 1, kLaneImageHeight)).setTo(white);   // one pixel, at a word's end
+  bgr(cv::Rect(190, 200, 140, 40)).setTo(yellow);            // across two boundaries
+  bgr(cv::Rect(250, 220, 20, 60)).setTo(white);              // inside and below it
+  bgr(cv::Rect(383, 0, 2, kLaneImageHeight)).setTo(yellow);  // padded 384-385
+  bgr(cv::Rect(600, 100, 40, 300)).setTo(white);             // to the image's edge
+  const vehicle::CameraModel camera(vehicle::ColorCameraParams());
+  LaneDetector detector(LaneDetectionParams{}, CalibrationOf(camera));
+  BirdsEyeMasks reference;
+  LaneMasksReference(bgr, detector.thresholds(), detector.image_to_birds_eye(), &reference);
+  BirdsEyeRowSums sums;
+  detector.ComputeRowSums(bgr, &sums);
+  EXPECT_EQ(sums, RowSumsOfMasks(reference));
+  EXPECT_GT(cv::countNonZero(reference.yellow), 1000);
+  EXPECT_GT(cv::countNonZero(reference.white), 1000);
+}
+
 TEST(LaneMasks, BitIdenticalOnADarkFloorWithSparseLinePixels) {
   // The dark fast path (eight pixels at a time): dark values up to just below each set's V bound,
   // single line pixels and pixels at exactly the bound scattered among them, in every channel.
