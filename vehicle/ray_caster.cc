@@ -695,38 +695,51 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
   constexpr int kBlock = CameraRays::kBlockSize;
   const int blocks_per_row = r.blocks_per_row();
   const CameraRays::FloorBlock* blocks = r.floor_blocks().data();
-  // A block's group (CameraRays::floor_block_groups) is looked up once per frame, when the first
-  // of its blocks is met: 0 not yet, 1 all of the common colour, 2 not known to be.
+  // A block's group (CameraRays::floor_block_groups) is looked up once per frame, when a run
+  // first reaches it; per group row, as bits: looked up, and not all of the common colour.
   const CameraRays::FloorBlock* groups = r.floor_block_groups().data();
-  group_common_.assign(r.floor_block_groups().size(), 0);
-  std::uint8_t* const group_status = group_common_.data();
-  // Per run, the blocks it reaches one by one, a stretch of common ones filled at once and the
-  // others looked up. A block the run covers in part (at its ends, where a region's edge cuts a
-  // row) is common if the whole block is. (The count is kept in a local: the byte stores may alias
-  // any member, which the compiler would then reload after each.)
+  const int words = (blocks_per_row + 63) / 64;
+  group_seen_.assign(r.floor_block_groups().size() / static_cast<std::size_t>(blocks_per_row) *
+                         static_cast<std::size_t>(words),
+                     0);
+  group_mixed_.assign(group_seen_.size(), 0);
+  // Per run, the blocks of its groups that are not all common one by one: a block that is common
+  // itself joins the stretch of common pixels, filled at once; the others are looked up. A block
+  // the run covers in part (at its ends, where a region's edge cuts a row) is common if the whole
+  // block is. (The count is kept in a local: the byte stores may alias any member, which the
+  // compiler would then reload after each.)
   std::uint64_t common_pixels = 0;
   for (const CameraRays::Run& run : runs) {
     const int row = run.begin / w;  // a run lies in one row
     const int row_start = row * w;
-    const std::size_t group_row =
-        static_cast<std::size_t>(row / CameraRays::kGroupRows) * blocks_per_row;
-    const auto common = [&](int k) {
-      std::uint8_t& status = group_status[group_row + static_cast<std::size_t>(k)];
-      if (status == 0)
-        status = pass.Common(groups[group_row + static_cast<std::size_t>(k)]) ? 1 : 2;
-      return status == 1 || pass.Common(blocks[row * blocks_per_row + k]);
-    };
+    const int group_row = row / CameraRays::kGroupRows;
+    std::uint64_t* seen = group_seen_.data() + static_cast<std::size_t>(group_row) * words;
+    std::uint64_t* mixed = group_mixed_.data() + static_cast<std::size_t>(group_row) * words;
+    const CameraRays::FloorBlock* row_groups =
+        groups + static_cast<std::size_t>(group_row) * blocks_per_row;
+    const CameraRays::FloorBlock* row_blocks =
+        blocks + static_cast<std::size_t>(row) * blocks_per_row;
     const int k_begin = (run.begin - row_start) / kBlock;
     const int k_end = (run.end - row_start + kBlock - 1) / kBlock;
     int common_from = run.begin;  // the stretch of common pixels [common_from, block's start)
-    for (int k = k_begin; k < k_end; ++k) {
-      if (common(k)) continue;
-      const int from = std::max(run.begin, row_start + k * kBlock);
-      const int to = std::min(run.end, row_start + (k + 1) * kBlock);
-      pass.FillCommon(row, common_from, from - common_from);
-      common_pixels += static_cast<std::uint64_t>(from - common_from);
-      pass.LookUp(row, from, to);
-      common_from = to;
+    for (int word = k_begin / 64; word <= (k_end - 1) / 64; ++word) {
+      const int lo = std::max(k_begin - 64 * word, 0), hi = std::min(k_end - 64 * word, 64);
+      const std::uint64_t in_run = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
+      for (std::uint64_t fresh = in_run & ~seen[word]; fresh != 0; fresh &= fresh - 1) {
+        const int k = 64 * word + std::countr_zero(fresh);
+        if (!pass.Common(row_groups[k])) mixed[word] |= 1ull << (k - 64 * word);
+      }
+      seen[word] |= in_run;
+      for (std::uint64_t left = in_run & mixed[word]; left != 0; left &= left - 1) {
+        const int k = 64 * word + std::countr_zero(left);
+        if (pass.Common(row_blocks[k])) continue;
+        const int from = std::max(run.begin, row_start + k * kBlock);
+        const int to = std::min(run.end, row_start + (k + 1) * kBlock);
+        pass.FillCommon(row, common_from, from - common_from);
+        common_pixels += static_cast<std::uint64_t>(from - common_from);
+        pass.LookUp(row, from, to);
+        common_from = to;
+      }
     }
     pass.FillCommon(row, common_from, run.end - common_from);
     common_pixels += static_cast<std::uint64_t>(run.end - common_from);

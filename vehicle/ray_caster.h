@@ -447,7 +447,9 @@ class CameraRenderer {
   std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;  // scratch
   // per row: the columns [begin, end) prisms wrote depth in this frame (begin >= end: none)
   std::vector<std::pair<int, int>> depth_columns_hit_;
-  std::vector<std::uint8_t> group_common_;  // per floor block group, this frame (RenderFloor)
+  // per row of floor block groups, this frame, as bits of the groups (RenderFloor): looked up;
+  // not all of the common colour
+  std::vector<std::uint64_t> group_seen_, group_mixed_;
   bool common_floor_blocks_on_{true};
   std::uint64_t common_floor_pixels_{0};
 };
