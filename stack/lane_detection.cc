@@ -268,7 +268,9 @@ std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
     if (weights[i] > 0.0) distinct.push_back(rows[i]);
     scale = std::max(scale, std::abs(rows[i]));
   }
-  std::sort(distinct.begin(), distinct.end());
+  // (the rows of RowMeans come in order: then no sort is needed)
+  if (!std::is_sorted(distinct.begin(), distinct.end()))
+    std::sort(distinct.begin(), distinct.end());
   if (std::unique(distinct.begin(), distinct.end()) - distinct.begin() < unknowns) {
     return std::nullopt;
   }
