@@ -687,15 +687,24 @@ ClassBits ClassBits64(const std::uint8_t* in) {
 
 }  // namespace
 
-void LaneDetector::FindLinePixels() {
+void LaneDetector::FindLinePixels(std::span<const std::pair<int, int>> nonzero_columns) {
   constexpr int kWords = LaneDetectorTables::kLineWords;
   for (const SourceSpan& span : tables_->spans_) {
     const int padded_row = span.row + 1;
     const std::uint8_t* in = classes_.data() + padded_row * kClassStride;
     const std::size_t row_word = static_cast<std::size_t>(padded_row) * kWords;
-    const int begin = span.col_begin + 1, end = span.col_end + 1;  // padded columns
+    // the padded columns to search: the span's, or the part of it that may hold a line pixel
+    int begin = span.col_begin + 1, end = span.col_end + 1;
+    if (!nonzero_columns.empty()) {
+      const auto [first, last] = nonzero_columns[static_cast<std::size_t>(span.row)];
+      begin = std::max(begin, first + 1);
+      end = std::min(end, last + 1);
+    }
+    // the words the last frame left with a line pixel and this one does not search: cleared
+    std::uint16_t stale = line_words_[static_cast<std::size_t>(padded_row)];
     std::uint16_t words = 0;
-    for (int w = begin / 64; w <= (end - 1) / 64; ++w) {
+    for (int w = begin / 64; begin < end && w <= (end - 1) / 64; ++w) {
+      stale &= static_cast<std::uint16_t>(~(1u << w));
       // 64 bytes from the word's first column: the row's, and beyond its end the next row's (the
       // padded image has a row below the last span's, and 64 · kLineWords <= kClassStride + 63),
       // masked off
@@ -709,6 +718,7 @@ void LaneDetector::FindLinePixels() {
       white_bits_[i] = bits.white & keep;
       words |= static_cast<std::uint16_t>(1u << w);
     }
+    for (; stale != 0; stale &= stale - 1) line_bits_[row_word + std::countr_zero(stale)] = 0;
     line_words_[static_cast<std::size_t>(padded_row)] = words;
   }
 }
@@ -836,8 +846,13 @@ void LaneDetector::ComputeRowSums(const cv::Mat& bgr, BirdsEyeRowSums* sums,
   SumWarpedClasses(sums, classes);
 }
 
-void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
-  FindLinePixels();
+void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes,
+                                             std::span<const std::pair<int, int>> nonzero_columns) {
+  Require(nonzero_columns.empty() || nonzero_columns.size() == kLaneImageHeight, [&] {
+    return "ComputeRowSumsFromClasses: " + std::to_string(nonzero_columns.size()) +
+           " rows of nonzero columns for an image of " + std::to_string(kLaneImageHeight);
+  });
+  FindLinePixels(nonzero_columns);
   SumWarpedClasses(sums, classes);
 }
 

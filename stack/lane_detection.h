@@ -577,9 +577,13 @@ class LaneDetector {
                       BirdsEyeClasses classes = BirdsEyeClasses::kNonZero);
   // The detector's class image for a producer to fill (ClassImageRegion); then
   // ComputeRowSumsFromClasses gives ComputeRowSums of the image whose classes were written.
+  // `nonzero_columns`, if the producer knows them: per image row (one entry each), the columns
+  // [begin, end) outside which every class it wrote is 0 (begin >= end: none), so that only
+  // those are searched for line pixels.
   ClassImageRegion MutableClassRegion();
   void ComputeRowSumsFromClasses(BirdsEyeRowSums* sums,
-                                 BirdsEyeClasses classes = BirdsEyeClasses::kNonZero);
+                                 BirdsEyeClasses classes = BirdsEyeClasses::kNonZero,
+                                 std::span<const std::pair<int, int>> nonzero_columns = {});
   // The rest, from the bird's-eye masks or their row sums (the same result): Step is
   // ComputeRowSums then Fit. The real hardware runs the two in separate slots (reference §8: lane
   // planner, polynomial fit). Fit(sums) is FitLanePoints(*tables(), sums).
@@ -591,7 +595,8 @@ class LaneDetector {
 
   // The classes of the source pixels into classes_, and the line bits from them.
   void Classify(const cv::Mat& bgr);
-  void FindLinePixels();  // line_bits_ from classes_
+  // line_bits_ from classes_ (nonzero_columns: as ComputeRowSumsFromClasses', or empty).
+  void FindLinePixels(std::span<const std::pair<int, int>> nonzero_columns = {});
   // The warp over classes_: visit(first, last, yellow bits, white bits) for source squares with
   // a line pixel among their four pixels and the output pixels [first, last) that read them
   // (LaneDetectorTables::WarpPixel words; the other outputs stay 0, the border value); bit k of

@@ -430,6 +430,14 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
     labels.palette[static_cast<std::size_t>(k)] = label(bgr);
   }
   labels.surround = label(surround_);
+  if (out.nonzero_columns != nullptr) {
+    if (labels.surround != 0 || labels.palette[tex.common_index()] != 0) {
+      *out.nonzero_columns = region.columns;  // the region's every pixel may be
+    } else {
+      out.nonzero_columns->assign(region.columns.size(), {rays_->width(), 0});
+      labels.nonzero = out.nonzero_columns;
+    }
+  }
   RenderImpl(X_map_car, prisms, nullptr, nullptr, &region, nullptr, &labels);
 }
 
@@ -738,6 +746,8 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
         pass.FillCommon(row, common_from, from - common_from);
         common_pixels += static_cast<std::uint64_t>(from - common_from);
         pass.LookUp(row, from, to);
+        if (pass.labels != nullptr)
+          pass.labels->MayBeNonzero(row, from - row_start, to - row_start);
         common_from = to;
       }
     }
@@ -1088,6 +1098,7 @@ void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, 
     }
   }
   if (depth_mm != nullptr && first < last) NoteDepthColumns(v, first, last);
+  if (labels != nullptr && first < last) labels->MayBeNonzero(v, first, last);
 }
 
 void AddCameraNoise(const CameraNoiseParams& noise, const CameraParams& camera, std::uint64_t seed,

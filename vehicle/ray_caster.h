@@ -323,10 +323,14 @@ class DepthRowHistory {
   std::vector<std::pair<int, int>> changed_;
 };
 
-// Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u].
+// Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u]. If
+// nonzero_columns is set, RenderLabels also says there, per image row, the columns [begin, end)
+// outside which every pixel it labelled got label 0 (begin >= end: none), so that a consumer
+// looking for the other labels need not read the rest.
 struct LabelView {
   std::uint8_t* origin{nullptr};
   std::ptrdiff_t stride{0};
+  std::vector<std::pair<int, int>>* nonzero_columns{nullptr};
 };
 // A label per colour, for a consumer that reads a function of each pixel's colour alone (the lane
 // detector reads its line classes). Called once per colour in view, not per pixel.
@@ -400,6 +404,14 @@ class CameraRenderer {
     std::array<std::uint8_t, 256> palette{};  // by floor palette index
     std::uint8_t surround{0};
     std::span<const std::uint8_t> prism_labels;  // per prism; empty: label(face colour)
+    // per row, the columns that may hold a label other than 0, widened as they are written
+    // (LabelView::nonzero_columns; null where not asked for, or where it is the whole region)
+    std::vector<std::pair<int, int>>* nonzero{nullptr};
+    void MayBeNonzero(int v, int begin, int end) const {
+      if (nonzero == nullptr) return;
+      std::pair<int, int>& columns = (*nonzero)[static_cast<std::size_t>(v)];
+      columns = {std::min(columns.first, begin), std::max(columns.second, end)};
+    }
   };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
                   DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,

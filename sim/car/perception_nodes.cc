@@ -180,6 +180,7 @@ struct LaneScratch {
   vehicle::ColorImage color;
   std::optional<SceneKey> last;  // the last frame's (LabelsFromScene), and its sums
   stack::BirdsEyeRowSums last_sums;
+  std::vector<std::pair<int, int>> nonzero_columns;  // the renderer's, per image row
 };
 
 // The bird's-eye row sums of a frame. The detector reads a function of each pixel's colour alone,
@@ -198,8 +199,10 @@ void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scr
     }
     const stack::ClassImageRegion classes = detector.MutableClassRegion();
     frame.RenderLabels(*p.reads, p.line_class,
-                       vehicle::LabelView{classes.pixels.data(), classes.stride});
-    detector.ComputeRowSumsFromClasses(sums, count);
+                       vehicle::LabelView{.origin = classes.pixels.data(),
+                                          .stride = classes.stride,
+                                          .nonzero_columns = &scratch->nonzero_columns});
+    detector.ComputeRowSumsFromClasses(sums, count, scratch->nonzero_columns);
     scratch->last = std::move(key);
     scratch->last_sums = *sums;
   } else {

@@ -188,6 +188,13 @@ bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpan
   if (!LabelsFromScene()) return false;
   if (frame.blackout) {  // every pixel black
     const std::uint8_t black = label(vehicle::Bgr{0, 0, 0});
+    if (out.nonzero_columns != nullptr) {
+      if (black != 0) {
+        *out.nonzero_columns = region.columns;
+      } else {
+        out.nonzero_columns->assign(region.columns.size(), {0, 0});
+      }
+    }
     for (std::size_t v = 0; v < region.columns.size(); ++v) {
       const auto [begin, end] = region.columns[v];
       if (begin < end) {

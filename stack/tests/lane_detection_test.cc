@@ -231,6 +231,60 @@ TEST_F(LaneTrack, DetectorsOnSharedTablesShareNoScratch) {
   EXPECT_EQ(std::memcmp(&fitted, &stepped, sizeof fitted), 0);
 }
 
+// A producer that says where its classes may be non-zero (the renderer's nonzero_columns): the
+// detector searches only there and gives the sums of the whole image, also after a frame whose
+// lines lay where the next one's columns do not reach (the old line bits are cleared).
+TEST_F(LaneTrack, NonzeroColumnsFromTheProducerGiveTheSameSums) {
+  const LaneCameraCalibration calibration = CalibrationOf(frames_->color_camera());
+  const auto tables =
+      std::make_shared<const LaneDetectorTables>(LaneDetectionParams{}, calibration);
+  LaneDetector told(tables);
+  LaneDetector searched(tables);
+  // per image row, the columns between the first and the last non-zero class written
+  const auto columns_of = [&](LaneDetector& detector) {
+    const ClassImageRegion classes = detector.MutableClassRegion();
+    std::vector<std::pair<int, int>> columns(kLaneImageHeight, {kLaneImageWidth, 0});
+    for (const LaneDetector::SourceSpan& span : classes.spans) {
+      for (int c = span.col_begin; c < span.col_end; ++c) {
+        if (classes.pixels[static_cast<std::size_t>(span.row * classes.stride + c)] == 0) continue;
+        auto& [begin, end] = columns[static_cast<std::size_t>(span.row)];
+        begin = std::min(begin, c);
+        end = std::max(end, c + 1);
+      }
+    }
+    return columns;
+  };
+  int frames_with_lines = 0;
+  for (const auto& [route, s_m] : {std::pair{"outer_loop", 2.5},
+                                   {"inner_loop", 4.0},
+                                   {"outer_loop", 9.0},
+                                   {"south_loop", 9.2},
+                                   {"outer_loop", 6.5}}) {
+    const auto frame = frames_->Render(frames_->PoseOnRoute(route, s_m));
+    testing::WriteLineClasses(told, frame.color);
+    testing::WriteLineClasses(searched, frame.color);
+    const std::vector<std::pair<int, int>> columns = columns_of(told);
+    for (const BirdsEyeClasses count : {BirdsEyeClasses::kNonZero, BirdsEyeClasses::kExact}) {
+      BirdsEyeRowSums with, without;
+      told.ComputeRowSumsFromClasses(&with, count, columns);
+      searched.ComputeRowSumsFromClasses(&without, count);
+      EXPECT_EQ(with, without) << route << " " << s_m;
+      frames_with_lines += with != BirdsEyeRowSums{};
+    }
+  }
+  EXPECT_GE(frames_with_lines, 8);
+  // a black frame after them, told it holds nothing: no line pixel is left over
+  const ClassImageRegion classes = told.MutableClassRegion();
+  std::fill(classes.pixels.begin(), classes.pixels.end(), std::uint8_t{0});
+  BirdsEyeRowSums black;
+  told.ComputeRowSumsFromClasses(&black, BirdsEyeClasses::kNonZero,
+                                 std::vector<std::pair<int, int>>(kLaneImageHeight, {0, 0}));
+  EXPECT_EQ(black, BirdsEyeRowSums{});
+  EXPECT_THROW(told.ComputeRowSumsFromClasses(&black, BirdsEyeClasses::kNonZero,
+                                              std::vector<std::pair<int, int>>(3, {0, 0})),
+               std::invalid_argument);
+}
+
 TEST(LaneMasks, RowSumsCountTheNonZeroPixelsOfEachRowAndSumTheirColumns) {
   BirdsEyeMasks masks{cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC1),
                       cv::Mat::zeros(kLaneImageHeight, kLaneImageWidth, CV_8UC1)};

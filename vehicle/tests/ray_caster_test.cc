@@ -857,6 +857,59 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
                std::invalid_argument);
 }
 
+// LabelView::nonzero_columns: every pixel outside a row's columns got label 0 (the lane detector
+// searches only inside them), and the columns are a small part of the region where the floor's
+// common colour and the surround are labelled 0; otherwise they are the whole region.
+TEST(RayCasterTest, NonzeroColumnsBoundEveryLabelOtherThanZero) {
+  const CameraParams params = ColorCameraParams();
+  world::FloorRaster raster = BlackFloor(4.0);
+  Paint(&raster, -2.0, 2.0, 0.0, 0.03, kWhite);  // one line along x
+  CameraRenderer renderer = MakeRenderer(params, raster);
+  const Bgr surround = SceneAppearance{}.surround();
+  const ColourLabel lines = [&](const Bgr& c) {  // 0 for the black floor and the surround
+    return static_cast<std::uint8_t>(c == Bgr{0, 0, 0} || c == surround ? 0 : 1 + c[2] % 7);
+  };
+  RowSpans region;
+  for (int v = 0; v < params.height_px; ++v) {
+    region.columns.emplace_back(v % 50, params.width_px - v % 70);
+  }
+  std::vector<std::uint8_t> labels(static_cast<std::size_t>(params.width_px) * params.height_px);
+  std::vector<std::pair<int, int>> nonzero;
+  std::size_t region_pixels = 0, inside = 0, labelled = 0;
+  for (const auto& [begin, end] : region.columns) region_pixels += end - begin;
+  for (int k = 0; k < 12; ++k) {
+    const world::Pose2 pose{-1.5 + 0.25 * k, 0.1 * (k % 5 - 2), 0.08 * (k % 7 - 3)};
+    const Eigen::Vector3d ahead = Lift(pose) * Eigen::Vector3d(1.2, 0.2 * (k % 3 - 1), 0.0);
+    const std::vector<Prism> prisms{
+        Box(ahead.x(), ahead.y(), 0.3 * k, 0.525, 0.296, 0.2, Bgr{40, 40, 190})};
+    std::fill(labels.begin(), labels.end(), std::uint8_t{0});
+    renderer.RenderLabels(pose, prisms, region, lines,
+                          LabelView{labels.data(), params.width_px, &nonzero});
+    ASSERT_EQ(nonzero.size(), region.columns.size());
+    for (int v = 0; v < params.height_px; ++v) {
+      const auto [begin, end] = nonzero[static_cast<std::size_t>(v)];
+      inside += static_cast<std::size_t>(std::max(0, end - begin));
+      for (int u = 0; u < params.width_px; ++u) {
+        const std::uint8_t got = labels[static_cast<std::size_t>(v) * params.width_px + u];
+        labelled += got != 0;
+        if (u < begin || u >= end) {
+          ASSERT_EQ(got, 0) << "pose " << k << " (" << u << ", " << v << ")";
+        }
+      }
+    }
+  }
+  std::printf("  per frame: %zu pixels labelled, %zu in the columns, %zu in the region\n",
+              labelled / 12, inside / 12, region_pixels);
+  EXPECT_GT(labelled, 12u * 1000u);  // the line and the box were in view
+  EXPECT_LT(inside, 2 * labelled);   // the columns hug them
+  EXPECT_LT(inside, 12u * region_pixels / 2);
+  // with the floor's colour labelled, every column of the region may hold a label
+  const ColourLabel all = [](const Bgr& c) { return static_cast<std::uint8_t>(1 + c[0] % 5); };
+  renderer.RenderLabels(world::Pose2{}, {}, region, all,
+                        LabelView{labels.data(), params.width_px, &nonzero});
+  EXPECT_EQ(nonzero, region.columns);
+}
+
 TEST(RayCasterTest, PrismLabelsNameTheObjectEachPixelSeesWhateverItsColour) {
   // two boxes of one colour, the nearer hiding part of the farther: told apart by their labels
   const CameraParams params = DepthCameraParams();

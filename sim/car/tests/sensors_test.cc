@@ -291,6 +291,18 @@ TEST(SensorSuiteTest, LabelsAndTheDepthHistoryGiveTheFramesOwnPicture) {
           << "pixel " << i << (frame.blackout ? " (blackout)" : "");
     }
   }
+  // a blackout's columns that may hold a label other than 0: all where black has one, else none
+  std::vector<std::pair<int, int>> nonzero;
+  const vehicle::ColourLabel lines = [](const vehicle::Bgr& c) {
+    return static_cast<std::uint8_t>(c[0] > 200 ? 1 : 0);
+  };
+  ASSERT_TRUE(colour_frames.back().RenderLabels(all, label,
+                                                vehicle::LabelView{labels.data(), w, &nonzero}));
+  EXPECT_EQ(nonzero, all.columns);
+  ASSERT_TRUE(colour_frames.back().RenderLabels(all, lines,
+                                                vehicle::LabelView{labels.data(), w, &nonzero}));
+  const std::vector<std::pair<int, int>> none(static_cast<std::size_t>(h), {0, 0});
+  EXPECT_EQ(nonzero, none);
 
   vehicle::DepthImage buffer, whole;
   vehicle::DepthRowHistory history;
