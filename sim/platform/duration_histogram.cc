@@ -30,38 +30,24 @@ std::uint32_t DurationHistogram::KeyOf(std::int64_t ns) {
   return static_cast<std::uint32_t>(kExactBelow_ns + (shift - 1) * kSubBuckets + sub);
 }
 
-DurationHistogram::DurationHistogram(const DurationHistogram& other)
-    : buckets_(other.buckets_), count_(other.count_), sum_ns_(other.sum_ns_) {}
-
-DurationHistogram::DurationHistogram(DurationHistogram&& other) noexcept
-    : buckets_(std::move(other.buckets_)), count_(other.count_), sum_ns_(other.sum_ns_) {
-  other.last_ = other.buckets_.end();
-}
-
-DurationHistogram& DurationHistogram::operator=(const DurationHistogram& other) {
-  if (this != &other) *this = DurationHistogram(other);
-  return *this;
-}
-
-DurationHistogram& DurationHistogram::operator=(DurationHistogram&& other) noexcept {
-  buckets_ = std::move(other.buckets_);
-  count_ = other.count_;
-  sum_ns_ = other.sum_ns_;
-  last_ = buckets_.end();
-  other.last_ = other.buckets_.end();
-  return *this;
-}
-
 void DurationHistogram::Add(Duration d) {
   const std::int64_t ns = d.count();
   if (ns < 0) {
     throw std::invalid_argument("DurationHistogram: negative duration " + std::to_string(ns) +
                                 " ns");
   }
-  // jobs of one node tend to last alike: the last bucket first (map iterators stay valid)
+  // jobs of one node tend to last alike: the last bucket first, then a bisection; a new bucket is
+  // rare after the first jobs (a node's turnaround occupies a few hundred)
   const std::uint32_t key = KeyOf(ns);
-  if (last_ == buckets_.end() || last_->first != key) last_ = buckets_.try_emplace(key).first;
-  Bucket& b = last_->second;
+  if (last_ >= keys_.size() || keys_[last_] != key) {
+    const auto at = std::lower_bound(keys_.begin(), keys_.end(), key);
+    last_ = static_cast<std::size_t>(at - keys_.begin());
+    if (at == keys_.end() || *at != key) {
+      keys_.insert(at, key);
+      buckets_.insert(buckets_.begin() + static_cast<std::ptrdiff_t>(last_), Bucket{});
+    }
+  }
+  Bucket& b = buckets_[last_];
   if (b.count == 0) {
     b.min_ns = ns;
     b.max_ns = ns;
@@ -81,7 +67,7 @@ double DurationHistogram::Quantile_ns(double q) const {
   const std::uint64_t rank =
       std::clamp<std::uint64_t>(r < 1.0 ? 1 : static_cast<std::uint64_t>(r), 1, count_);
   std::uint64_t before = 0;
-  for (const auto& [key, b] : buckets_) {
+  for (const Bucket& b : buckets_) {
     if (before + b.count >= rank) {
       if (rank == before + 1) return static_cast<double>(b.min_ns);
       if (rank == before + b.count) return static_cast<double>(b.max_ns);
@@ -89,15 +75,15 @@ double DurationHistogram::Quantile_ns(double q) const {
     }
     before += b.count;
   }
-  return static_cast<double>(buckets_.rbegin()->second.max_ns);
+  return static_cast<double>(buckets_.back().max_ns);
 }
 
 Stats DurationHistogram::ComputeStats() const {
   Stats s;
   s.count = count_;
   if (count_ == 0) return s;
-  s.min = static_cast<double>(buckets_.begin()->second.min_ns) / kNsPerMs;
-  s.max = static_cast<double>(buckets_.rbegin()->second.max_ns) / kNsPerMs;
+  s.min = static_cast<double>(buckets_.front().min_ns) / kNsPerMs;
+  s.max = static_cast<double>(buckets_.back().max_ns) / kNsPerMs;
   s.p50 = Quantile_ns(0.50) / kNsPerMs;
   s.p95 = Quantile_ns(0.95) / kNsPerMs;
   s.p99 = Quantile_ns(0.99) / kNsPerMs;
@@ -108,7 +94,7 @@ Stats DurationHistogram::ComputeStats() const {
 std::vector<std::uint64_t> DurationHistogram::Counts(const std::vector<double>& edges_ms) const {
   if (edges_ms.size() < 2) throw std::invalid_argument("DurationHistogram::Counts: < 2 edges");
   std::vector<std::uint64_t> counts(edges_ms.size() - 1, 0);
-  for (const auto& [key, b] : buckets_) {
+  for (const Bucket& b : buckets_) {
     const std::size_t low = BinOf(edges_ms, static_cast<double>(b.min_ns) / kNsPerMs);
     const std::size_t high = BinOf(edges_ms, static_cast<double>(b.max_ns) / kNsPerMs);
     const double middle_ms =
