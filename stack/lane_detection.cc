@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "world/bits.h"
 #include "world/plumb_bob.h"
 #include "world/validation.h"
 
@@ -422,32 +423,6 @@ std::vector<std::uint8_t> ExactValueTable() {
   return table;
 }
 
-// LaneDetectorTables::square_outputs_ from the two tables: per neighbour pattern, whether each
-// mask's output is set for no alpha, for every alpha, or depends on it.
-std::array<std::array<std::uint8_t, 256>, 2> SquareOutputs(const std::vector<std::uint8_t>& warp,
-                                                           const std::vector<std::uint8_t>& exact) {
-  constexpr std::uint8_t kNever = 0, kAlways = 1, kDepends = 2;
-  const auto state = [](int set_count) {
-    return set_count == 0 ? kNever : set_count == kAlphaCount ? kAlways : kDepends;
-  };
-  std::array<std::array<std::uint8_t, 256>, 2> outputs{};
-  for (int p = 0; p < 256; ++p) {
-    int nonzero[2] = {0, 0}, exactly[2] = {0, 0};
-    for (int a = 0; a < kAlphaCount; ++a) {
-      nonzero[0] += warp[static_cast<std::size_t>(a * 16 + (p & 15))] != 0;
-      nonzero[1] += warp[static_cast<std::size_t>(a * 16 + (p >> 4))] != 0;
-      const std::uint8_t cls = exact[static_cast<std::size_t>(a * 256 + p)];
-      exactly[0] += cls == 1;
-      exactly[1] += cls == 2;
-    }
-    outputs[static_cast<std::size_t>(BirdsEyeClasses::kNonZero)][p] =
-        static_cast<std::uint8_t>(state(nonzero[0]) | (state(nonzero[1]) << 2));
-    outputs[static_cast<std::size_t>(BirdsEyeClasses::kExact)][p] =
-        static_cast<std::uint8_t>(state(exactly[0]) | (state(exactly[1]) << 2));
-  }
-  return outputs;
-}
-
 }  // namespace
 
 // Per output pixel, warpPerspective's source coordinates: the inverse homography (it inverts the
@@ -495,6 +470,31 @@ struct LaneDetectorTables::WarpSource {
   std::vector<int> sy = std::vector<int>(kLaneImageWidth * kLaneImageHeight);
   std::vector<int> alpha = std::vector<int>(kLaneImageWidth * kLaneImageHeight);
 };
+
+// LaneDetectorTables::square_outputs_ from the two tables: per neighbour pattern, whether each
+// mask's output is set for no alpha, for every alpha, or depends on it.
+LaneDetectorTables::SquareOutputTable LaneDetectorTables::SquareOutputs(
+    const std::vector<std::uint8_t>& warp, const std::vector<std::uint8_t>& exact) {
+  const auto state = [](int set_count) {
+    return set_count == 0 ? kNever : set_count == kAlphaCount ? kAlways : kDepends;
+  };
+  SquareOutputTable outputs{};
+  for (int p = 0; p < 256; ++p) {
+    int nonzero[2] = {0, 0}, exactly[2] = {0, 0};
+    for (int a = 0; a < kAlphaCount; ++a) {
+      nonzero[0] += warp[static_cast<std::size_t>(a * 16 + (p & 15))] != 0;
+      nonzero[1] += warp[static_cast<std::size_t>(a * 16 + (p >> 4))] != 0;
+      const std::uint8_t cls = exact[static_cast<std::size_t>(a * 256 + p)];
+      exactly[0] += cls == 1;
+      exactly[1] += cls == 2;
+    }
+    outputs[static_cast<std::size_t>(BirdsEyeClasses::kNonZero)][p] =
+        static_cast<std::uint8_t>(state(nonzero[0]) | (state(nonzero[1]) << 2));
+    outputs[static_cast<std::size_t>(BirdsEyeClasses::kExact)][p] =
+        static_cast<std::uint8_t>(state(exactly[0]) | (state(exactly[1]) << 2));
+  }
+  return outputs;
+}
 
 LaneDetectorTables::LaneDetectorTables(const LaneDetectionParams& params,
                                        const LaneCameraCalibration& camera)
@@ -709,7 +709,7 @@ void LaneDetector::FindLinePixels(std::span<const std::pair<int, int>> nonzero_c
       // padded image has a row below the last span's, and 64 · kLineWords <= kClassStride + 63),
       // masked off
       const int lo = std::max(begin - 64 * w, 0), hi = std::min(end - 64 * w, 64);
-      const std::uint64_t keep = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
+      const std::uint64_t keep = world::BitRange(lo, hi);
       const ClassBits bits = ClassBits64(in + 64 * w);
       const std::size_t i = row_word + static_cast<std::size_t>(w);
       line_bits_[i] = bits.any & keep;
@@ -881,12 +881,11 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
         if (yellow != Tables::kDepends && white != Tables::kDepends) {
           // the same for each of the square's outputs (the squares inside a line: 77 % of the
           // outputs visited in the default scenario)
-          if (yellow == Tables::kAlways) {
-            for (const std::uint32_t* w = first; w != last; ++w) add(sums->yellow, *w);
-          }
-          if (white == Tables::kAlways) {
-            for (const std::uint32_t* w = first; w != last; ++w) add(sums->white, *w);
-          }
+          const auto add_all = [&](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows) {
+            for (const std::uint32_t* w = first; w != last; ++w) add(rows, *w);
+          };
+          if (yellow == Tables::kAlways) add_all(sums->yellow);
+          if (white == Tables::kAlways) add_all(sums->white);
           return;
         }
         for (const std::uint32_t* w = first; w != last; ++w) {

@@ -457,7 +457,10 @@ class LaneDetectorTables {
   // Per BirdsEyeClasses, from warp_lut_ and exact_lut_ (a square of one class, or of none, does
   // not depend on it: the weights sum to one).
   enum SquareOutput : std::uint8_t { kNever = 0, kAlways = 1, kDepends = 2 };
-  std::array<std::array<std::uint8_t, 256>, 2> square_outputs_{};
+  using SquareOutputTable = std::array<std::array<std::uint8_t, 256>, 2>;
+  static SquareOutputTable SquareOutputs(const std::vector<std::uint8_t>& warp_lut,
+                                         const std::vector<std::uint8_t>& exact_lut);
+  SquareOutputTable square_outputs_{};
   // Active output pixels (whose source square touches the image), ordered by their square's top
   // left pixel in the padded class image (then by output index): the pixels of the squares whose
   // top left is padded index p are pixels_[square_start_[p], square_start_[p + 1]).

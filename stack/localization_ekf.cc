@@ -144,17 +144,6 @@ world::Pose2 OdomFromMap(const world::Pose2& X_map_odom, const world::Pose2& X_m
   return {p_odom.x(), p_odom.y(), world::WrapAngle(X_map_base.yaw_rad - X_map_odom.yaw_rad)};
 }
 
-OdomPointFromMap::OdomPointFromMap(const world::Pose2& X_map_odom)
-    : p_map_odom_(X_map_odom.position()),
-      c_(std::cos(X_map_odom.yaw_rad)),
-      s_(std::sin(X_map_odom.yaw_rad)) {}
-
-world::Vec2 OdomPointFromMap::operator()(const world::Vec2& p_map) const {
-  const double dx = p_map.x() - p_map_odom_.x();
-  const double dy = p_map.y() - p_map_odom_.y();
-  return {c_ * dx + s_ * dy, -s_ * dx + c_ * dy};
-}
-
 LocalizationEkfState InitialLocalizationEkfState(const LocalizationEkfParams& params, Time start,
                                                  const world::Pose2& X_map_odom) {
   params.Validate();

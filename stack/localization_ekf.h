@@ -175,16 +175,8 @@ world::Pose2 MapFromOdom(const world::Pose2& X_map_odom, const world::Pose2& X_o
 // X_odom_base = X_map_odom⁻¹ · X_map_base.
 world::Pose2 OdomFromMap(const world::Pose2& X_map_odom, const world::Pose2& X_map_base);
 
-// OdomFromMap's position of many map points under one map→odom transform, bit for bit: the
-// rotation's cos and sin are taken once (a collision check asks for thousands of cells per step).
-class OdomPointFromMap {
- public:
-  explicit OdomPointFromMap(const world::Pose2& X_map_odom);
-  world::Vec2 operator()(const world::Vec2& p_map) const;
-
- private:
-  world::Vec2 p_map_odom_;
-  double c_{1.0}, s_{0.0};
-};
+// OdomFromMap's position of many map points under one map→odom transform, bit for bit
+// (world::PointsInFrame with F the map and the body odom).
+using OdomPointFromMap = world::PointsInFrame;
 
 }  // namespace autonomsim::stack

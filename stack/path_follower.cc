@@ -25,15 +25,6 @@ bool Finite(const world::Pose2& X) {
   return std::isfinite(X.x_m) && std::isfinite(X.y_m) && std::isfinite(X.yaw_rad);
 }
 
-// p_F expressed in the base frame of X_F_base.
-world::Vec2 ToBase(const world::Pose2& X_F_base, const world::Vec2& p_F) {
-  const double c = std::cos(X_F_base.yaw_rad);
-  const double s = std::sin(X_F_base.yaw_rad);
-  const double dx = p_F.x() - X_F_base.x_m;
-  const double dy = p_F.y() - X_F_base.y_m;
-  return {c * dx + s * dy, -s * dx + c * dy};
-}
-
 double Distance(const world::Pose2& X, const world::Vec2& p) {
   return std::hypot(p.x() - X.x_m, p.y() - X.y_m);
 }
@@ -220,14 +211,15 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
 
   // carrot and curvature
   const double lookahead_m = LookaheadDistance(params.pursuit, input.speed_mps);
+  const world::PointsInFrame to_base(X);
   std::size_t carrot = end - 1;
   for (std::size_t i = closest; i < end; ++i) {
-    if (ToBase(X, path[i]).norm() >= lookahead_m) {
+    if (to_base(path[i]).norm() >= lookahead_m) {
       carrot = i;
       break;
     }
   }
-  const world::Vec2 p_base_carrot = ToBase(X, path[carrot]);
+  const world::Vec2 p_base_carrot = to_base(path[carrot]);
   out.carrot = path[carrot];
   out.curvature_per_m = PurePursuitCurvature(p_base_carrot);
 

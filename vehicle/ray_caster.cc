@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "world/bits.h"
 #include "world/validation.h"
 
 namespace autonomsim::vehicle {
@@ -732,7 +733,7 @@ void CameraRenderer::FillFloor(const FloorPass& pass, const std::vector<CameraRa
     int common_from = run.begin;  // the stretch of common pixels [common_from, block's start)
     for (int word = k_begin / 64; word <= (k_end - 1) / 64; ++word) {
       const int lo = std::max(k_begin - 64 * word, 0), hi = std::min(k_end - 64 * word, 64);
-      const std::uint64_t in_run = (hi == 64 ? ~0ull : (1ull << hi) - 1) & (~0ull << lo);
+      const std::uint64_t in_run = world::BitRange(lo, hi);
       for (std::uint64_t fresh = in_run & ~seen[word]; fresh != 0; fresh &= fresh - 1) {
         const int k = 64 * word + std::countr_zero(fresh);
         if (!pass.Common(row_groups[k])) mixed[word] |= 1ull << (k - 64 * word);
@@ -798,12 +799,8 @@ struct PrismInBase {
 
 PrismInBase PlaceInBase(const world::Pose2& X_map_car, const Prism& prism) {
   const world::OrientedBox& box = prism.footprint;
-  const double cy = std::cos(X_map_car.yaw_rad);
-  const double sy = std::sin(X_map_car.yaw_rad);
-  const double rel_x = box.pose.x_m - X_map_car.x_m;
-  const double rel_y = box.pose.y_m - X_map_car.y_m;
   const double psi = box.pose.yaw_rad - X_map_car.yaw_rad;
-  return PrismInBase{.p_base = Eigen::Vector2d(cy * rel_x + sy * rel_y, -sy * rel_x + cy * rel_y),
+  return PrismInBase{.p_base = world::PointsInFrame(X_map_car)(box.pose.position()),
                      .cp = std::cos(psi),
                      .sp = std::sin(psi),
                      .half_length = 0.5 * box.length_m,
@@ -1028,9 +1025,7 @@ void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, Col
 }
 
 void CameraRenderer::NoteDepthColumns(int v, int first, int last) {
-  std::pair<int, int>& hit = depth_columns_hit_[static_cast<std::size_t>(v)];
-  hit.first = std::min(hit.first, first);
-  hit.second = std::max(hit.second, last);
+  WidenColumns(&depth_columns_hit_[static_cast<std::size_t>(v)], first, last);
 }
 
 void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,

@@ -293,6 +293,12 @@ class CameraRays {
 struct RowSpans {
   std::vector<std::pair<int, int>> columns;  // one entry per image row
 };
+// A row's columns [first, second) widened to take in [begin, end) (an empty one, first >= second,
+// set {width, 0}, takes just them).
+inline void WidenColumns(std::pair<int, int>* columns, int begin, int end) {
+  columns->first = std::min(columns->first, begin);
+  columns->second = std::max(columns->second, end);
+}
 
 // What a consumer keeps with a depth buffer it renders one camera into frame after frame, so that
 // the renderer rewrites only the pixels that can have changed: the bare floor's depth is the same
@@ -408,9 +414,7 @@ class CameraRenderer {
     // (LabelView::nonzero_columns; null where not asked for, or where it is the whole region)
     std::vector<std::pair<int, int>>* nonzero{nullptr};
     void MayBeNonzero(int v, int begin, int end) const {
-      if (nonzero == nullptr) return;
-      std::pair<int, int>& columns = (*nonzero)[static_cast<std::size_t>(v)];
-      columns = {std::min(columns.first, begin), std::max(columns.second, end)};
+      if (nonzero != nullptr) WidenColumns(&(*nonzero)[static_cast<std::size_t>(v)], begin, end);
     }
   };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,

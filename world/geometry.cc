@@ -24,6 +24,17 @@ double WrapAngle(double a_rad) {
   return r;
 }
 
+PointsInFrame::PointsInFrame(const Pose2& X_F_body)
+    : p_F_body_(X_F_body.position()),
+      c_(std::cos(X_F_body.yaw_rad)),
+      s_(std::sin(X_F_body.yaw_rad)) {}
+
+Vec2 PointsInFrame::operator()(const Vec2& p_F) const {
+  const double dx = p_F.x() - p_F_body_.x();
+  const double dy = p_F.y() - p_F_body_.y();
+  return {c_ * dx + s_ * dy, -s_ * dx + c_ * dy};
+}
+
 std::vector<Vec2> OrientedBox::Corners() const {
   const Vec2 c = pose.position();
   const Vec2 x = 0.5 * length_m * pose.heading();

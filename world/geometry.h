@@ -45,6 +45,20 @@ struct Box {
 // Wraps an angle to (-pi, pi].
 double WrapAngle(double a_rad);
 
+// Points of a frame F expressed in a body's frame, the body at X_F_body: p_body = R(-yaw) ·
+// (p_F - p_F_body). The rotation's cos and sin are taken once, for as many points as are asked
+// (a collision check maps thousands of cells under one pose); each point's arithmetic is
+// c·dx + s·dy, -s·dx + c·dy in that order.
+class PointsInFrame {
+ public:
+  explicit PointsInFrame(const Pose2& X_F_body);
+  Vec2 operator()(const Vec2& p_F) const;
+
+ private:
+  Vec2 p_F_body_;
+  double c_{1.0}, s_{0.0};
+};
+
 // A rectangle centred on a pose: the footprint of a car or an obstacle.
 struct OrientedBox {
   Pose2 pose;

@@ -92,6 +92,11 @@ class LaneTrack : public ::testing::Test {
     delete frames_;
     frames_ = nullptr;
   }
+  // Tables of the default parameters for the track's colour camera.
+  static std::shared_ptr<const LaneDetectorTables> DefaultTables() {
+    return std::make_shared<const LaneDetectorTables>(LaneDetectionParams{},
+                                                      CalibrationOf(frames_->color_camera()));
+  }
   static testing::TrackFrames* frames_;
 };
 testing::TrackFrames* LaneTrack::frames_ = nullptr;
@@ -235,9 +240,7 @@ TEST_F(LaneTrack, DetectorsOnSharedTablesShareNoScratch) {
 // detector searches only there and gives the sums of the whole image, also after a frame whose
 // lines lay where the next one's columns do not reach (the old line bits are cleared).
 TEST_F(LaneTrack, NonzeroColumnsFromTheProducerGiveTheSameSums) {
-  const LaneCameraCalibration calibration = CalibrationOf(frames_->color_camera());
-  const auto tables =
-      std::make_shared<const LaneDetectorTables>(LaneDetectionParams{}, calibration);
+  const auto tables = DefaultTables();
   LaneDetector told(tables);
   LaneDetector searched(tables);
   // per image row, the columns between the first and the last non-zero class written
