@@ -233,36 +233,79 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
   return Finish(counts);
 }
 
-// FarthestCountedDepth_m's slack for the rounding to millimetres (0.5 mm) and the float
-// arithmetic (below 1e-5 m at these distances), with room to spare: ours, not the lab's.
+// FarthestCountedDepths_m's slacks, ours, not the lab's, with room to spare: the box is widened
+// by kCountedBoxSlack_m for the float arithmetic of the points (below 1e-5 m for a point within
+// a few metres), which matters where a ray grazes a face; the bound is moved kCountedDepthSlack_m
+// farther for the rounding of the depth to millimetres (0.5 mm).
+constexpr double kCountedBoxSlack_m = 0.001;
 constexpr double kCountedDepthSlack_m = 0.01;
 
-double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
-                              const ObstacleGridParams& params) {
-  params.Validate();
+namespace {
+
+// The box's camera → base transform in doubles, and a test of a base-frame point against the box
+// widened by `slack_m` on every side.
+struct BoxInBase {
+  explicit BoxInBase(const ObstacleGridParams& params) : p(params) {
+    params.Validate();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) M(r, c) = params.X_base_camera[4 * r + c];
+      t(r) = params.X_base_camera[4 * r + 3];
+    }
+  }
+  bool Inside(const Eigen::Vector3d& b, double slack_m) const {
+    return b.x() >= p.x_min_m - slack_m && b.x() <= p.x_max_m + slack_m &&
+           b.y() >= p.y_min_m - slack_m && b.y() <= p.y_max_m + slack_m &&
+           b.z() >= p.z_min_m - slack_m && b.z() <= p.z_max_m + slack_m;
+  }
+  const ObstacleGridParams& p;
   Eigen::Matrix3d M;
   Eigen::Vector3d t;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) M(r, c) = params.X_base_camera[4 * r + c];
-    t(r) = params.X_base_camera[4 * r + 3];
+};
+
+}  // namespace
+
+std::vector<float> FarthestCountedDepths_m(const PointCloudParams& cloud_params,
+                                           const ObstacleGridParams& params,
+                                           const std::array<double, 12>& P) {
+  const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
+  const BoxInBase box(params);
+  constexpr int kHeight = PointCloud640::kHeight;
+  constexpr float kInfinite = std::numeric_limits<float>::infinity();
+  // a pixel without a return is the camera's own position: inside the box, every pixel counts
+  if (box.Inside(box.t, kCountedBoxSlack_m)) {
+    return std::vector<float>(PointCloud640::kPoints, kInfinite);
   }
-  const auto inside = [&](const Eigen::Vector3d& p) {
-    return p.x() >= params.x_min_m && p.x() <= params.x_max_m && p.y() >= params.y_min_m &&
-           p.y() <= params.y_max_m && p.z() >= params.z_min_m && p.z() <= params.z_max_m;
-  };
-  constexpr double kInfinite = std::numeric_limits<double>::infinity();
-  if (inside(t) || std::abs(M.determinant()) < 1e-9) return kInfinite;
-  const Eigen::Matrix3d camera_from_base = M.inverse();
-  double ahead_m = 0.0;  // the farthest corner's distance ahead of the camera, in its frame
-  for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d corner((k & 1) ? params.x_max_m : params.x_min_m,
-                                 (k & 2) ? params.y_max_m : params.y_min_m,
-                                 (k & 4) ? params.z_max_m : params.z_min_m);
-    ahead_m = std::max(ahead_m, (camera_from_base * (corner - t)).x());
+  // Pixel (u, v) with depth value d back-projects to s · (1, -(u - cx) / fx, -(v - cy) / fy) in
+  // the camera's frame, s = d · m_per_mm (StepPointCloud), so to t + s · a in base_link with
+  // a = M · that direction: along each axis the box (widened by its slack) holds an interval of
+  // s, and the pixel's points in the box are those of the three intervals' intersection.
+  const double lo[3] = {params.x_min_m, params.y_min_m, params.z_min_m};
+  const double hi[3] = {params.x_max_m, params.y_max_m, params.z_max_m};
+  const double m_per_mm = static_cast<double>(k.m_per_mm);
+  std::vector<float> farthest(PointCloud640::kPoints, -kInfinite);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      const Eigen::Vector3d a =
+          box.M * Eigen::Vector3d(1.0, -(u - static_cast<double>(k.cx)) / k.fx,
+                                  -(v - static_cast<double>(k.cy)) / k.fy);
+      double s_lo = 0.0, s_hi = std::numeric_limits<double>::infinity();
+      for (int j = 0; j < 3; ++j) {
+        const double below = lo[j] - kCountedBoxSlack_m - box.t(j);
+        const double above = hi[j] + kCountedBoxSlack_m - box.t(j);
+        if (a(j) == 0.0) {
+          if (below > 0.0 || above < 0.0) s_hi = -1.0;
+          continue;
+        }
+        s_lo = std::max(s_lo, std::min(below / a(j), above / a(j)));
+        s_hi = std::min(s_hi, std::max(below / a(j), above / a(j)));
+      }
+      if (s_lo > s_hi) continue;
+      // s = d · m_per_mm and d is the optical depth in millimetres, rounded
+      farthest[static_cast<std::size_t>(v * kWidth + u)] =
+          static_cast<float>(s_hi / (m_per_mm * 1000.0) + kCountedDepthSlack_m);
+    }
   }
-  // ahead = d · m_per_mm for a depth value d in millimetres, which is the depth in metres · 1000
-  const double depth_m = ahead_m / (static_cast<double>(cloud_params.m_per_mm()) * 1000.0);
-  return depth_m + kCountedDepthSlack_m;
+  return farthest;
 }
 
 Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGridParams& params,

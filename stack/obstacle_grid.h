@@ -88,6 +88,7 @@ struct ObstacleGridParams {
   // Finite values, min < max, cell_size_m > 0, and the box's x and y extents are 18 and 13 cells
   // (Grid234's fixed shape).
   void Validate() const;
+  friend bool operator==(const ObstacleGridParams&, const ObstacleGridParams&) = default;
 };
 
 // The grid of a cloud. Throws std::invalid_argument if the cloud does not hold 640×480 points.
@@ -154,14 +155,19 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
                         DepthGridMemo* memo,
                         std::span<const std::pair<int, int>> changed_columns = {});
 
-// The largest optical depth (metres, as a depth camera measures it) that a pixel can have and
-// still be counted by the grid: a depth value d back-projects to a point d · m_per_mm ahead of the
-// camera (StepPointCloud), and no point of the box is farther ahead than its farthest corner; 1 cm
-// is added for the rounding to millimetres and the float arithmetic. A renderer may leave out
-// whatever is wholly farther (vehicle::CameraRenderer::RenderDepth): the grid is the same. +inf
-// where a pixel without a return (depth 0, the camera's own position) falls inside the box.
-double FarthestCountedDepth_m(const PointCloudParams& cloud_params,
-                              const ObstacleGridParams& params);
+// Per pixel of a 640 × 480 depth image (row-major), the farthest optical depth (metres, as a
+// depth camera measures it) at which the grid can count it: a depth value d back-projects to a
+// point d · m_per_mm ahead of the camera (StepPointCloud), and the pixel's ray leaves the box at
+// some distance; 1 mm is added to the box for the float arithmetic, 1 cm to the bound for the
+// rounding to millimetres. -inf
+// where the ray never enters the box; +inf everywhere where a pixel without a return (depth 0,
+// the camera's own position) falls inside the box. A pixel whose depth is beyond
+// its bound is not counted, nor is anything behind it: a renderer may leave out a surface beyond
+// the bound (vehicle::DepthInterest), and the grid is the same. Throws std::invalid_argument for
+// a P that StepPointCloud refuses.
+std::vector<float> FarthestCountedDepths_m(const PointCloudParams& cloud_params,
+                                           const ObstacleGridParams& params,
+                                           const std::array<double, 12>& P);
 
 struct ObstacleLayerParams {
   // reference §4: a cell is an obstacle when its count is above 250.

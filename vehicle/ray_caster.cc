@@ -395,9 +395,46 @@ void CameraRenderer::Render(const world::Pose2& X_map_car, std::span<const Prism
 
 void CameraRenderer::RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                  DepthImage* depth, DepthRowHistory* history,
-                                 double depth_of_interest_m) {
+                                 const DepthInterest* interest) {
   Require(depth != nullptr && history != nullptr, "CameraRenderer::RenderDepth needs its outputs");
-  RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history, nullptr, depth_of_interest_m);
+  CheckInterest(interest);
+  RenderImpl(X_map_car, prisms, nullptr, depth, nullptr, history, nullptr, interest);
+}
+
+void CameraRenderer::CheckInterest(const DepthInterest* interest) const {
+  Require(interest == nullptr ||
+              (interest->width() == rays_->width() && interest->height() == rays_->height()),
+          [&] {
+            return "CameraRenderer: a depth interest of " + std::to_string(interest->width()) +
+                   "x" + std::to_string(interest->height()) + " for a camera of " +
+                   std::to_string(rays_->width()) + "x" + std::to_string(rays_->height());
+          });
+}
+
+DepthInterest::DepthInterest(const CameraRays& rays, std::vector<float> farthest_m)
+    : width_(rays.width()), height_(rays.height()), pixels_m_(std::move(farthest_m)) {
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  Require(pixels_m_.size() == n, [&] {
+    return "DepthInterest: " + std::to_string(pixels_m_.size()) + " bounds for " +
+           std::to_string(n) + " pixels";
+  });
+  Require(std::none_of(pixels_m_.begin(), pixels_m_.end(), [](float b) { return std::isnan(b); }),
+          "DepthInterest: a bound is NaN");
+  constexpr float kNone = -std::numeric_limits<float>::infinity();
+  tiles_m_.assign(rays.tiles().size(), kNone);
+  tile_rows_m_.assign(rays.tile_rows().size(), kNone);
+  const auto per_row = static_cast<std::size_t>(rays.tiles_per_row());
+  for (std::size_t ti = 0; ti < rays.tiles().size(); ++ti) {
+    const CameraRays::Tile& tile = rays.tiles()[ti];
+    for (int v = tile.v0; v < tile.v1; ++v) {
+      const float* row = pixels_m_.data() + static_cast<std::size_t>(v) * width_;
+      tiles_m_[ti] = std::max(tiles_m_[ti], *std::max_element(row + tile.u0, row + tile.u1));
+    }
+    float& row_m = tile_rows_m_[ti / per_row];
+    row_m = std::max(row_m, tiles_m_[ti]);
+  }
+  farthest_m_ =
+      tile_rows_m_.empty() ? kNone : *std::max_element(tile_rows_m_.begin(), tile_rows_m_.end());
 }
 
 void CameraRenderer::CheckRegion(const RowSpans& region, const char* what) const {
@@ -467,7 +504,7 @@ void Intersect(const std::vector<CameraRays::Run>& runs, const RowSpans& region,
 void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms,
                                 ColorImage* color, DepthImage* depth, const RowSpans* color_region,
                                 DepthRowHistory* history, const LabelOut* labels,
-                                double depth_of_interest_m) {
+                                const DepthInterest* interest) {
   const int w = rays_->width();
   const int h = rays_->height();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
@@ -492,7 +529,7 @@ void CameraRenderer::RenderImpl(const world::Pose2& X_map_car, std::span<const P
   // Without a depth image, only the colour region's pixels of a prism are needed.
   const RowSpans* prism_region = depth == nullptr ? color_region : nullptr;
   for (std::size_t k = 0; k < prisms.size(); ++k) {
-    RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels, depth_of_interest_m);
+    RenderPrism(X_map_car, prisms[k], k, color, depth, prism_region, labels, interest);
   }
   if (history != nullptr) KeepHistory(depth, history);
 }
@@ -913,11 +950,12 @@ struct CameraRenderer::PrismTrace {
   };
   // False (and `hits` not set) where no pixel of the four is within the prism's bounds or hits it.
   [[gnu::always_inline]] inline bool Test(int i, int n, const float* nearest_t, Hits* hits) const {
-    // within the prism's bounds on the image?
+    // within the prism's bounds on the image, and (with an interest) not beyond the pixel's bound?
     const F4 nx = Load(rays.ray_x().data() + i, n);
     const F4 ny = Load(rays.ray_y().data() + i, n);
-    const I4 in_box =
+    I4 in_box =
         FirstLanes(n) & (nx >= box_x_lo) & (nx <= box_x_hi) & (ny >= box_y_lo) & (ny <= box_y_hi);
+    if (interest_m != nullptr) in_box &= Load(interest_m + i, n) >= z_near;
     if (!Any(in_box)) return false;
     // slabs: a zero direction gives infinite bounds of the right signs
     const F4 one = Splat(1.0f);
@@ -955,23 +993,59 @@ struct CameraRenderer::PrismTrace {
   const CameraRays& rays;
   F4 box_x_lo, box_x_hi, box_y_lo, box_y_hi;
   F4 far;
+  // DepthInterest::pixels_m (null: none) and the prism's least optical depth, rounded down: a
+  // pixel whose bound is nearer sees nothing of the prism within it
+  const float* interest_m{nullptr};
+  F4 z_near{};
   F4 x_lo_o, x_hi_o, y_lo_o, y_hi_o, z_lo_o, z_hi_o;
   F4 rc, rs;
   std::array<Bgr, 7> face_bgr;
   std::array<std::uint8_t, 7> face_label{};
 };
 
+namespace {
+
+// The largest float not above x.
+float FloatBelow(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                    : f;
+}
+
+// Calls visit(tile index) for each tile of `r` that a prism with these bounds may cover, and
+// (with an interest) where some pixel's bound reaches the prism's least depth, until visit
+// returns true; returns whether one did.
+template <class Visit>
+bool ForEachTileReached(const CameraRays& r, const RayBounds& bounds, const DepthInterest* interest,
+                        Visit visit) {
+  // (optical z is linear in the point, so the nearest point of a box is a corner)
+  const auto beyond = [&](float farthest_m) { return bounds.z_near > farthest_m; };
+  if (interest != nullptr && beyond(interest->farthest_m())) return false;
+  const std::vector<CameraRays::Tile>& tiles = r.tiles();
+  const std::vector<CameraRays::Tile>& tile_rows = r.tile_rows();
+  const auto per_row = static_cast<std::size_t>(r.tiles_per_row());
+  for (std::size_t row = 0; row < tile_rows.size(); ++row) {
+    if (Misses(tile_rows[row], bounds)) continue;
+    if (interest != nullptr && beyond(interest->tile_row_farthest_m(row))) continue;
+    for (std::size_t ti = row * per_row; ti < (row + 1) * per_row; ++ti) {
+      if (Misses(tiles[ti], bounds)) continue;
+      if (interest != nullptr && beyond(interest->tile_farthest_m(ti))) continue;
+      if (visit(ti)) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& prism,
                                  std::size_t index, ColorImage* color, DepthImage* depth,
                                  const RowSpans* region, const LabelOut* labels,
-                                 double depth_of_interest_m) {
+                                 const DepthInterest* interest) {
   const CameraRays& r = *rays_;
   const PrismInBase placed = PlaceInBase(X_map_car, prism);
   const std::optional<RayBounds> bounds = VisibleBounds(r, placed);
-  // (optical z is linear in the point, so the nearest point of a box is a corner)
-  if (!bounds || bounds->z_near > depth_of_interest_m) return;
-  const auto misses = [&](const CameraRays::Tile& tile) { return Misses(tile, *bounds); };
-  const std::vector<CameraRays::Tile>& tile_rows = r.tile_rows();
+  if (!bounds) return;
 
   PrismTrace trace(r, placed, *bounds);
   trace.face_bgr = PrismFaceColours(prism);
@@ -980,21 +1054,22 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   } else if (labels != nullptr) {
     for (std::size_t f = 0; f < 7; ++f) trace.face_label[f] = (*labels->label)(trace.face_bgr[f]);
   }
-
-  const std::vector<CameraRays::Tile>& tiles = r.tiles();
-  const auto per_row = static_cast<std::size_t>(r.tiles_per_row());
-  for (std::size_t row = 0; row < tile_rows.size(); ++row) {
-    if (misses(tile_rows[row])) continue;
-    for (std::size_t ti = row * per_row; ti < (row + 1) * per_row; ++ti) {
-      if (!misses(tiles[ti])) TracePrismTile(trace, ti, color, depth, region, labels);
-    }
+  if (interest != nullptr) {
+    trace.interest_m = interest->pixels_m().data();
+    trace.z_near = Splat(FloatBelow(bounds->z_near));
   }
+  ForEachTileReached(r, *bounds, interest, [&](std::size_t ti) {
+    TracePrismTile(trace, ti, color, depth, region, labels);
+    return false;
+  });
 }
 
 bool CameraRenderer::MaySee(const world::Pose2& X_map_car, const Prism& prism,
-                            double depth_of_interest_m) const {
+                            const DepthInterest* interest) const {
+  CheckInterest(interest);
   const std::optional<RayBounds> bounds = VisibleBounds(*rays_, PlaceInBase(X_map_car, prism));
-  return bounds && bounds->z_near <= depth_of_interest_m;
+  return bounds && (interest == nullptr || ForEachTileReached(*rays_, *bounds, interest,
+                                                              [](std::size_t) { return true; }));
 }
 
 void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, ColorImage* color,

@@ -329,6 +329,32 @@ class DepthRowHistory {
   std::vector<std::pair<int, int>> changed_;
 };
 
+// What a consumer of depth images reads (demand-driven sensing, as RowSpans is for colour): per
+// pixel, the farthest optical depth (metres) it can use. A surface beyond a pixel's bound is of
+// no use there, nor is anything behind it, so a renderer may leave it out: the image is exact
+// wherever its depth is within the bound. Also kept per tile and per row of tiles of the camera's
+// rays (CameraRays::tiles), so that a prism beyond every pixel of a tile costs one comparison.
+class DepthInterest {
+ public:
+  // farthest_m: a bound per pixel of `rays`' image, row-major (-inf: none of the pixel's depth is
+  // read, +inf: all of it); std::invalid_argument if the count is not the image's or one is NaN.
+  DepthInterest(const CameraRays& rays, std::vector<float> farthest_m);
+
+  std::span<const float> pixels_m() const { return pixels_m_; }
+  float farthest_m() const { return farthest_m_; }  // the largest of every pixel's
+  float tile_farthest_m(std::size_t tile) const { return tiles_m_[tile]; }
+  float tile_row_farthest_m(std::size_t row) const { return tile_rows_m_[row]; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  int width_, height_;
+  std::vector<float> pixels_m_;
+  std::vector<float> tiles_m_;      // per CameraRays::tiles() entry
+  std::vector<float> tile_rows_m_;  // per CameraRays::tile_rows() entry
+  float farthest_m_;
+};
+
 // Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u]. If
 // nonzero_columns is set, RenderLabels also says there, per image row, the columns [begin, end)
 // outside which every pixel it labelled got label 0 (begin >= end: none), so that a consumer
@@ -365,13 +391,13 @@ class CameraRenderer {
               DepthImage* depth, const RowSpans& color_region);
   // The depth image alone, into a buffer that `history` describes (DepthRowHistory): only the
   // columns of each row that the last frame's prisms wrote are set back to the bare floor. The
-  // image is exactly Render's wherever Render's is at most `depth_of_interest_m` (optical z,
-  // metres): a prism wholly farther is left out, for a consumer that reads nothing farther (the
-  // obstacle grid, stack::FarthestCountedDepth_m); what it would have hidden is farther still.
-  // The default leaves nothing out.
+  // image is exactly Render's wherever Render's is within `interest`'s bound for the pixel (null:
+  // everywhere): a prism is left out where all of it is beyond the bound of every pixel of a
+  // tile (or of four neighbouring pixels), for a consumer that reads nothing farther (the
+  // obstacle grid, stack::FarthestCountedDepths_m); what it would have hidden is farther still.
+  // std::invalid_argument if `interest` is not of this camera's size.
   void RenderDepth(const world::Pose2& X_map_car, std::span<const Prism> prisms, DepthImage* depth,
-                   DepthRowHistory* history,
-                   double depth_of_interest_m = std::numeric_limits<double>::infinity());
+                   DepthRowHistory* history, const DepthInterest* interest = nullptr);
 
   // label(c) for each pixel of `region` whose colour Render would make c, written to `out`; no
   // other pixel is written. The floor has few colours and a prism's faces seven, so this costs
@@ -387,10 +413,10 @@ class CameraRenderer {
 
   // Whether `prism` may cover a pixel of the image with the car at X_map_car: false only for a
   // prism the renderer would draw nothing of (behind the camera, beyond the far clip, beside the
-  // view, or wholly beyond `depth_of_interest_m` as RenderDepth leaves it out), so that a consumer
-  // may tell two frames apart by the car's pose and the prisms it may see.
+  // view, or beyond `interest`'s bounds wherever it may be seen, as RenderDepth leaves it out),
+  // so that a consumer may tell two frames apart by the car's pose and the prisms it may see.
   bool MaySee(const world::Pose2& X_map_car, const Prism& prism,
-              double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
+              const DepthInterest* interest = nullptr) const;
 
   // Floor blocks of the texture's common colour (CameraRays::FloorBlock) filled without looking
   // their pixels up, a group of them at a time where the group's circle allows: on by default;
@@ -403,6 +429,8 @@ class CameraRenderer {
  private:
   // std::invalid_argument unless `region` has a row per image row.
   void CheckRegion(const RowSpans& region, const char* what) const;
+  // std::invalid_argument unless `interest` is null or of this camera's size.
+  void CheckInterest(const DepthInterest* interest) const;
   // RenderLabels' output: where, and the labels of the floor's and the surround's colours.
   struct LabelOut {
     LabelView view;
@@ -419,8 +447,7 @@ class CameraRenderer {
   };
   void RenderImpl(const world::Pose2& X_map_car, std::span<const Prism> prisms, ColorImage* color,
                   DepthImage* depth, const RowSpans* color_region, DepthRowHistory* history,
-                  const LabelOut* labels = nullptr,
-                  double depth_of_interest_m = std::numeric_limits<double>::infinity());
+                  const LabelOut* labels = nullptr, const DepthInterest* interest = nullptr);
   // After a frame rendered into the buffer `history` describes: what changed, what to restore.
   void KeepHistory(const DepthImage* depth, DepthRowHistory* history);
   // Colour (or, with `labels`, labels) and depth of the floor and the surround.
@@ -434,10 +461,10 @@ class CameraRenderer {
   void FillFloor(const FloorPass& pass, const std::vector<CameraRays::Run>& runs);
   // `region`: only its pixels (colour alone), or null: all of the prism's.
   // `index`: the prism's place in the frame's list (its entry of LabelOut::prism_labels).
-  // Nothing is drawn for a prism wholly farther than `depth_of_interest_m` (RenderDepth).
+  // `interest`: nothing is drawn where the prism is wholly beyond it (RenderDepth), or null.
   void RenderPrism(const world::Pose2& X_map_car, const Prism& prism, std::size_t index,
                    ColorImage* color, DepthImage* depth, const RowSpans* region,
-                   const LabelOut* labels, double depth_of_interest_m);
+                   const LabelOut* labels, const DepthInterest* interest);
   // RenderPrism's per-pixel step: the exact ray test of pixels [u_begin, u_end) of row v, and
   // the nearest surface's colour, label and depth where the prism is nearer than what they saw.
   struct PrismTrace;

@@ -54,10 +54,10 @@ struct SceneKey {
   friend bool operator==(const SceneKey&, const SceneKey&) = default;  // exactly, bit for bit
 };
 
-SceneKey SceneOf(const CameraFrame& frame, double depth_of_interest_m, int variant) {
+SceneKey SceneOf(const CameraFrame& frame, const vehicle::DepthInterest* interest, int variant) {
   SceneKey key{.pose = frame.X_map_car, .blackout = frame.blackout, .variant = variant};
   for (const vehicle::Prism& prism : frame.prisms) {
-    if (frame.MaySee(prism, depth_of_interest_m)) key.prisms.push_back(prism);
+    if (frame.MaySee(prism, interest)) key.prisms.push_back(prism);
   }
   return key;
 }
@@ -72,10 +72,10 @@ struct DepthScratch {
   stack::Grid234 last_grid;
 };
 
-// `depth_of_interest_m`: what the consumer reads (CameraFrame::RenderDepth).
+// `interest`: what the consumer reads (CameraFrame::RenderDepth), or null: every pixel.
 stack::DepthImageView RenderDepth(const CameraFrame& frame, DepthScratch* scratch,
-                                  double depth_of_interest_m) {
-  frame.RenderDepth(&scratch->depth, &scratch->history, depth_of_interest_m);
+                                  const vehicle::DepthInterest* interest) {
+  frame.RenderDepth(&scratch->depth, &scratch->history, interest);
   return stack::DepthImageView{scratch->depth.width, scratch->depth.height, scratch->depth.mm};
 }
 
@@ -92,9 +92,9 @@ struct GridParams {
   stack::ObstacleGridParams grid;
   std::array<double, 12> P{};
   std::function<void(const stack::Grid234&, Time)> hook;
-  // The fused node reads no depth beyond this (stack::FarthestCountedDepth_m); the point cloud
-  // node, which publishes every point, reads all.
-  double depth_of_interest_m{std::numeric_limits<double>::infinity()};
+  // The fused node reads no pixel's depth beyond its bound here (stack::FarthestCountedDepths_m);
+  // the point cloud node, which publishes every point, reads all (null).
+  std::shared_ptr<const vehicle::DepthInterest> interest;
 };
 
 stack::Grid234 Report(const GridParams& params, stack::Grid234 grid, Time stamp) {
@@ -107,12 +107,12 @@ stack::Grid234 Report(const GridParams& params, stack::Grid234 grid, Time stamp)
 stack::Grid234 FusedGrid(const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
   std::optional<SceneKey> key;
   if (frame.DepthFromScene()) {
-    key = SceneOf(frame, p.depth_of_interest_m, 0);
+    key = SceneOf(frame, p.interest.get(), 0);
     if (scratch->last && *scratch->last == *key) return scratch->last_grid;
   }
   scratch->last_grid =
-      stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch, p.depth_of_interest_m),
-                             p.P, &scratch->grid_memo, scratch->history.changed_columns());
+      stack::StepDepthToGrid(p.cloud, p.grid, RenderDepth(frame, scratch, p.interest.get()), p.P,
+                             &scratch->grid_memo, scratch->history.changed_columns());
   scratch->last = std::move(key);
   return scratch->last_grid;
 }
@@ -121,6 +121,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                                          const std::map<std::string, NodeMappingConfig>& mapping,
                                          const SensorSuite& sensors,
                                          TopicId<CameraFrame> depth_image,
+                                         PerceptionTablesCache& tables,
                                          std::function<void(const stack::Grid234&, Time)> hook) {
   // depth 1: the costmap's obstacle layer subscribes with QoS(1), best effort
   // (code/ros_ws/src/obstacle_layer/src/obstacle_layer.cpp:32-37)
@@ -132,7 +133,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
   if (InHardware(mapping, "obstacle_detection", kSlot0)) {
     // Point cloud and grid fused in one slot; the cloud is never written (reference §4).
     params.cloud.hardware_scale = true;
-    params.depth_of_interest_m = stack::FarthestCountedDepth_m(params.cloud, params.grid);
+    params.interest = tables.DepthInterest(params.cloud, params.grid, sensors.depth_camera());
     AddComponentNode(graph, NodeSpec{.name = "obstacle_detection", .mapping = kSlot0}, depth_image,
                      obstacles, std::move(params), std::make_shared<DepthScratch>(),
                      [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
@@ -148,8 +149,7 @@ TopicId<stack::Grid234> AddObstacleNodes(NodeGraph& graph, const PerceptionConfi
                    params, std::make_shared<DepthScratch>(),
                    [](const GridParams& p, const CameraFrame& frame, DepthScratch* scratch) {
                      auto cloud = std::make_shared<stack::PointCloud640>();
-                     stack::StepPointCloud(p.cloud,
-                                           RenderDepth(frame, scratch, p.depth_of_interest_m), p.P,
+                     stack::StepPointCloud(p.cloud, RenderDepth(frame, scratch, nullptr), p.P,
                                            cloud.get());
                      return CloudMessage{std::move(cloud), frame.stamp};
                    });
@@ -192,7 +192,7 @@ void LaneRowSums(const LaneParams& p, const CameraFrame& frame, LaneScratch* scr
                  stack::BirdsEyeClasses count = stack::BirdsEyeClasses::kNonZero) {
   stack::LaneDetector& detector = scratch->detector;
   if (frame.LabelsFromScene()) {
-    SceneKey key = SceneOf(frame, std::numeric_limits<double>::infinity(), static_cast<int>(count));
+    SceneKey key = SceneOf(frame, nullptr, static_cast<int>(count));
     if (scratch->last && *scratch->last == key) {
       *sums = scratch->last_sums;
       return;
@@ -218,7 +218,7 @@ stack::LanePoints Report(const LaneParams& params, stack::LanePoints lanes, Time
 TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig& config,
                                         const std::map<std::string, NodeMappingConfig>& mapping,
                                         const SensorSuite& sensors, TopicId<CameraFrame> image,
-                                        LaneTablesCache& lane_tables,
+                                        PerceptionTablesCache& tables,
                                         std::function<void(const stack::LanePoints&, Time)> hook) {
   // depth 1: the LaneController subscribes with depth 1 (autonomros_lane_detection/src/
   // lane_controller.cpp:179); the ROS 2 lane detector publishes with depth 1
@@ -226,7 +226,7 @@ TopicId<stack::LanePoints> AddLaneNodes(NodeGraph& graph, const PerceptionConfig
   const auto lanes = graph.AddTopic<stack::LanePoints>(
       {.name = kLanePointsTopic, .type = msg::LanePoints(), .depth = 1});
   LaneParams params{
-      .tables = lane_tables.Get(config.lane_detection, sensors.color_camera().model()),
+      .tables = tables.LaneTables(config.lane_detection, sensors.color_camera().model()),
       .reads = nullptr,
       .hook = std::move(hook)};
   params.reads = std::make_shared<const vehicle::RowSpans>(
@@ -305,9 +305,18 @@ stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera)
   return calibration;
 }
 
-std::shared_ptr<const stack::LaneDetectorTables> LaneTablesCache::Get(
+std::shared_ptr<const vehicle::DepthInterest> PerceptionTablesCache::DepthInterest(
+    const stack::PointCloudParams& cloud, const stack::ObstacleGridParams& grid,
+    const CameraSensor& depth_camera) {
+  return depth_interests_.Get({cloud.hardware_scale, grid, &depth_camera.rays()}, [&] {
+    return std::make_shared<const vehicle::DepthInterest>(
+        depth_camera.rays(), stack::FarthestCountedDepths_m(cloud, grid, depth_camera.Info().P));
+  });
+}
+
+std::shared_ptr<const stack::LaneDetectorTables> PerceptionTablesCache::LaneTables(
     const stack::LaneDetectionParams& params, const vehicle::CameraModel& camera) {
-  return built_.Get({params, camera.params()}, [&] {
+  return lane_tables_.Get({params, camera.params()}, [&] {
     return std::make_shared<const stack::LaneDetectorTables>(params, LaneCalibration(camera));
   });
 }
@@ -315,13 +324,13 @@ std::shared_ptr<const stack::LaneDetectorTables> LaneTablesCache::Get(
 PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
                                     const std::map<std::string, NodeMappingConfig>& mapping,
                                     const SensorSuite& sensors, TopicId<CameraFrame> image,
-                                    TopicId<CameraFrame> depth_image, LaneTablesCache& lane_tables,
+                                    TopicId<CameraFrame> depth_image, PerceptionTablesCache& tables,
                                     PerceptionHooks hooks) {
   PerceptionTopics topics;
-  topics.obstacles =
-      AddObstacleNodes(graph, config, mapping, sensors, depth_image, std::move(hooks.on_grid));
+  topics.obstacles = AddObstacleNodes(graph, config, mapping, sensors, depth_image, tables,
+                                      std::move(hooks.on_grid));
   topics.lanes =
-      AddLaneNodes(graph, config, mapping, sensors, image, lane_tables, std::move(hooks.on_lanes));
+      AddLaneNodes(graph, config, mapping, sensors, image, tables, std::move(hooks.on_lanes));
   return topics;
 }
 

@@ -25,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -74,28 +75,36 @@ vehicle::ColourLabel LaneLineClass(std::shared_ptr<const stack::LaneDetectorTabl
 // is ReconROS's point cloud thread).
 int ColorImageDepth(const std::map<std::string, NodeMappingConfig>& mapping);
 
-// The lane detector's tables, built once per distinct lane_detection parameters and colour camera
-// and shared, read-only, by every car that has the same: building them (the warp's source of
-// each bird's-eye pixel, the pixels it reads) took ~3 ms and a few MB a car at start, a fifth of
-// a 10-car fleet's start (issue 38).
-class LaneTablesCache {
+// The perception nodes' read-only tables, built once per distinct parameters and camera and
+// shared by every car that has the same (issue 38):
+// - the lane detector's (the warp's source of each bird's-eye pixel, the pixels it reads): ~3 ms
+//   and a few MB a car at start, a fifth of a 10-car fleet's start;
+// - the fused obstacle node's depth interest (stack::FarthestCountedDepths_m on the depth
+//   camera's tiles): 1.2 MB a camera.
+class PerceptionTablesCache {
  public:
-  std::shared_ptr<const stack::LaneDetectorTables> Get(const stack::LaneDetectionParams& params,
-                                                       const vehicle::CameraModel& camera);
+  std::shared_ptr<const stack::LaneDetectorTables> LaneTables(
+      const stack::LaneDetectionParams& params, const vehicle::CameraModel& camera);
+  std::shared_ptr<const vehicle::DepthInterest> DepthInterest(const stack::PointCloudParams& cloud,
+                                                              const stack::ObstacleGridParams& grid,
+                                                              const CameraSensor& depth_camera);
 
  private:
   BuiltOnce<std::pair<stack::LaneDetectionParams, vehicle::CameraParams>, stack::LaneDetectorTables>
-      built_;
+      lane_tables_;
+  BuiltOnce<std::tuple<bool, stack::ObstacleGridParams, const vehicle::CameraRays*>,
+            vehicle::DepthInterest>
+      depth_interests_;
 };
 
 // Adds the nodes and their topics to `graph`, fed by the camera topics (the suite's frames).
 // `mapping` is the board's configured mapping (it chooses the graph's shape); ConfigError for a
 // mapping the shape cannot take (e.g. lane_detection in hardware: map lane_planner and poly_fit).
-// The lane detector's tables come from `lane_tables`.
+// The nodes' tables come from `tables`.
 PerceptionTopics AddPerceptionNodes(NodeGraph& graph, const PerceptionConfig& config,
                                     const std::map<std::string, NodeMappingConfig>& mapping,
                                     const SensorSuite& sensors, TopicId<CameraFrame> image,
-                                    TopicId<CameraFrame> depth_image, LaneTablesCache& lane_tables,
+                                    TopicId<CameraFrame> depth_image, PerceptionTablesCache& tables,
                                     PerceptionHooks hooks = {});
 
 }  // namespace autonomsim::sim

@@ -123,8 +123,8 @@ void CameraFrame::Render(vehicle::ColorImage* color, vehicle::DepthImage* depth,
 }
 
 void CameraFrame::RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history,
-                              double depth_of_interest_m) const {
-  CameraOf(*this).RenderDepth(*this, depth, history, depth_of_interest_m);
+                              const vehicle::DepthInterest* interest) const {
+  CameraOf(*this).RenderDepth(*this, depth, history, interest);
 }
 
 bool CameraFrame::RenderLabels(const vehicle::RowSpans& region, const vehicle::ColourLabel& label,
@@ -179,8 +179,9 @@ bool CameraFrame::LabelsFromScene() const { return CameraOf(*this).LabelsFromSce
 
 bool CameraFrame::DepthFromScene() const { return CameraOf(*this).DepthFromScene(); }
 
-bool CameraFrame::MaySee(const vehicle::Prism& prism, double depth_of_interest_m) const {
-  return CameraOf(*this).MaySee(*this, prism, depth_of_interest_m);
+bool CameraFrame::MaySee(const vehicle::Prism& prism,
+                         const vehicle::DepthInterest* interest) const {
+  return CameraOf(*this).MaySee(*this, prism, interest);
 }
 
 bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
@@ -211,14 +212,14 @@ bool CameraSensor::RenderLabels(const CameraFrame& frame, const vehicle::RowSpan
 
 void CameraSensor::RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
                                vehicle::DepthRowHistory* history,
-                               double depth_of_interest_m) const {
+                               const vehicle::DepthInterest* interest) const {
   // not the bare floor plus prisms, or not rendered row by row
   if (frame.blackout || !DepthFromScene()) {
     Render(frame, nullptr, depth);
     history->Forget();
     return;
   }
-  renderer_.RenderDepth(frame.X_map_car, frame.prisms, depth, history, depth_of_interest_m);
+  renderer_.RenderDepth(frame.X_map_car, frame.prisms, depth, history, interest);
   ++frames_rendered_;
 }
 

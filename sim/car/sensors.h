@@ -18,7 +18,6 @@
 
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -123,9 +122,9 @@ struct CameraFrame {
               const vehicle::RowSpans& color_region) const;
   // The depth image alone, into a buffer `history` describes (vehicle::DepthRowHistory): Render's
   // image, with only the rows that can have changed since the buffer's last frame rewritten;
-  // exact up to `depth_of_interest_m`, as vehicle::CameraRenderer::RenderDepth.
+  // exact within `interest`'s bounds (null: everywhere), as vehicle::CameraRenderer::RenderDepth.
   void RenderDepth(vehicle::DepthImage* depth, vehicle::DepthRowHistory* history,
-                   double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
+                   const vehicle::DepthInterest* interest = nullptr) const;
   // label(colour) of each `region` pixel (vehicle::CameraRenderer::RenderLabels), without the
   // colour image. False, and nothing written, where a pixel's colour is not the scene's own (the
   // colour noise is on): render the colour then.
@@ -135,8 +134,7 @@ struct CameraFrame {
   // whether `prism` may cover a pixel of this frame (vehicle::CameraRenderer::MaySee): two such
   // frames with the same pose, blackout and prisms it may see have the same labels.
   bool LabelsFromScene() const;
-  bool MaySee(const vehicle::Prism& prism,
-              double depth_of_interest_m = std::numeric_limits<double>::infinity()) const;
+  bool MaySee(const vehicle::Prism& prism, const vehicle::DepthInterest* interest = nullptr) const;
   // The same for RenderDepth: false where its image is not the scene's alone (depth noise, the GL
   // backend).
   bool DepthFromScene() const;
@@ -156,18 +154,19 @@ class CameraSensor {
   const vehicle::CameraModel& model() const { return renderer_.camera(); }
   vehicle::CameraInfo Info() const { return model().Info(); }
   std::uint64_t frames_rendered() const { return frames_rendered_; }
+  const vehicle::CameraRays& rays() const { return renderer_.rays(); }
 
   void Render(const CameraFrame& frame, vehicle::ColorImage* color, vehicle::DepthImage* depth,
               const vehicle::RowSpans* color_region = nullptr) const;
   void RenderDepth(const CameraFrame& frame, vehicle::DepthImage* depth,
-                   vehicle::DepthRowHistory* history, double depth_of_interest_m) const;
+                   vehicle::DepthRowHistory* history, const vehicle::DepthInterest* interest) const;
   bool RenderLabels(const CameraFrame& frame, const vehicle::RowSpans& region,
                     const vehicle::ColourLabel& label, vehicle::LabelView out) const;
   bool LabelsFromScene() const { return !params_.noise.AltersColor() && gl_ == nullptr; }
   bool DepthFromScene() const { return !params_.noise.AltersDepth() && gl_ == nullptr; }
   bool MaySee(const CameraFrame& frame, const vehicle::Prism& prism,
-              double depth_of_interest_m) const {
-    return renderer_.MaySee(frame.X_map_car, prism, depth_of_interest_m);
+              const vehicle::DepthInterest* interest) const {
+    return renderer_.MaySee(frame.X_map_car, prism, interest);
   }
 
  private:

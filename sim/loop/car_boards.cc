@@ -64,7 +64,7 @@ std::unique_ptr<Board> Simulation::Impl::MakeBoard(CarAgent* agent, const Platfo
                                   Time stamp) { JudgeLanes(agent, lanes, stamp); }};
     const PerceptionTopics topics =
         AddPerceptionNodes(graph, config.perception, config.platform.mapping, *suite, image,
-                           depth_image, lane_tables, std::move(hooks));
+                           depth_image, perception_tables, std::move(hooks));
     if (config.drives_by_stack()) AddStack(agent, suite, topics, &graph);
   }
   if (SlotExecutor* executor = board->platform().slot_executor()) {

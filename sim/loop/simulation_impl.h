@@ -139,8 +139,8 @@ struct Simulation::Impl {
   // ... and their global costmaps, one per distinct global_costmap parameters (the planners only
   // read them: the lab's global costmap has no obstacle layer)
   std::vector<std::unique_ptr<stack::GlobalCostmap>> global_costmaps;
-  // driver: perception — the lane detectors' tables, one per distinct parameters and camera
-  LaneTablesCache lane_tables;
+  // driver: perception — the nodes' tables, one per distinct parameters and camera
+  PerceptionTablesCache perception_tables;
   // per car (agents' order): its compute board, for the cars that run nodes on one
   std::vector<std::unique_ptr<Board>> boards;
   LaneJudgeParams lane_judge;

@@ -159,35 +159,65 @@ TEST(ObstacleGridTest, MovesPointsFromTheCameraToBase) {
   EXPECT_EQ(Total(grid), 1);
 }
 
-// A renderer may leave out what lies wholly beyond FarthestCountedDepth_m (issue 38): no depth
-// value beyond it is counted, with either scale, and the bound is within 3 cm of tight.
-TEST(ObstacleGridTest, NoDepthBeyondTheFarthestCountedDepthIsCounted) {
+// A renderer may leave out what lies beyond a pixel's FarthestCountedDepths_m (issue 38): no
+// depth value beyond its pixel's bound is counted, with either scale, and the bounds are within
+// a few centimetres of tight.
+TEST(ObstacleGridTest, NoDepthBeyondItsPixelsFarthestCountedDepthIsCounted) {
   const ObstacleGridParams grid;  // the lab's box
   const std::array<double, 12> P = vehicle::CameraModel(vehicle::DepthCameraParams()).Info().P;
+  const auto total = [&](const PointCloudParams& cloud, const std::vector<std::uint16_t>& image) {
+    const Grid234 g = StepDepthToGrid(cloud, grid, DepthImageView{kW, kH, image}, P);
+    int n = 0;
+    for (std::uint8_t c : g.data) n += c;
+    return n;
+  };
   for (const bool hardware_scale : {false, true}) {
     PointCloudParams cloud;
     cloud.hardware_scale = hardware_scale;
-    const double far_m = FarthestCountedDepth_m(cloud, grid);
-    ASSERT_TRUE(far_m > 1.0 && far_m < 2.0) << far_m;
-    // a wall of one depth value at every pixel
-    const auto counted = [&](int mm) {
-      const std::vector<std::uint16_t> wall(640 * 480, static_cast<std::uint16_t>(mm));
-      const Grid234 g = StepDepthToGrid(cloud, grid, DepthImageView{640, 480, wall}, P);
-      int total = 0;
-      for (std::uint8_t n : g.data) total += n;
-      return total;
-    };
-    const int bound_mm = static_cast<int>(std::lround(far_m * 1000.0));
-    for (int mm = bound_mm; mm <= bound_mm + 300; mm += 3) {
-      EXPECT_EQ(counted(mm), 0) << mm << " mm, hardware_scale " << hardware_scale;
+    const std::vector<float> bound_m = FarthestCountedDepths_m(cloud, grid, P);
+    ASSERT_EQ(bound_m.size(), static_cast<std::size_t>(kW * kH));
+    // a wall of one depth value wherever that is beyond the pixel's bound (0 elsewhere): every
+    // value up to 1.6 m (the box's farthest corner is 1.42 m ahead), every 97th beyond
+    int pixels_beyond = 0;
+    for (int mm = 1; mm <= 65535; mm += mm < 1600 ? 1 : 97) {
+      std::vector<std::uint16_t> image(kW * kH, 0);
+      for (int i = 0; i < kW * kH; ++i) {
+        if (mm > 1000.0 * bound_m[i]) image[i] = static_cast<std::uint16_t>(mm);
+      }
+      if (mm == 700) pixels_beyond = static_cast<int>(std::count(image.begin(), image.end(), 700));
+      ASSERT_EQ(total(cloud, image), 0) << mm << " mm, hardware_scale " << hardware_scale;
     }
-    EXPECT_GT(counted(bound_mm - 30), 0) << "hardware_scale " << hardware_scale;
+    EXPECT_GT(pixels_beyond, kW * kH / 10);  // the sides and the bottom of the image
+    // tight: a little short of its bound, most pixels that have one are counted (a row at a
+    // time, so that no cell's count saturates; the best of four distances, as a ray's path
+    // through the box may be short)
+    int with_bound = 0, counted = 0;
+    for (int v = 0; v < kH; v += 4) {
+      int in_row = 0, best = 0;
+      for (const double short_mm : {12.0, 20.0, 30.0, 60.0}) {
+        std::vector<std::uint16_t> short_of(kW * kH, 0);
+        in_row = 0;
+        for (int i = v * kW; i < (v + 1) * kW; ++i) {
+          if (!std::isfinite(bound_m[i])) continue;
+          ASSERT_TRUE(bound_m[i] > 0.4f && bound_m[i] < 1.5f) << i << ": " << bound_m[i];
+          ++in_row;
+          short_of[i] = static_cast<std::uint16_t>(std::lround(1000.0 * bound_m[i] - short_mm));
+        }
+        best = std::max(best, total(cloud, short_of));
+      }
+      with_bound += in_row;
+      counted += best;
+    }
+    EXPECT_GT(with_bound, kW * kH / 4 / 2);
+    EXPECT_GT(counted, with_bound * 9 / 10) << "hardware_scale " << hardware_scale;
   }
-  // a box around the camera counts a pixel without a return: nothing may be left out
+  // a box around the camera counts a pixel without a return: every depth is of interest
   ObstacleGridParams around = grid;
   around.x_min_m = -0.5;
   around.x_max_m = 0.4;
-  EXPECT_TRUE(std::isinf(FarthestCountedDepth_m(PointCloudParams{}, around)));
+  for (const float b : FarthestCountedDepths_m(PointCloudParams{}, around, P)) {
+    ASSERT_TRUE(std::isinf(b) && b > 0.0f);
+  }
 }
 
 TEST(ObstacleGridTest, ValidateNamesTheBadKey) {

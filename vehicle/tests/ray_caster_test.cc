@@ -489,47 +489,77 @@ TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsA
   }
 }
 
-// RenderDepth with a depth of interest (issue 38: the obstacle grid reads nothing beyond ~1.4 m)
-// leaves out the prisms wholly beyond it and is Render's image wherever that is within it, frame
-// after frame in one buffer.
-TEST(RayCasterTest, ADepthOfInterestLeavesOutOnlyPrismsWhollyBeyondIt) {
+// RenderDepth with a depth interest (issue 38: the obstacle grid reads each pixel's depth only up
+// to where its ray leaves the obstacle box) is Render's image wherever that is within the pixel's
+// bound, frame after frame in one buffer, and leaves out what lies beyond it.
+TEST(RayCasterTest, ADepthInterestLeavesOutOnlyWhatIsBeyondEachPixelsBound) {
   const CameraParams params = DepthCameraParams();
   CameraRenderer renderer = MakeRenderer(params, BlackFloor());
-  constexpr double kInterest_m = 1.6;
-  const std::vector<Prism> prisms{Box(1.2, 0.0, 0.3, 0.3, 0.3, 0.3),   // near
-                                  Box(3.0, 0.1, 0.0, 0.5, 0.4, 0.3),   // far, partly behind it
-                                  Box(2.6, -0.6, 0.5, 0.4, 0.4, 0.3),  // far, beside
-                                  Box(1.9, 0.5, 0.0, 0.8, 0.2, 0.3)};  // straddling the depth
+  const CameraRays& rays = renderer.rays();
+  // bounds as the grid's: farthest at the image's centre, nearer towards its sides; none in the
+  // top rows, all of the depth in a band of rows
+  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
+  for (int v = 0; v < rays.height(); ++v) {
+    for (int u = 0; u < rays.width(); ++u) {
+      const double off_centre = std::abs(u - 0.5 * rays.width()) / (0.5 * rays.width());
+      float bound = static_cast<float>(2.2 - 1.4 * off_centre);
+      if (v < 40) bound = -std::numeric_limits<float>::infinity();
+      if (v >= 300 && v < 310) bound = std::numeric_limits<float>::infinity();
+      bounds[static_cast<std::size_t>(v) * rays.width() + u] = bound;
+    }
+  }
+  const DepthInterest interest(rays, bounds);
+  EXPECT_FLOAT_EQ(interest.farthest_m(), std::numeric_limits<float>::infinity());
+  const std::vector<Prism> prisms{Box(1.2, 0.0, 0.3, 0.3, 0.3, 0.3),    // near
+                                  Box(3.0, 0.1, 0.0, 0.5, 0.4, 0.3),    // far, partly behind it
+                                  Box(2.6, -0.6, 0.5, 0.4, 0.4, 0.3),   // far, beside
+                                  Box(1.9, 0.5, 0.0, 0.8, 0.2, 0.3),    // straddling the bounds
+                                  Box(0.9, -0.7, 0.0, 0.3, 0.3, 0.3)};  // near, beside
   DepthImage limited;
   DepthRowHistory history;
   for (int k = 0; k < 4; ++k) {
     const world::Pose2 car{0.1 * k, 0.05 * k, 0.05 * k};
     DepthImage full;
     renderer.Render(car, prisms, nullptr, &full);
-    renderer.RenderDepth(car, prisms, &limited, &history, kInterest_m);
+    renderer.RenderDepth(car, prisms, &limited, &history, &interest);
     int within = 0, left_out = 0;
     for (std::size_t i = 0; i < full.mm.size(); ++i) {
-      if (full.mm[i] <= 1000 * kInterest_m) {
+      if (full.mm[i] != 0 && full.mm[i] <= 1000.0 * bounds[i]) {
         ++within;
         EXPECT_EQ(limited.mm[i], full.mm[i]) << "frame " << k << " pixel " << i;
       } else if (limited.mm[i] != full.mm[i]) {
-        ++left_out;  // a far prism's pixel now shows what is behind it: farther still, or nothing
+        ++left_out;  // a prism's pixel now shows what is behind it: farther still, or nothing
         EXPECT_TRUE(limited.mm[i] == 0 || limited.mm[i] > full.mm[i]) << "pixel " << i;
       }
     }
     EXPECT_GT(within, 10000) << "frame " << k;
     EXPECT_GT(left_out, 1000) << "frame " << k;
-    // MaySee with the depth of interest names the prisms that matter: the others changed nothing
+    // MaySee with the interest names the prisms that matter: the others changed nothing
     std::vector<Prism> seen;
     for (const Prism& prism : prisms) {
-      if (renderer.MaySee(car, prism, kInterest_m)) seen.push_back(prism);
+      if (renderer.MaySee(car, prism, &interest)) seen.push_back(prism);
     }
     EXPECT_TRUE(seen.size() >= 1 && seen.size() < prisms.size()) << seen.size();
     DepthImage only_seen;
     DepthRowHistory fresh;
-    renderer.RenderDepth(car, seen, &only_seen, &fresh, kInterest_m);
+    renderer.RenderDepth(car, seen, &only_seen, &fresh, &interest);
     EXPECT_EQ(only_seen.mm, limited.mm) << "frame " << k;
   }
+  // an interest everywhere beyond reach leaves nothing out
+  const DepthInterest all(rays, std::vector<float>(bounds.size(), 1e9f));
+  DepthImage full, whole;
+  DepthRowHistory fresh;
+  renderer.Render(world::Pose2{}, prisms, nullptr, &full);
+  renderer.RenderDepth(world::Pose2{}, prisms, &whole, &fresh, &all);
+  EXPECT_EQ(whole.mm, full.mm);
+  // an interest of another size is refused
+  EXPECT_THROW(DepthInterest(rays, std::vector<float>(10, 1.0f)), std::invalid_argument);
+  CameraParams small = params;
+  small.width_px = 320;
+  small.height_px = 240;
+  CameraRenderer other = MakeRenderer(small, BlackFloor());
+  EXPECT_THROW(other.RenderDepth(world::Pose2{}, prisms, &whole, &fresh, &interest),
+               std::invalid_argument);
 }
 
 // MaySee is false only for a prism that changes no pixel: with it left out, the images are the
