@@ -1,5 +1,6 @@
 #include "stack/controller_server.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -141,6 +142,11 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
   out.cmd_vel = drive.twist;
   out.status = {.attempt = state->attempt, .follow_path = drive.follow};
   return out;
+}
+
+bool CanCollide(const Costmap2D& costmap) {
+  return std::any_of(costmap.costs().begin(), costmap.costs().end(),
+                     [](std::uint8_t cost) { return cost >= kInscribedInflatedObstacle; });
 }
 
 CostQuery LocalCostmapCost(std::shared_ptr<const Costmap2D> costmap,

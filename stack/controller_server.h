@@ -95,7 +95,8 @@ struct ControllerServerInput {
   double speed_mps{0.0};
   std::optional<ControllerLanes> lanes;  // none: no lane points received yet
   std::optional<ControllerPath> path;    // none: no successful plan received yet
-  CostQuery cell_cost;                   // map frame; empty: no costmap yet, no collision check
+  // map frame; empty: no costmap yet (or none a pose can collide on, CanCollide), no check
+  CostQuery cell_cost;
 };
 
 // geometry_msgs/Twist on cmd_vel.
@@ -143,5 +144,10 @@ ControllerServerOutput StepControllerServer(const ControllerServerParams& params
 // transform; nullopt outside the costmap. Keeps the costmap alive.
 CostQuery LocalCostmapCost(std::shared_ptr<const Costmap2D> costmap,
                            const world::Pose2& X_map_odom);
+
+// Whether the collision check can find a collision on `costmap`: some cell's cost is at least
+// INSCRIBED (the centre model's threshold; the footprint model's LETHAL is above it). Where none
+// is, the check answers "no collision" for every pose, and a caller may leave it out (no query).
+bool CanCollide(const Costmap2D& costmap);
 
 }  // namespace autonomsim::stack

@@ -478,7 +478,11 @@ stack::ControllerServerInput ControllerInput(const ControllerNodeState& s, Time 
         .points_base = s.lanes->points_base, .valid = s.lanes->valid, .stamp = s.lanes->stamp};
   }
   if (s.path) input.path = stack::ControllerPath{.points_map = *s.path->path, .id = s.path->id};
-  if (s.costmap) input.cell_cost = stack::LocalCostmapCost(s.costmap, X_map_odom);
+  // (a costmap no pose can collide on is left out: the check's answer is the same, and it costs
+  // a cost look-up per footprint sample and step of the horizon)
+  if (s.costmap && stack::CanCollide(*s.costmap)) {
+    input.cell_cost = stack::LocalCostmapCost(s.costmap, X_map_odom);
+  }
   return input;
 }
 

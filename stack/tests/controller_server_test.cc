@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -274,6 +275,31 @@ TEST(ControllerServerTest, LocalCostmapCostGoesThroughMapToOdom) {
   EXPECT_EQ(cost(Vec2(0.55, 2.25)), kInscribedInflatedObstacle);  // odom (0.25, 0.45)
   EXPECT_EQ(cost(Vec2(0.55, 2.55)), kFreeSpace);                  // odom (0.55, 0.45)
   EXPECT_EQ(cost(Vec2(5.0, 5.0)), std::nullopt);                  // outside the grid
+}
+
+// The controller leaves the collision check out on a costmap CanCollide says no pose can collide
+// on (issue 38): there, the check says "no collision" for every pose, under either model.
+TEST(ControllerServerTest, NoPoseCollidesOnACostmapThatCannotCollide) {
+  auto costmap = std::make_shared<Costmap2D>(40, 40, 0.05, Vec2(0.0, 0.0));
+  for (std::size_t i = 0; i < costmap->costs().size(); ++i) {
+    costmap->mutable_costs()[i] = static_cast<std::uint8_t>((i * 37) % kInscribedInflatedObstacle);
+  }
+  ASSERT_FALSE(CanCollide(*costmap));
+  const CostQuery cost = LocalCostmapCost(costmap, world::Pose2{});
+  for (const CollisionModel model : {CollisionModel::kCentre, CollisionModel::kFootprint}) {
+    CollisionCheckParams params;
+    params.model = model;
+    for (int k = 0; k < 50; ++k) {
+      const world::Pose2 X{0.1 + 0.035 * k, 1.9 - 0.03 * k, 0.4 * k};
+      EXPECT_FALSE(IsCollisionImminent(params, X, 0.5, 0.3, cost)) << k;
+    }
+  }
+  // one cell at each of the costs a model collides on: the check is needed again
+  for (const std::uint8_t c : {kInscribedInflatedObstacle, kLethalObstacle, kNoInformation}) {
+    Costmap2D one = *costmap;
+    one.SetCost(20, 20, c);
+    EXPECT_TRUE(CanCollide(one)) << int{c};
+  }
 }
 
 TEST(ControllerServerTest, ParamsValidateBothControllers) {

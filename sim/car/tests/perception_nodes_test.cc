@@ -1,4 +1,4 @@
-// The lane detector's tables are built once per distinct parameters and camera, and shared.
+// The perception nodes' tables are built once per distinct parameters and camera, and shared.
 #include "sim/car/perception_nodes.h"
 
 #include <gtest/gtest.h>
