@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 
 #include "sim/core/config.h"
@@ -124,14 +123,20 @@ void Cpu::Advance() {
 }
 
 void Cpu::Reallocate() {
-  std::vector<std::size_t> order(jobs_.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [this](std::size_t a, std::size_t b) {
-    return jobs_[a].max_parallelism < jobs_[b].max_parallelism;
-  });
+  // the jobs by max_parallelism, ties in start order: an insertion sort (stable; a handful of
+  // jobs), into memory kept from call to call
+  order_.clear();
+  for (std::size_t i = 0; i < jobs_.size(); ++i) {
+    std::size_t k = order_.size();
+    order_.push_back(i);
+    for (; k > 0 && jobs_[i].max_parallelism < jobs_[order_[k - 1]].max_parallelism; --k) {
+      order_[k] = order_[k - 1];
+    }
+    order_[k] = i;
+  }
   double capacity = static_cast<double>(cores_);
   std::size_t left = jobs_.size();
-  for (std::size_t i : order) {
+  for (std::size_t i : order_) {
     const double fair = capacity / static_cast<double>(left);
     const double rate = std::min(jobs_[i].max_parallelism, fair);
     jobs_[i].rate = rate;
@@ -162,23 +167,28 @@ void Cpu::ScheduleNext() {
 void Cpu::OnCompletion() {
   next_event_ = EventId{};
   Advance();
-  // Done: nothing left but rounding (less than half a nanosecond of its current share).
-  std::vector<std::function<void()>> finished;
-  std::vector<Job> still;
-  still.reserve(jobs_.size());
+  // Done: nothing left but rounding (less than half a nanosecond of its current share). The
+  // others keep their order; the memory of both lists is kept from call to call (a done callback
+  // may start jobs, so the finished list is taken out of the member while they run).
+  std::vector<std::function<void()>> finished = std::move(finished_);
+  finished.clear();
+  std::size_t kept = 0;
   for (Job& job : jobs_) {
     if (job.remaining_core_ns <= 0.5 * job.rate) {
       finished.push_back(std::move(job.done));
     } else {
-      still.push_back(std::move(job));
+      if (&jobs_[kept] != &job) jobs_[kept] = std::move(job);
+      ++kept;
     }
   }
-  jobs_ = std::move(still);
+  jobs_.erase(jobs_.begin() + static_cast<std::ptrdiff_t>(kept), jobs_.end());
   Reallocate();
   ScheduleNext();
   for (auto& done : finished) {
     if (done) done();
   }
+  finished.clear();
+  if (finished.capacity() > finished_.capacity()) finished_ = std::move(finished);
 }
 
 // ---- Fpga ----

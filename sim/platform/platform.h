@@ -108,6 +108,9 @@ class Cpu {
   int cores_;
   RunMetrics* metrics_;
   std::vector<Job> jobs_;  // in start order
+  // scratch, kept for its memory: Reallocate's order of the jobs, OnCompletion's finished jobs
+  std::vector<std::size_t> order_;
+  std::vector<std::function<void()>> finished_;
   Time last_update_{0};
   double busy_core_s_{0.0};  // the core-seconds charged up to last_update_
   EventId next_event_;
