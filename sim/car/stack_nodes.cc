@@ -450,8 +450,9 @@ struct ControllerNodeState {
   std::optional<Lanes> lanes;
   std::optional<PathMessage> path;  // the newest successful plan
   std::shared_ptr<const stack::Costmap2D> costmap;
-  bool hold{true};           // nothing to do before the behaviour's first goals
-  std::uint64_t attempt{0};  // the behaviour's FollowPath action
+  bool costmap_can_collide{false};  // stack::CanCollide(*costmap), once per costmap
+  bool hold{true};                  // nothing to do before the behaviour's first goals
+  std::uint64_t attempt{0};         // the behaviour's FollowPath action
   stack::ControllerServerState server;
 };
 
@@ -480,7 +481,7 @@ stack::ControllerServerInput ControllerInput(const ControllerNodeState& s, Time 
   if (s.path) input.path = stack::ControllerPath{.points_map = *s.path->path, .id = s.path->id};
   // (a costmap no pose can collide on is left out: the check's answer is the same, and it costs
   // a cost look-up per footprint sample and step of the horizon)
-  if (s.costmap && stack::CanCollide(*s.costmap)) {
+  if (s.costmap && s.costmap_can_collide) {
     input.cell_cost = stack::LocalCostmapCost(s.costmap, X_map_odom);
   }
   return input;
@@ -500,8 +501,10 @@ void AddControllerNode(NodeGraph& graph, Cache& cache, const StackTopics& topics
   cache.Keep<PathMessage>(node, topics.plan, [state](const PathMessage& p, Time) {
     if (p.ok) state->path = p;
   });
-  cache.Keep<CostmapMessage>(
-      node, topics.costmap, [state](const CostmapMessage& c, Time) { state->costmap = c.costmap; });
+  cache.Keep<CostmapMessage>(node, topics.costmap, [state](const CostmapMessage& c, Time) {
+    state->costmap = c.costmap;
+    state->costmap_can_collide = c.costmap && stack::CanCollide(*c.costmap);
+  });
   cache.Keep<stack::BehaviorOutput>(node, topics.behavior,
                                     [state](const stack::BehaviorOutput& o, Time) {
                                       state->hold = o.hold;
