@@ -691,8 +691,11 @@ void CameraRenderer::RenderFloor(const world::Pose2& X_map_car, ColorImage* colo
   const std::vector<CameraRays::Run>* floor_runs = &r.floor_runs();
   const std::vector<CameraRays::Run>* surround_runs = &r.surround_runs();
   if (color_region != nullptr) {
-    Intersect(r.floor_runs(), *color_region, r.width(), &floor_in_region_);
-    Intersect(r.surround_runs(), *color_region, r.width(), &surround_in_region_);
+    if (runs_region_ != color_region->columns) {  // (a region has a row per image row)
+      Intersect(r.floor_runs(), *color_region, r.width(), &floor_in_region_);
+      Intersect(r.surround_runs(), *color_region, r.width(), &surround_in_region_);
+      runs_region_ = color_region->columns;
+    }
     floor_runs = &floor_in_region_;
     surround_runs = &surround_in_region_;
   }

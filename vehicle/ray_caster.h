@@ -487,7 +487,10 @@ class CameraRenderer {
   std::vector<float> nearest_t_;           // per pixel, valid in tiles stamped with frame_
   std::vector<std::uint32_t> tile_stamp_;  // the frame in which a tile's nearest_t_ was set
   std::uint32_t frame_{0};
-  std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;  // scratch
+  // the floor's and the surround's runs within the last colour region asked for (a consumer asks
+  // for the same region frame after frame: they are cut again only when it changes)
+  std::vector<CameraRays::Run> floor_in_region_, surround_in_region_;
+  std::vector<std::pair<int, int>> runs_region_;  // that region's columns (none: not yet cut)
   // per row: the columns [begin, end) prisms wrote depth in this frame (begin >= end: none)
   std::vector<std::pair<int, int>> depth_columns_hit_;
   // per row of floor block groups, this frame, as bits of the groups (RenderFloor): looked up;

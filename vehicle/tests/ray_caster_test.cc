@@ -597,24 +597,26 @@ TEST(RayCasterTest, APrismTheCameraMayNotSeeChangesNoPixel) {
 
 TEST(RayCasterTest, ADemandDrivenRenderIsTheFullRenderWhereItIsAsked) {
   // a textured floor, cars and boxes in view, 24 poses; the region a trapezoid like the lane
-  // detector's, reaching both image edges, with rows left out
+  // detector's, reaching both image edges, with rows left out, and shifted now and then (the
+  // renderer keeps what it cut for the last region)
   const CameraParams params = ColorCameraParams();
   world::FloorRaster raster = BlackFloor();
   Paint(&raster, 0.5, 0.54, -2.0, 2.0, kWhite);
   Paint(&raster, -2.0, 2.0, 0.3, 0.34, kWhite);
   Paint(&raster, 1.0, 1.04, -2.0, 2.0, Bgr{0, 235, 235});
   CameraRenderer renderer = MakeRenderer(params, raster);
-  RowSpans region;
-  region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
-  for (int row = 200; row < params.height_px; ++row) {
-    if (row % 37 == 0) continue;
-    const int half = (row - 200) * 2;
-    region.columns[static_cast<std::size_t>(row)] = {std::max(0, 300 - half),
-                                                     std::min(params.width_px, 340 + half)};
-  }
   int untouched = 0;
   int prism_pixels_in_region = 0;
   for (int k = 0; k < 24; ++k) {
+    RowSpans region;
+    region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
+    const int shift = k % 5 < 2 ? 0 : 15 * (k % 5);
+    for (int row = 200; row < params.height_px; ++row) {
+      if (row % 37 == 0) continue;
+      const int half = (row - 200) * 2;
+      region.columns[static_cast<std::size_t>(row)] = {
+          std::max(0, 300 + shift - half), std::min(params.width_px, 340 + shift + half)};
+    }
     const world::Pose2 pose{-1.0 + 0.1 * k, 0.4 - 0.05 * k, 0.26 * k};
     const Eigen::Isometry3d X_map_car = Lift(pose);
     const Eigen::Vector3d ahead = X_map_car * Eigen::Vector3d(1.0 + 0.05 * k, 0.2 - 0.02 * k, 0.0);
