@@ -1004,6 +1004,9 @@ struct CameraRenderer::PrismTrace {
   F4 rc, rs;
   std::array<Bgr, 7> face_bgr;
   std::array<std::uint8_t, 7> face_label{};
+  // every face has the same label (a car's body is one class to the lane detector): a labels-only
+  // trace needs no entry face either
+  bool one_label{false};
 };
 
 namespace {
@@ -1057,6 +1060,8 @@ void CameraRenderer::RenderPrism(const world::Pose2& X_map_car, const Prism& pri
   } else if (labels != nullptr) {
     for (std::size_t f = 0; f < 7; ++f) trace.face_label[f] = (*labels->label)(trace.face_bgr[f]);
   }
+  trace.one_label = std::all_of(trace.face_label.begin(), trace.face_label.end(),
+                                [&](std::uint8_t l) { return l == trace.face_label[0]; });
   if (interest != nullptr) {
     trace.interest_m = interest->pixels_m().data();
     trace.z_near = Splat(FloatBelow(bounds->z_near));
@@ -1094,8 +1099,8 @@ void CameraRenderer::TracePrismTile(const PrismTrace& trace, std::size_t ti, Col
   if (tile_stamp_[ti] != frame_) InitTileDepth(ti);
   for (int v = tile.v0; v < tile.v1; ++v) {
     const auto [u_begin, u_end] = columns(v);
-    if (color == nullptr && labels == nullptr) {
-      TracePrismDepthRow(trace, v, u_begin, u_end, depth);
+    if (color == nullptr && (labels == nullptr || trace.one_label)) {
+      TracePrismFacelessRow(trace, v, u_begin, u_end, depth, labels);
     } else {
       TracePrismRow(trace, v, u_begin, u_end, color, depth, labels);
     }
@@ -1106,15 +1111,20 @@ void CameraRenderer::NoteDepthColumns(int v, int first, int last) {
   WidenColumns(&depth_columns_hit_[static_cast<std::size_t>(v)], first, last);
 }
 
-void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
-                                        DepthImage* depth) {
-  // TracePrismRow's depth, four pixels at a time: without colour or labels the face the ray
-  // enters through does not matter.
+void CameraRenderer::TracePrismFacelessRow(const PrismTrace& trace, int v, int u_begin, int u_end,
+                                           DepthImage* depth, const LabelOut* labels) {
+  // TracePrismRow's depth and labels, four pixels at a time, where the face the ray enters
+  // through does not matter: without colour, and without labels or with one label for all faces.
   const CameraParams& params = rays_->camera().params();
   const F4 near_m = Splat(static_cast<float>(params.clip_near_m));
   const F4 far_m = Splat(static_cast<float>(params.clip_far_m));
   const int w = rays_->width();
   std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
+  // the row's labels, all faces' one
+  std::uint8_t* label_row =
+      labels != nullptr ? labels->view.origin + static_cast<std::ptrdiff_t>(v) * labels->view.stride
+                        : nullptr;
+  const std::uint8_t label = trace.face_label[0];
   float* nearest = nearest_t_.data();
   PrismTrace::Hits hits;
   int first = u_end, last = u_begin;  // the columns written, four at a time
@@ -1132,9 +1142,12 @@ void CameraRenderer::TracePrismDepthRow(const PrismTrace& trace, int v, int u_be
       if (!hits.hit[k]) continue;
       nearest[i + k] = hits.t[k];
       if (depth_mm != nullptr) depth_mm[i + k] = static_cast<std::uint16_t>(mm[k]);
+      if (label_row != nullptr) label_row[u + k] = label;
     }
   }
-  if (depth_mm != nullptr && first < last) NoteDepthColumns(v, first, last);
+  if (first >= last) return;
+  if (depth_mm != nullptr) NoteDepthColumns(v, first, last);
+  if (labels != nullptr && label != 0) labels->MayBeNonzero(v, first, last);
 }
 
 void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end,

@@ -470,9 +470,10 @@ class CameraRenderer {
   struct PrismTrace;
   void TracePrismRow(const PrismTrace& trace, int v, int u_begin, int u_end, ColorImage* color,
                      DepthImage* depth, const LabelOut* labels);
-  // The same without colour or labels: the depth alone, with no face to find.
-  void TracePrismDepthRow(const PrismTrace& trace, int v, int u_begin, int u_end,
-                          DepthImage* depth);
+  // The same without colour, and without labels or with one label for every face: no face to
+  // find.
+  void TracePrismFacelessRow(const PrismTrace& trace, int v, int u_begin, int u_end,
+                             DepthImage* depth, const LabelOut* labels);
   // RenderPrism's step for one tile that the prism's bounds reach: each row's pixels (of
   // `region`, if given) traced.
   void TracePrismTile(const PrismTrace& trace, std::size_t tile, ColorImage* color,

@@ -853,6 +853,9 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
   const ColourLabel label = [](const Bgr& c) {
     return static_cast<std::uint8_t>(1 + (c[0] * 7 + c[1] * 3 + c[2]) % 251);
   };
+  const ColourLabel lines_or_not = [](const Bgr& c) {
+    return static_cast<std::uint8_t>(c == kWhite ? 1 : c == Bgr{0, 235, 235} ? 2 : 3);
+  };
   const std::ptrdiff_t stride = params.width_px + 2;
   std::vector<std::uint8_t> padded(static_cast<std::size_t>(stride) * (params.height_px + 2));
   std::set<std::uint8_t> seen;
@@ -865,21 +868,26 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
                                     Box(side.x(), side.y(), 0.0, 0.2, 0.2, 0.3, Bgr{40, 40, 190})};
     ColorImage full;
     renderer.Render(pose, prisms, &full, nullptr);
-    std::fill(padded.begin(), padded.end(), 0);
-    renderer.RenderLabels(pose, prisms, region, label,
-                          LabelView{padded.data() + stride + 1, stride});
-    for (int v = -1; v <= params.height_px; ++v) {
-      for (int u = -1; u <= params.width_px; ++u) {
-        const std::uint8_t got = padded[static_cast<std::size_t>((v + 1) * stride + u + 1)];
-        const bool asked = v >= 0 && v < params.height_px &&
-                           u >= region.columns[static_cast<std::size_t>(v)].first &&
-                           u < region.columns[static_cast<std::size_t>(v)].second;
-        if (!asked) {
-          ASSERT_EQ(got, 0) << "pose " << k << " (" << u << ", " << v << ") was not asked for";
-          continue;
+    // a label per colour, and (as the lane detector's) one for the lines' colours and one for
+    // every other, every face of a prism alike
+    for (const ColourLabel& labelling : {label, lines_or_not}) {
+      std::fill(padded.begin(), padded.end(), 0);
+      renderer.RenderLabels(pose, prisms, region, labelling,
+                            LabelView{padded.data() + stride + 1, stride});
+      for (int v = -1; v <= params.height_px; ++v) {
+        for (int u = -1; u <= params.width_px; ++u) {
+          const std::uint8_t got = padded[static_cast<std::size_t>((v + 1) * stride + u + 1)];
+          const bool asked = v >= 0 && v < params.height_px &&
+                             u >= region.columns[static_cast<std::size_t>(v)].first &&
+                             u < region.columns[static_cast<std::size_t>(v)].second;
+          if (!asked) {
+            ASSERT_EQ(got, 0) << "pose " << k << " (" << u << ", " << v << ") was not asked for";
+            continue;
+          }
+          ASSERT_EQ(got, labelling(PixelAt(full, u, v)))
+              << "pose " << k << " (" << u << ", " << v << ")";
+          seen.insert(got);
         }
-        ASSERT_EQ(got, label(PixelAt(full, u, v))) << "pose " << k << " (" << u << ", " << v << ")";
-        seen.insert(got);
       }
     }
   }
