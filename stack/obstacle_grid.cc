@@ -240,64 +240,48 @@ Grid234 StepObstacleGrid(const ObstacleGridParams& params, const PointCloud640& 
 constexpr double kCountedBoxSlack_m = 0.001;
 constexpr double kCountedDepthSlack_m = 0.01;
 
-namespace {
-
-// The box's camera → base transform in doubles, and a test of a base-frame point against the box
-// widened by `slack_m` on every side.
-struct BoxInBase {
-  explicit BoxInBase(const ObstacleGridParams& params) : p(params) {
-    params.Validate();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) M(r, c) = params.X_base_camera[4 * r + c];
-      t(r) = params.X_base_camera[4 * r + 3];
-    }
-  }
-  bool Inside(const Eigen::Vector3d& b, double slack_m) const {
-    return b.x() >= p.x_min_m - slack_m && b.x() <= p.x_max_m + slack_m &&
-           b.y() >= p.y_min_m - slack_m && b.y() <= p.y_max_m + slack_m &&
-           b.z() >= p.z_min_m - slack_m && b.z() <= p.z_max_m + slack_m;
-  }
-  const ObstacleGridParams& p;
-  Eigen::Matrix3d M;
-  Eigen::Vector3d t;
-};
-
-}  // namespace
-
 std::vector<float> FarthestCountedDepths_m(const PointCloudParams& cloud_params,
                                            const ObstacleGridParams& params,
                                            const std::array<double, 12>& P) {
   const detail::CloudConstants k = detail::MakeCloudConstants(cloud_params, P);
-  const BoxInBase box(params);
+  params.Validate();
+  Eigen::Matrix3d M;  // camera → base_link, p_base = M · p_camera + t
+  Eigen::Vector3d t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) M(r, c) = params.X_base_camera[4 * r + c];
+    t(r) = params.X_base_camera[4 * r + 3];
+  }
+  // the box widened by its slack, relative to the camera's position t
+  const Eigen::Vector3d below =
+      Eigen::Vector3d(params.x_min_m, params.y_min_m, params.z_min_m).array() - kCountedBoxSlack_m -
+      t.array();
+  const Eigen::Vector3d above =
+      Eigen::Vector3d(params.x_max_m, params.y_max_m, params.z_max_m).array() + kCountedBoxSlack_m -
+      t.array();
   constexpr int kHeight = PointCloud640::kHeight;
   constexpr float kInfinite = std::numeric_limits<float>::infinity();
   // a pixel without a return is the camera's own position: inside the box, every pixel counts
-  if (box.Inside(box.t, kCountedBoxSlack_m)) {
+  if ((below.array() <= 0.0).all() && (above.array() >= 0.0).all()) {
     return std::vector<float>(PointCloud640::kPoints, kInfinite);
   }
   // Pixel (u, v) with depth value d back-projects to s · (1, -(u - cx) / fx, -(v - cy) / fy) in
   // the camera's frame, s = d · m_per_mm (StepPointCloud), so to t + s · a in base_link with
-  // a = M · that direction: along each axis the box (widened by its slack) holds an interval of
-  // s, and the pixel's points in the box are those of the three intervals' intersection.
-  const double lo[3] = {params.x_min_m, params.y_min_m, params.z_min_m};
-  const double hi[3] = {params.x_max_m, params.y_max_m, params.z_max_m};
+  // a = M · that direction: along each axis the box holds an interval of s, and the pixel's
+  // points in the box are those of the three intervals' intersection.
   const double m_per_mm = static_cast<double>(k.m_per_mm);
   std::vector<float> farthest(PointCloud640::kPoints, -kInfinite);
   for (int v = 0; v < kHeight; ++v) {
     for (int u = 0; u < kWidth; ++u) {
-      const Eigen::Vector3d a =
-          box.M * Eigen::Vector3d(1.0, -(u - static_cast<double>(k.cx)) / k.fx,
-                                  -(v - static_cast<double>(k.cy)) / k.fy);
+      const Eigen::Vector3d a = M * Eigen::Vector3d(1.0, -(u - static_cast<double>(k.cx)) / k.fx,
+                                                    -(v - static_cast<double>(k.cy)) / k.fy);
       double s_lo = 0.0, s_hi = std::numeric_limits<double>::infinity();
       for (int j = 0; j < 3; ++j) {
-        const double below = lo[j] - kCountedBoxSlack_m - box.t(j);
-        const double above = hi[j] + kCountedBoxSlack_m - box.t(j);
-        if (a(j) == 0.0) {
-          if (below > 0.0 || above < 0.0) s_hi = -1.0;
+        if (a(j) == 0.0) {  // parallel to the slab: inside it everywhere or nowhere
+          if (below(j) > 0.0 || above(j) < 0.0) s_hi = -1.0;
           continue;
         }
-        s_lo = std::max(s_lo, std::min(below / a(j), above / a(j)));
-        s_hi = std::min(s_hi, std::max(below / a(j), above / a(j)));
+        s_lo = std::max(s_lo, std::min(below(j) / a(j), above(j) / a(j)));
+        s_hi = std::min(s_hi, std::max(below(j) / a(j), above(j) / a(j)));
       }
       if (s_lo > s_hi) continue;
       // s = d · m_per_mm and d is the optical depth in millimetres, rounded

@@ -159,12 +159,11 @@ Grid234 StepDepthToGrid(const PointCloudParams& cloud_params, const ObstacleGrid
 // depth camera measures it) at which the grid can count it: a depth value d back-projects to a
 // point d · m_per_mm ahead of the camera (StepPointCloud), and the pixel's ray leaves the box at
 // some distance; 1 mm is added to the box for the float arithmetic, 1 cm to the bound for the
-// rounding to millimetres. -inf
-// where the ray never enters the box; +inf everywhere where a pixel without a return (depth 0,
-// the camera's own position) falls inside the box. A pixel whose depth is beyond
-// its bound is not counted, nor is anything behind it: a renderer may leave out a surface beyond
-// the bound (vehicle::DepthInterest), and the grid is the same. Throws std::invalid_argument for
-// a P that StepPointCloud refuses.
+// rounding to millimetres. -inf where the ray never enters the box; +inf everywhere where a pixel
+// without a return (depth 0, the camera's own position) falls inside the box. A pixel whose depth
+// is beyond its bound is not counted, nor is anything behind it: a renderer may leave out a
+// surface beyond the bound (vehicle::DepthInterest), and the grid is the same. Throws
+// std::invalid_argument for a P that StepPointCloud refuses.
 std::vector<float> FarthestCountedDepths_m(const PointCloudParams& cloud_params,
                                            const ObstacleGridParams& params,
                                            const std::array<double, 12>& P);

@@ -75,6 +75,7 @@ struct PointCloudParams {
     v("hardware_scale", hardware_scale);
   }
   void Validate() const {}  // every value is valid
+  friend bool operator==(const PointCloudParams&, const PointCloudParams&) = default;
 
   // The scale as the real code's float: 0.001f or 1.0f/1024.
   float m_per_mm() const { return hardware_scale ? 1.0f / 1024.0f : 0.001f; }

@@ -583,8 +583,7 @@ struct CameraRenderer::FloorPass {
 
   std::uint8_t* LabelRow(int v) const {
     const int w = rays.width();
-    return labels->view.origin + static_cast<std::ptrdiff_t>(v) * labels->view.stride -
-           static_cast<std::ptrdiff_t>(v) * w;
+    return labels->Row(v) - static_cast<std::ptrdiff_t>(v) * w;
   }
 
   // Pixels [begin, end) of row v, each looked up.
@@ -1121,9 +1120,7 @@ void CameraRenderer::TracePrismFacelessRow(const PrismTrace& trace, int v, int u
   const int w = rays_->width();
   std::uint16_t* depth_mm = depth != nullptr ? depth->mm.data() : nullptr;
   // the row's labels, all faces' one
-  std::uint8_t* label_row =
-      labels != nullptr ? labels->view.origin + static_cast<std::ptrdiff_t>(v) * labels->view.stride
-                        : nullptr;
+  std::uint8_t* label_row = labels != nullptr ? labels->Row(v) : nullptr;
   const std::uint8_t label = trace.face_label[0];
   float* nearest = nearest_t_.data();
   PrismTrace::Hits hits;
@@ -1174,8 +1171,7 @@ void CameraRenderer::TracePrismRow(const PrismTrace& trace, int v, int u_begin, 
       nearest_t_[p] = t;
       if (out != nullptr) std::memcpy(out + 3 * p, trace.face_bgr[face].data(), 3);
       if (labels != nullptr) {
-        labels->view.origin[static_cast<std::ptrdiff_t>(v) * labels->view.stride + u + k] =
-            trace.face_label[face];
+        labels->Row(v)[u + k] = trace.face_label[face];
       }
       if (depth_mm != nullptr) {
         depth_mm[p] = t >= near_m && t <= far_m ? static_cast<std::uint16_t>(t * 1000.0f + 0.5f)

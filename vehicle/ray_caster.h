@@ -441,6 +441,10 @@ class CameraRenderer {
     // per row, the columns that may hold a label other than 0, widened as they are written
     // (LabelView::nonzero_columns; null where not asked for, or where it is the whole region)
     std::vector<std::pair<int, int>>* nonzero{nullptr};
+    // row v's labels: pixel u's at Row(v)[u]
+    std::uint8_t* Row(int v) const {
+      return view.origin + static_cast<std::ptrdiff_t>(v) * view.stride;
+    }
     void MayBeNonzero(int v, int begin, int end) const {
       if (nonzero != nullptr) WidenColumns(&(*nonzero)[static_cast<std::size_t>(v)], begin, end);
     }

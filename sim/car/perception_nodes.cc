@@ -308,7 +308,7 @@ stack::LaneCameraCalibration LaneCalibration(const vehicle::CameraModel& camera)
 std::shared_ptr<const vehicle::DepthInterest> PerceptionTablesCache::DepthInterest(
     const stack::PointCloudParams& cloud, const stack::ObstacleGridParams& grid,
     const CameraSensor& depth_camera) {
-  return depth_interests_.Get({cloud.hardware_scale, grid, &depth_camera.rays()}, [&] {
+  return depth_interests_.Get({cloud, grid, &depth_camera.rays()}, [&] {
     return std::make_shared<const vehicle::DepthInterest>(
         depth_camera.rays(), stack::FarthestCountedDepths_m(cloud, grid, depth_camera.Info().P));
   });

@@ -92,8 +92,9 @@ class PerceptionTablesCache {
  private:
   BuiltOnce<std::pair<stack::LaneDetectionParams, vehicle::CameraParams>, stack::LaneDetectorTables>
       lane_tables_;
-  BuiltOnce<std::tuple<bool, stack::ObstacleGridParams, const vehicle::CameraRays*>,
-            vehicle::DepthInterest>
+  BuiltOnce<
+      std::tuple<stack::PointCloudParams, stack::ObstacleGridParams, const vehicle::CameraRays*>,
+      vehicle::DepthInterest>
       depth_interests_;
 };
 
