@@ -140,7 +140,8 @@ void Car::ApplyForces(double dt_s) {
   have_previous_velocity_ = true;
 
   // steering servo: slews toward the commanded wheel angle at a limited rate
-  const double target_angle_rad = std::atan(params_.wheelbase_m * command_.curvature_per_m);
+  const double target_angle_rad = steer_target_.Of(
+      command_.curvature_per_m, [&](double k) { return std::atan(params_.wheelbase_m * k); });
   const double max_slew_rad = params_.steering_rate_rad_per_s * dt_s;
   steering_angle_rad_ +=
       std::clamp(target_angle_rad - steering_angle_rad_, -max_slew_rad, max_slew_rad);
@@ -156,16 +157,17 @@ void Car::ApplyForces(double dt_s) {
   const double drive_u =
       std::abs(command_.throttle) < params_.esc_neutral_band ? 0.0 : command_.throttle;
   const double target_mps = drive_u * params_.top_speed_mps;
-  const double wanted_dv_mps =
-      (target_mps - forward_mps) * (1.0 - std::exp(-dt_s / params_.motor_time_constant_s));
+  const double lag = motor_lag_.Of(
+      dt_s, [&](double dt) { return 1.0 - std::exp(-dt / params_.motor_time_constant_s); });
+  const double wanted_dv_mps = (target_mps - forward_mps) * lag;
   const double drive_Ns = std::clamp(m * wanted_dv_mps, -axle_grip_Ns, axle_grip_Ns);
   v += x_axis * (drive_Ns / m);  // at the rear axle, on the body's x axis: no torque
 
   // tyres: lateral impulses at both axles cancel the sideways slip up to the grip left over by
   // the drive (friction circle at the rear)
   const double half_wheelbase_m = params_.wheelbase_m / 2.0;
-  const double cos_steer = std::cos(steering_angle_rad_);
-  const double sin_steer = std::sin(steering_angle_rad_);
+  const double cos_steer = steer_cos_.Of(steering_angle_rad_, [](double a) { return std::cos(a); });
+  const double sin_steer = steer_sin_.Of(steering_angle_rad_, [](double a) { return std::sin(a); });
   TireConstraint axles[2];
   axles[0].r = -half_wheelbase_m * x_axis;
   axles[0].n = y_axis;

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <chrono>
+#include <limits>
 
 #include "world/geometry.h"
 #include "world/time.h"
@@ -124,6 +125,26 @@ class Car {
   bool have_previous_velocity_{false};
   world::Vec2 previous_velocity_map_mps_{0.0, 0.0};
   world::Vec2 acceleration_body_mps2_{0.0, 0.0};
+
+  // f(x) as last computed, for the functions ApplyForces takes of inputs that change less often
+  // than every step (dt, the command, the servo at rest): the same x gives the same bits, so the
+  // value is computed again only when x changes.
+  struct LastValue {
+    double x{std::numeric_limits<double>::quiet_NaN()};  // none yet (NaN equals nothing)
+    double y{0.0};
+    template <class F>
+    double Of(double input, F f) {
+      if (input != x) {
+        x = input;
+        y = f(input);
+      }
+      return y;
+    }
+  };
+  LastValue motor_lag_;     // 1 - exp(-dt/τ), by dt_s
+  LastValue steer_target_;  // atan(wheelbase · κ), by the commanded κ
+  LastValue steer_cos_;     // by the steering angle
+  LastValue steer_sin_;     // by the steering angle
 };
 
 // The real PWM mapping (reference §2), in timer counts within a 10 ms period (150000 counts is the
