@@ -857,13 +857,18 @@ void LaneDetector::ComputeRowSumsFromClasses(BirdsEyeRowSums* sums, BirdsEyeClas
 }
 
 void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses classes) {
-  *sums = BirdsEyeRowSums{};
   using Tables = LaneDetectorTables;
   using WarpPixel = Tables::WarpPixel;
-  const auto add = [](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows, std::uint32_t w) {
-    BirdsEyeRowSums::Row& row = rows[static_cast<std::size_t>(WarpPixel::Row(w))];
-    ++row.count;
-    row.col_sum += WarpPixel::Col(w);
+  // Per row a pixel's column plus 1 << kCountShift, summed in one word (one store per pixel, not
+  // two): a row's column sum stays below 640 · 640 < 2^kCountShift.
+  constexpr int kCountShift = 40;
+  static_assert(std::uint64_t{kLaneImageWidth} * kLaneImageWidth <
+                (std::uint64_t{1} << kCountShift));
+  packed_yellow_.fill(0);
+  packed_white_.fill(0);
+  const auto add = [](std::array<std::uint64_t, kLaneImageHeight>& rows, std::uint32_t w) {
+    rows[static_cast<std::size_t>(WarpPixel::Row(w))] +=
+        static_cast<std::uint64_t>(WarpPixel::Col(w)) + (std::uint64_t{1} << kCountShift);
   };
   const std::uint8_t* outputs = tables_->square_outputs_[static_cast<std::size_t>(classes)].data();
   // the nonzero masks: each its own 0/255 image's warp. The exact classes: the combined image's
@@ -881,27 +886,37 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
         if (yellow != Tables::kDepends && white != Tables::kDepends) {
           // the same for each of the square's outputs (the squares inside a line: 77 % of the
           // outputs visited in the default scenario)
-          const auto add_all = [&](std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows) {
+          const auto add_all = [&](std::array<std::uint64_t, kLaneImageHeight>& rows) {
             for (const std::uint32_t* w = first; w != last; ++w) add(rows, *w);
           };
-          if (yellow == Tables::kAlways) add_all(sums->yellow);
-          if (white == Tables::kAlways) add_all(sums->white);
+          if (yellow == Tables::kAlways) add_all(packed_yellow_);
+          if (white == Tables::kAlways) add_all(packed_white_);
           return;
         }
         for (const std::uint32_t* w = first; w != last; ++w) {
           const int alpha16 = WarpPixel::Alpha16(*w);
           if (nonzero) {
-            if (warp[alpha16 + yellow_bits] != 0) add(sums->yellow, *w);
-            if (warp[alpha16 + white_bits] != 0) add(sums->white, *w);
+            if (warp[alpha16 + yellow_bits] != 0) add(packed_yellow_, *w);
+            if (warp[alpha16 + white_bits] != 0) add(packed_white_, *w);
             continue;
           }
           const std::uint8_t cls = white_bits == 0    ? single[alpha16 + yellow_bits] & 3
                                    : yellow_bits == 0 ? single[alpha16 + white_bits] >> 2
                                                       : exact[(alpha16 << 4) + pattern];
-          if (cls == 1) add(sums->yellow, *w);
-          if (cls == 2) add(sums->white, *w);
+          if (cls == 1) add(packed_yellow_, *w);
+          if (cls == 2) add(packed_white_, *w);
         }
       });
+  const auto unpack = [](const std::array<std::uint64_t, kLaneImageHeight>& packed,
+                         std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& rows) {
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      rows[r].count = static_cast<std::int32_t>(packed[r] >> kCountShift);
+      rows[r].col_sum =
+          static_cast<std::int64_t>(packed[r] & ((std::uint64_t{1} << kCountShift) - 1));
+    }
+  };
+  unpack(packed_yellow_, sums->yellow);
+  unpack(packed_white_, sums->white);
 }
 
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {
