@@ -29,6 +29,16 @@ double Distance(const world::Pose2& X, const world::Vec2& p) {
   return std::hypot(p.x() - X.x_m, p.y() - X.y_m);
 }
 
+double SquaredDistance(const world::Pose2& X, const world::Vec2& p) {
+  const double dx = p.x() - X.x_m, dy = p.y() - X.y_m;
+  return dx * dx + dy * dy;
+}
+
+// Where two distances' squares differ by more than this factor, their hypots (each within an ulp
+// of the true distance, as is the square's rounding) compare the same way: a comparison of
+// distances takes the hypots only where the squares are this close.
+constexpr double kSquaresApart = 1.0 + 1e-9;
+
 // Whether the cell containing p_F collides under the model (the lab's inCollision for centre).
 bool CellCollides(CollisionModel model, const CostQuery& cell_cost, const world::Vec2& p_F) {
   const std::optional<std::uint8_t> cost = cell_cost(p_F);
@@ -198,12 +208,30 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
     }
   }
   std::size_t closest = s.begin;
+  double closest_sq = SquaredDistance(X, path[closest]);
+  double closest_m = Distance(X, path[closest]);
   for (std::size_t i = s.begin + 1; i < search_end; ++i) {
-    if (Distance(X, path[i]) < Distance(X, path[closest])) closest = i;
+    const double sq = SquaredDistance(X, path[i]);
+    if (sq > closest_sq * kSquaresApart) continue;  // farther: Distance would say so too
+    const double distance_m = Distance(X, path[i]);
+    if (distance_m < closest_m) {
+      closest = i;
+      closest_sq = sq;
+      closest_m = distance_m;
+    }
   }
   s.begin = closest;
+  // the points within the costmap's extent (Distance <= it), by their squares where those decide
+  const double extent_m = params.max_costmap_extent_m;
+  const double extent_sq = extent_m * extent_m;
+  const auto within_extent = [&](const world::Vec2& p) {
+    const double sq = SquaredDistance(X, p);
+    if (sq * kSquaresApart < extent_sq) return true;
+    if (sq > extent_sq * kSquaresApart) return false;
+    return Distance(X, p) <= extent_m;
+  };
   std::size_t end = closest;
-  while (end < path.size() && Distance(X, path[end]) <= params.max_costmap_extent_m) ++end;
+  while (end < path.size() && within_extent(path[end])) ++end;
   if (end == closest) {  // even the closest point is beyond the local costmap
     out.no_path = true;
     return out;

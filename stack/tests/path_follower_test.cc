@@ -9,6 +9,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -363,6 +364,53 @@ TEST(PathFollowerTest, PruningNeverGoesBackOnTheSamePath) {
   out = StepPathFollower(PathFollowerParams{}, input, &state);
   EXPECT_EQ(state.begin, 0u);
   EXPECT_NEAR(out.carrot->x(), 0.6, 0.05 + 1e-9);
+}
+
+// The pruning compares squared distances where they decide and hypots only where they are close
+// (path_follower.cc kSquaresApart): the same closest point (the first of equals) and the same
+// last point within max_costmap_extent_m as hypot over every point, here on jittered paths with
+// ties and points at exactly the extent. A look-ahead beyond every point makes the carrot that
+// last point.
+TEST(PathFollowerTest, PruningAgreesWithTheHypotOfEveryPoint) {
+  PathFollowerParams params;
+  params.pursuit.lookahead_dist_m = 100.0;
+  params.max_costmap_extent_m = 5.0;
+  const auto reference = [&](const std::vector<Vec2>& path, const Pose2& X) {
+    const auto distance = [&](const Vec2& p) { return std::hypot(p.x() - X.x_m, p.y() - X.y_m); };
+    std::size_t closest = 0;
+    for (std::size_t i = 1; i < path.size(); ++i) {
+      if (distance(path[i]) < distance(path[closest])) closest = i;
+    }
+    std::size_t end = closest;
+    while (end < path.size() && distance(path[end]) <= params.max_costmap_extent_m) ++end;
+    return std::pair{closest, end};
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-1e-15, 1e-15);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Pose2 X{0.0, 0.0, 0.0};
+    std::vector<Vec2> path;
+    // towards X and away, with mirrored (equal-distance) pairs, then out past the extent through
+    // (3, 4) and (-3, -4) at exactly 5 m, each point perhaps nudged by an ulp or two
+    // (the nearest two, at ±0.01 m, tie exactly in every other trial)
+    for (int i = -20; i <= 20; ++i) {
+      if (i != 0) path.emplace_back(0.01 * std::abs(i) + (trial % 4 < 2 ? jitter(rng) : 0.0), 0.3);
+    }
+    for (int i = 0; i <= 10; ++i) {
+      const double k = 0.9 + 0.02 * i;
+      const Vec2 p = (trial % 2 == 0 ? Vec2(3.0, 4.0) : Vec2(-3.0, -4.0)) * k;
+      path.push_back(i == 5 ? p : p + Vec2(jitter(rng), jitter(rng)));
+    }
+    PathFollowerState state;
+    PathFollowerInput input;
+    input.path = path;
+    input.X_F_base = X;
+    const PathFollowerOutput out = StepPathFollower(params, input, &state);
+    const auto [closest, end] = reference(path, X);
+    ASSERT_EQ(state.begin, closest) << trial;
+    ASSERT_TRUE(out.carrot.has_value());
+    ASSERT_EQ(*out.carrot, path[end - 1]) << trial;
+  }
 }
 
 TEST(PathFollowerTest, NoPathStopsAndBadInputThrows) {
