@@ -33,6 +33,8 @@ struct TireConstraint {
   world::Vec2 n;  // unit lateral direction of the wheel, map frame
   double limit_Ns{0.0};
   double accumulated_Ns{0.0};
+  double rn{0.0};                 // r × n, m
+  double effective_mass_kg{0.0};  // of the body along n at r
 };
 
 }  // namespace
@@ -175,17 +177,19 @@ void Car::ApplyForces(double dt_s) {
   axles[1].r = half_wheelbase_m * x_axis;
   axles[1].n = y_axis * cos_steer - x_axis * sin_steer;
   axles[1].limit_Ns = axle_grip_Ns;
+  for (TireConstraint& axle : axles) {  // (fixed over the passes)
+    axle.rn = Cross(axle.r, axle.n);
+    axle.effective_mass_kg = 1.0 / (1.0 / m + axle.rn * axle.rn / inertia);
+  }
   for (int pass = 0; pass < kTireIterations; ++pass) {
     for (TireConstraint& axle : axles) {
       const double slip_mps = (v + CrossScalar(w, axle.r)).dot(axle.n);
-      const double rn = Cross(axle.r, axle.n);
-      const double effective_mass_kg = 1.0 / (1.0 / m + rn * rn / inertia);
-      const double accumulated = std::clamp(axle.accumulated_Ns - slip_mps * effective_mass_kg,
+      const double accumulated = std::clamp(axle.accumulated_Ns - slip_mps * axle.effective_mass_kg,
                                             -axle.limit_Ns, axle.limit_Ns);
       const double impulse_Ns = accumulated - axle.accumulated_Ns;
       axle.accumulated_Ns = accumulated;
       v += axle.n * (impulse_Ns / m);
-      w += rn * impulse_Ns / inertia;
+      w += axle.rn * impulse_Ns / inertia;
     }
   }
 
