@@ -1,5 +1,6 @@
 #include "stack/behavior.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -61,6 +62,8 @@ std::vector<world::Vec2> GoalsAhead(const BehaviorParams& params, const world::P
   const double end_m = route.cyclic() ? s_m + params.waypoint_horizon_m
                                       : std::min(s_m + params.waypoint_horizon_m, route.length_m());
   const double spacing = params.waypoint_spacing_m;
+  // (one allocation, not one per doubling: the count is known to within the end's rounding)
+  goals.reserve(static_cast<std::size_t>(std::max(0.0, (end_m - s_m) / spacing)) + 2);
   for (auto n = static_cast<std::int64_t>(std::floor(s_m / spacing)) + 1;
        static_cast<double>(n) * spacing < end_m + 1e-9; ++n) {
     const double s = static_cast<double>(n) * spacing;

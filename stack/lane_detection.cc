@@ -130,6 +130,10 @@ void RowMeans(const std::array<BirdsEyeRowSums::Row, kLaneImageHeight>& sums,
   rows->clear();
   cols->clear();
   weights->clear();
+  // (at most a row each: one allocation, not one per doubling)
+  rows->reserve(kLaneImageHeight);
+  cols->reserve(kLaneImageHeight);
+  weights->reserve(kLaneImageHeight);
   *total = 0;
   for (int r = 0; r < kLaneImageHeight; ++r) {
     const BirdsEyeRowSums::Row& row = sums[static_cast<std::size_t>(r)];
@@ -262,6 +266,7 @@ std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
   const int unknowns = degree + 1;
   double scale = 1.0;
   std::vector<double> distinct;
+  distinct.reserve(rows.size());
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(rows[i]) || !std::isfinite(cols[i]) || !(weights[i] >= 0.0)) {
       return std::nullopt;
@@ -288,6 +293,7 @@ std::optional<RowPolynomial> FitRowPolynomial(std::span<const double> rows,
   if (qr.rank() < unknowns) return std::nullopt;
   const Eigen::VectorXd c = qr.solve(b);
   RowPolynomial poly;
+  poly.coefficients.reserve(static_cast<std::size_t>(unknowns));
   double power = 1.0;
   for (int k = 0; k < unknowns; ++k, power *= scale) poly.coefficients.push_back(c(k) / power);
   if (!std::all_of(poly.coefficients.begin(), poly.coefficients.end(),
@@ -313,6 +319,10 @@ Eigen::Vector2d ShiftTowardsLaneCentre(const RowPolynomial& line, double row, La
 std::optional<RowPolynomial> FitTrajectory(const LaneDetectionParams& params,
                                            std::span<const Eigen::Vector2d> shifted_row_col) {
   std::vector<double> rows, cols, weights;
+  const std::size_t n = shifted_row_col.size() + params.anchor_rows_px.size();
+  rows.reserve(n);
+  cols.reserve(n);
+  weights.reserve(n);
   for (const Eigen::Vector2d& p : shifted_row_col) {
     rows.push_back(p.x());
     cols.push_back(p.y());
