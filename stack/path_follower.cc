@@ -164,6 +164,56 @@ bool IsCollisionImminent(const CollisionCheckParams& params, const world::Pose2&
   return false;
 }
 
+namespace {
+
+// The first of the points nearest X among those from `begin` within
+// max_robot_pose_search_dist_m of path length.
+std::size_t ClosestAhead(const PathFollowerParams& params, std::span<const world::Vec2> path,
+                         const world::Pose2& X, std::size_t begin) {
+  std::size_t search_end = path.size();
+  double along_m = 0.0;
+  for (std::size_t i = begin; i + 1 < path.size(); ++i) {
+    along_m += (path[i + 1] - path[i]).norm();
+    if (along_m > params.max_robot_pose_search_dist_m) {
+      search_end = i + 1;
+      break;
+    }
+  }
+  std::size_t closest = begin;
+  double closest_sq = SquaredDistance(X, path[closest]);
+  double closest_m = Distance(X, path[closest]);
+  for (std::size_t i = begin + 1; i < search_end; ++i) {
+    const double sq = SquaredDistance(X, path[i]);
+    if (sq > closest_sq * kSquaresApart) continue;  // farther: Distance would say so too
+    const double distance_m = Distance(X, path[i]);
+    if (distance_m < closest_m) {
+      closest = i;
+      closest_sq = sq;
+      closest_m = distance_m;
+    }
+  }
+  return closest;
+}
+
+// The end of the run of points from `closest` on within max_costmap_extent_m of X (Distance <= it),
+// by their squares where those decide.
+std::size_t WithinExtentEnd(const PathFollowerParams& params, std::span<const world::Vec2> path,
+                            const world::Pose2& X, std::size_t closest) {
+  const double extent_m = params.max_costmap_extent_m;
+  const double extent_sq = extent_m * extent_m;
+  const auto within_extent = [&](const world::Vec2& p) {
+    const double sq = SquaredDistance(X, p);
+    if (sq * kSquaresApart < extent_sq) return true;
+    if (sq > extent_sq * kSquaresApart) return false;
+    return Distance(X, p) <= extent_m;
+  };
+  std::size_t end = closest;
+  while (end < path.size() && within_extent(path[end])) ++end;
+  return end;
+}
+
+}  // namespace
+
 PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
                                     const PathFollowerInput& input, PathFollowerState* state) {
   Require(Finite(input.X_F_base), "path follower: the pose must be finite");
@@ -197,41 +247,11 @@ PathFollowerOutput StepPathFollower(const PathFollowerParams& params,
     return out;
   }
 
-  // prune: the closest point within the search distance (first of equals), never backwards
-  std::size_t search_end = path.size();
-  double along_m = 0.0;
-  for (std::size_t i = s.begin; i + 1 < path.size(); ++i) {
-    along_m += (path[i + 1] - path[i]).norm();
-    if (along_m > params.max_robot_pose_search_dist_m) {
-      search_end = i + 1;
-      break;
-    }
-  }
-  std::size_t closest = s.begin;
-  double closest_sq = SquaredDistance(X, path[closest]);
-  double closest_m = Distance(X, path[closest]);
-  for (std::size_t i = s.begin + 1; i < search_end; ++i) {
-    const double sq = SquaredDistance(X, path[i]);
-    if (sq > closest_sq * kSquaresApart) continue;  // farther: Distance would say so too
-    const double distance_m = Distance(X, path[i]);
-    if (distance_m < closest_m) {
-      closest = i;
-      closest_sq = sq;
-      closest_m = distance_m;
-    }
-  }
-  s.begin = closest;
-  // the points within the costmap's extent (Distance <= it), by their squares where those decide
-  const double extent_m = params.max_costmap_extent_m;
-  const double extent_sq = extent_m * extent_m;
-  const auto within_extent = [&](const world::Vec2& p) {
-    const double sq = SquaredDistance(X, p);
-    if (sq * kSquaresApart < extent_sq) return true;
-    if (sq > extent_sq * kSquaresApart) return false;
-    return Distance(X, p) <= extent_m;
-  };
-  std::size_t end = closest;
-  while (end < path.size() && within_extent(path[end])) ++end;
+  // prune: the closest point within the search distance (first of equals), never backwards; the
+  // path kept out to the costmap's extent
+  s.begin = ClosestAhead(params, path, X, s.begin);
+  const std::size_t closest = s.begin;
+  const std::size_t end = WithinExtentEnd(params, path, X, closest);
   if (end == closest) {  // even the closest point is beyond the local costmap
     out.no_path = true;
     return out;

@@ -37,6 +37,26 @@ struct TireConstraint {
   double effective_mass_kg{0.0};  // of the body along n at r
 };
 
+// kTireIterations passes over the axles' constraints, each impulse clamped to its axle's grip,
+// on the body's velocity v and yaw rate w (mass m, inertia about the centre).
+void SolveTires(TireConstraint (&axles)[2], double m, double inertia, world::Vec2* v, double* w) {
+  for (TireConstraint& axle : axles) {  // (fixed over the passes)
+    axle.rn = Cross(axle.r, axle.n);
+    axle.effective_mass_kg = 1.0 / (1.0 / m + axle.rn * axle.rn / inertia);
+  }
+  for (int pass = 0; pass < kTireIterations; ++pass) {
+    for (TireConstraint& axle : axles) {
+      const double slip_mps = (*v + CrossScalar(*w, axle.r)).dot(axle.n);
+      const double accumulated = std::clamp(axle.accumulated_Ns - slip_mps * axle.effective_mass_kg,
+                                            -axle.limit_Ns, axle.limit_Ns);
+      const double impulse_Ns = accumulated - axle.accumulated_Ns;
+      axle.accumulated_Ns = accumulated;
+      *v += axle.n * (impulse_Ns / m);
+      *w += axle.rn * impulse_Ns / inertia;
+    }
+  }
+}
+
 }  // namespace
 
 void CarParams::Validate() const {
@@ -177,21 +197,7 @@ void Car::ApplyForces(double dt_s) {
   axles[1].r = half_wheelbase_m * x_axis;
   axles[1].n = y_axis * cos_steer - x_axis * sin_steer;
   axles[1].limit_Ns = axle_grip_Ns;
-  for (TireConstraint& axle : axles) {  // (fixed over the passes)
-    axle.rn = Cross(axle.r, axle.n);
-    axle.effective_mass_kg = 1.0 / (1.0 / m + axle.rn * axle.rn / inertia);
-  }
-  for (int pass = 0; pass < kTireIterations; ++pass) {
-    for (TireConstraint& axle : axles) {
-      const double slip_mps = (v + CrossScalar(w, axle.r)).dot(axle.n);
-      const double accumulated = std::clamp(axle.accumulated_Ns - slip_mps * axle.effective_mass_kg,
-                                            -axle.limit_Ns, axle.limit_Ns);
-      const double impulse_Ns = accumulated - axle.accumulated_Ns;
-      axle.accumulated_Ns = accumulated;
-      v += axle.n * (impulse_Ns / m);
-      w += axle.rn * impulse_Ns / inertia;
-    }
-  }
+  SolveTires(axles, m, inertia, &v, &w);
 
   body_->SetLinearVelocity(b2Vec2(static_cast<float>(v.x()), static_cast<float>(v.y())));
   body_->SetAngularVelocity(static_cast<float>(w));
