@@ -237,7 +237,7 @@ BehaviorOutput StepBehavior(const BehaviorParams& params, const world::Polyline&
           : route.Project(input.p_map).s_m;
   if (state->started) {
     double ds = state->route_s_m - previous_s;
-    if (route.cyclic()) ds = std::remainder(ds, route.length_m());
+    if (route.cyclic()) ds = world::Remainder(ds, route.length_m());
     state->progress_since_recovery_m += ds;
   }
   state->started = true;

@@ -19,7 +19,7 @@ void Box::Validate() const {
 
 double WrapAngle(double a_rad) {
   constexpr double kPi = std::numbers::pi;
-  double r = std::remainder(a_rad, 2.0 * kPi);
+  double r = Remainder(a_rad, 2.0 * kPi);
   if (r <= -kPi) r += 2.0 * kPi;
   return r;
 }

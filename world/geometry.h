@@ -45,6 +45,13 @@ struct Box {
 // Wraps an angle to (-pi, pi].
 double WrapAngle(double a_rad);
 
+// std::remainder(x, period) (x less the nearest multiple of period), without the library call
+// where x already lies within half a period of 0: there the remainder is x itself, exactly (the
+// nearest multiple is 0). Most calls are of that kind (an arc length's change over one step).
+inline double Remainder(double x, double period) {
+  return std::abs(x) < 0.5 * period ? x : std::remainder(x, period);
+}
+
 // Points of a frame F expressed in a body's frame, the body at X_F_body: p_body = R(-yaw) ·
 // (p_F - p_F_body). The rotation's cos and sin are taken once, for as many points as are asked
 // (a collision check maps thousands of cells under one pose); each point's arithmetic is

@@ -25,7 +25,7 @@ void RouteMonitor::Observe(Time t, const world::Pose2& pose, double speed_mps, D
   const world::Polyline::Projection on =
       path.ProjectNear(pose.position(), route_s_m_, kTrackingWindow_m);
   double ds = on.s_m - route_s_m_;
-  if (path.cyclic()) ds = std::remainder(ds, path.length_m());
+  if (path.cyclic()) ds = world::Remainder(ds, path.length_m());
   route_s_m_ = on.s_m;
   progress_m_ += ds;
   lateral_error_m_ = on.lateral_m;

@@ -273,7 +273,7 @@ std::optional<double> Simulation::Impl::ObstacleGap(const CarAgent& agent) const
   for (const ObstacleOnRoute& o : agent.obstacles_on_lane) {
     if (!physics.obstacle_enabled(o.index)) continue;
     double ahead = o.s_m - front_s;
-    if (path.cyclic()) ahead = std::remainder(ahead, path.length_m());
+    if (path.cyclic()) ahead = world::Remainder(ahead, path.length_m());
     const double gap = ahead - o.half_extent_m;
     if (ahead < -o.half_extent_m || gap > kObstacleHorizon_m) continue;
     if (!nearest || gap < *nearest) nearest = gap;

@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,6 +54,36 @@ std::string ErrorOf(const auto& action) {
     return e.what();
   }
   return "(no exception)";
+}
+
+// world::Remainder skips std::remainder within half a period of 0, where the remainder is x:
+// bit for bit the library's, at and beside the half period, for tiny and huge x, and for a NaN
+// and infinities; WrapAngle, which uses it, keeps its (-pi, pi] convention.
+TEST(GeometryTest, RemainderIsTheLibrarysBitForBit) {
+  const auto same = [](double x, double period) {
+    const double ours = Remainder(x, period), theirs = std::remainder(x, period);
+    return (std::isnan(ours) && std::isnan(theirs)) ||
+           std::memcmp(&ours, &theirs, sizeof ours) == 0;
+  };
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  for (const double period : {2.0 * std::numbers::pi, 17.3, 1e-3, 1e6}) {
+    const double half = 0.5 * period;
+    for (const double x :
+         {0.0, -0.0, half, -half, std::nextafter(half, 0.0), std::nextafter(half, kInf),
+          -std::nextafter(half, 0.0), -std::nextafter(half, kInf), period, 1e-300, -1e300, kInf,
+          -kInf, std::numeric_limits<double>::quiet_NaN()}) {
+      EXPECT_TRUE(same(x, period)) << x << " by " << period;
+    }
+    for (int i = 0; i < 10000; ++i) {
+      const double x = unit(rng) * period * (i % 2 == 0 ? 0.6 : 40.0);
+      ASSERT_TRUE(same(x, period)) << x << " by " << period;
+    }
+  }
+  EXPECT_EQ(WrapAngle(-std::numbers::pi), std::numbers::pi);
+  EXPECT_EQ(WrapAngle(std::numbers::pi), std::numbers::pi);
+  EXPECT_EQ(WrapAngle(0.25), 0.25);
 }
 
 TEST(PolylineTest, StraightLengthHeadingCurvature) {
