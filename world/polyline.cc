@@ -106,6 +106,32 @@ int Polyline::ChordIndexAt(double s_m) const {
   return std::clamp(index, 0, static_cast<int>(directions_.size()) - 1);
 }
 
+int Polyline::ChordIndexFrom(double s_m, int near) const {
+  // upper_bound's answer u (the first arc length above s, or n), bracketed as [lo, hi] by steps
+  // doubling away from `near`, then searched within the bracket
+  const auto arc = arc_lengths_m_.begin();
+  const auto n = static_cast<std::ptrdiff_t>(arc_lengths_m_.size());
+  const std::ptrdiff_t from = std::clamp<std::ptrdiff_t>(near, 0, n - 1);
+  std::ptrdiff_t lo = 0, hi = 0;
+  if (arc[from] <= s_m) {  // u > from; every index below lo is at or below s
+    lo = from + 1;
+    hi = lo;
+    for (std::ptrdiff_t step = 1; hi < n && arc[hi] <= s_m; step *= 2) {
+      lo = hi + 1;
+      hi = std::min(n, hi + step);
+    }
+  } else {  // u <= from; arc[hi] is above s
+    hi = from;
+    lo = from;
+    for (std::ptrdiff_t step = 1; lo > 0 && arc[lo - 1] > s_m; step *= 2) {
+      hi = lo - 1;
+      lo = std::max<std::ptrdiff_t>(0, lo - step);
+    }
+  }
+  const int index = static_cast<int>(std::upper_bound(arc + lo, arc + hi, s_m) - arc) - 1;
+  return std::clamp(index, 0, static_cast<int>(directions_.size()) - 1);
+}
+
 Vec2 Polyline::PointAt(double s_m) const {
   if (points_.empty()) throw std::logic_error("PointAt on an empty polyline");
   const double s = NormalizeS(s_m);
@@ -146,9 +172,10 @@ void Polyline::VisitChord(const Vec2& p, int i, double s_lo_m, double s_hi_m, Ne
 // window.
 void Polyline::ScanInterval(const Vec2& p, double s_lo_m, double s_hi_m, double s_start_m,
                             Nearest* best) const {
-  const int first = ChordIndexAt(s_lo_m);
-  const int last = ChordIndexAt(s_hi_m);
-  const int start = std::clamp(ChordIndexAt(s_start_m), first, last);
+  const int near = ChordIndexAt(s_start_m);
+  const int first = ChordIndexFrom(s_lo_m, near);
+  const int last = ChordIndexFrom(s_hi_m, near);
+  const int start = std::clamp(near, first, last);
   VisitChord(p, start, s_lo_m, s_hi_m, best);
   double best_m = std::sqrt(best->distance_sq);
   const auto arc = arc_lengths_m_.begin();

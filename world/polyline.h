@@ -62,6 +62,8 @@ class Polyline {
 
  private:
   int ChordIndexAt(double s_m) const;  // s already normalized
+  // The same, searched outwards from chord `near` (cheaper when s is a few chords from it)
+  int ChordIndexFrom(double s_m, int near) const;
   struct Nearest {
     int chord{0};
     double u_m{0.0};  // along the chord

@@ -290,6 +290,42 @@ TEST(PolylineTest, ProjectMatchesExhaustiveSearch) {
   }
 }
 
+// ProjectNear finds its window's first and last chords by steps doubling away from the hint's
+// chord (Polyline::ChordIndexFrom); on chords of very unequal lengths, with windows of every
+// size and at both ends of an open path, it must still see exactly the window's chords.
+TEST(PolylineTest, ProjectNearSeesItsWholeWindowOnUnequalChords) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> spacing(0.001, 0.2), unit(0.0, 1.0);
+  std::vector<Vec2> points;
+  double x = 0.0;
+  for (int k = 0; k < 400; ++k, x += spacing(rng)) points.emplace_back(x, 0.3 * std::sin(x));
+  const Polyline path(points, false);
+  const std::vector<double>& arc = path.arc_lengths_m();
+  const auto exhaustive = [&](const Vec2& p, double lo, double hi) {
+    double best = 1e9;
+    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+      if (arc[i + 1] < lo || arc[i] > hi) continue;
+      const Vec2 d = (points[i + 1] - points[i]) / (arc[i + 1] - arc[i]);
+      const double u = std::clamp(d.dot(p - points[i]), std::max(lo, arc[i]) - arc[i],
+                                  std::min(hi, arc[i + 1]) - arc[i]);
+      best = std::min(best, (p - (points[i] + d * u)).norm());
+    }
+    return best;
+  };
+  for (int trial = 0; trial < 3000; ++trial) {
+    const double hint = (1.4 * unit(rng) - 0.2) * path.length_m();
+    const double window = trial % 3 == 0 ? 0.0 : unit(rng) * (trial % 3 == 1 ? 0.3 : 30.0);
+    const Vec2 p(unit(rng) * x, 2.0 * unit(rng) - 1.0);
+    const Polyline::Projection near = path.ProjectNear(p, hint, window);
+    const double lo = std::clamp(hint - window, 0.0, path.length_m());
+    const double hi = std::clamp(hint + window, 0.0, path.length_m());
+    ASSERT_NEAR(near.distance_m, exhaustive(p, lo, hi), 1e-12)
+        << "hint " << hint << " window " << window;
+    ASSERT_GE(near.s_m, lo - 1e-12);
+    ASSERT_LE(near.s_m, hi + 1e-12);
+  }
+}
+
 TEST(PolylineTest, ProjectNearStaysInItsWindow) {
   // A U: the start and the end run side by side 0.2 m apart.
   const Polyline path({{2.0, 0.0}, {0.0, 0.0}, {0.0, 0.2}, {2.0, 0.2}}, false);
