@@ -166,6 +166,19 @@ FloorTexture::FloorTexture(const world::FloorRaster& raster)
   CountOthers();
 }
 
+std::shared_ptr<const std::vector<std::uint8_t>> FloorTexture::LabelTexels(
+    const PaletteLabels& labels) const {
+  const std::lock_guard<std::mutex> lock(label_texels_mutex_);
+  std::shared_ptr<const std::vector<std::uint8_t>>& texels = label_texels_[labels];
+  if (!texels) {
+    auto made = std::make_shared<std::vector<std::uint8_t>>(index_.size());
+    std::transform(index_.begin(), index_.end(), made->begin(),
+                   [&](std::uint8_t palette_index) { return labels[palette_index]; });
+    texels = std::move(made);
+  }
+  return texels;
+}
+
 void FloorTexture::IndexColours(const world::FloorRaster& raster) {
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   index_.resize(n + 1);
@@ -468,6 +481,12 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
     labels.palette[static_cast<std::size_t>(k)] = label(bgr);
   }
   labels.surround = label(surround_);
+  if (!label_texels_ ||
+      label_texels_palette_ != labels.palette) {  // (the same one, frame on frame)
+    label_texels_ = tex.LabelTexels(labels.palette);
+    label_texels_palette_ = labels.palette;
+  }
+  labels.texels = label_texels_->data();
   if (out.nonzero_columns != nullptr) {
     if (labels.surround != 0 || labels.palette[tex.common_index()] != 0) {
       *out.nonzero_columns = region.columns;  // the region's every pixel may be
@@ -595,7 +614,7 @@ struct CameraRenderer::FloorPass {
     const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
     const std::uint8_t* texel_index = tex.palette_index();
     const std::uint32_t* palette = tex.palette();
-    const std::uint8_t* label_palette = labels != nullptr ? labels->palette.data() : nullptr;
+    const std::uint8_t* label_texels = labels != nullptr ? labels->texels : nullptr;
     const float* fx = rays.floor_x().data();
     const float* fy = rays.floor_y().data();
     // (the row's start once: the byte stores below may alias anything, so the compiler would
@@ -613,7 +632,7 @@ struct CameraRenderer::FloorPass {
       const I4 index = inside ? texel_row * width + texel_col : outside;
       if (labels != nullptr) {
         std::uint8_t* label = label_row + i;
-        for (int k = 0; k < n; ++k) label[k] = label_palette[texel_index[index[k]]];
+        for (int k = 0; k < n; ++k) label[k] = label_texels[index[k]];
         continue;
       }
       for (int k = 0; k < n; ++k) {

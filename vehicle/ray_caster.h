@@ -23,7 +23,9 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <utility>
 #include <vector>
@@ -135,6 +137,12 @@ class FloorTexture {
   const std::uint32_t* palette() const { return palette_.data(); }
   int palette_size() const { return static_cast<int>(palette_.size()); }
   std::uint32_t outside_index() const { return static_cast<std::uint32_t>(index_.size() - 1); }
+  // Texel i's label under a labelling (`labels`: the label of each palette index), one byte per
+  // texel like palette_index() (outside_index() included): a labelled look-up is then one load,
+  // not two dependent ones. Made once per labelling and kept, shared by every renderer of this
+  // texture (the cars of a run); safe to call from several threads.
+  using PaletteLabels = std::array<std::uint8_t, 256>;
+  std::shared_ptr<const std::vector<std::uint8_t>> LabelTexels(const PaletteLabels& labels) const;
 
   // The colour most of the raster has (the bare floor of a track), as a palette index.
   std::uint8_t common_index() const { return common_index_; }
@@ -182,6 +190,8 @@ class FloorTexture {
   world::Vec2 origin_m_;
   std::vector<std::uint8_t> index_;
   std::vector<std::uint32_t> palette_;
+  mutable std::mutex label_texels_mutex_;
+  mutable std::map<PaletteLabels, std::shared_ptr<const std::vector<std::uint8_t>>> label_texels_;
   std::uint8_t common_index_{0};
   std::size_t cells_y_{0};
   std::size_t words_per_row_{0};
@@ -436,6 +446,7 @@ class CameraRenderer {
     LabelView view;
     const ColourLabel* label{nullptr};
     std::array<std::uint8_t, 256> palette{};  // by floor palette index
+    const std::uint8_t* texels{nullptr};      // by texel: FloorTexture::LabelTexels(palette)
     std::uint8_t surround{0};
     std::span<const std::uint8_t> prism_labels;  // per prism; empty: label(face colour)
     // per row, the columns that may hold a label other than 0, widened as they are written
@@ -503,6 +514,9 @@ class CameraRenderer {
   std::vector<std::uint64_t> group_seen_, group_mixed_;
   bool common_floor_blocks_on_{true};
   std::uint64_t common_floor_pixels_{0};
+  // the floor's label per texel under the last labelling asked for (FloorTexture::LabelTexels)
+  std::shared_ptr<const std::vector<std::uint8_t>> label_texels_;
+  FloorTexture::PaletteLabels label_texels_palette_{};
 };
 
 // Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a

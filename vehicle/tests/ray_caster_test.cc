@@ -71,6 +71,32 @@ Eigen::Vector3d MapRay(const CameraModel& camera, const world::Pose2& car, int u
   return camera.X_map_camera(car).linear() * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
 }
 
+// The floor's labels per texel (one load per labelled look-up): each texel's is the labelling's
+// label of its palette index, the bare floor beyond the raster's included; one table per
+// labelling, the same table when asked again.
+TEST(FloorTextureTest, LabelTexelsAreThePalettesLabelOfEachTexel) {
+  world::FloorRaster raster = BlackFloor(2.0, 0.01);
+  Paint(&raster, -0.5, 0.0, -0.2, 0.3, Bgr{255, 255, 255});
+  Paint(&raster, 0.2, 0.4, -0.9, 0.9, Bgr{0, 200, 220});
+  raster.floor_bgr = {40, 40, 40};
+  const FloorTexture tex(raster);
+  ASSERT_GE(tex.palette_size(), 3);
+  FloorTexture::PaletteLabels first{}, second{};
+  for (int k = 0; k < tex.palette_size(); ++k) {
+    first[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(k + 1);
+    second[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(k % 2);
+  }
+  for (const FloorTexture::PaletteLabels& labels : {first, second}) {
+    const auto texels = tex.LabelTexels(labels);
+    ASSERT_EQ(texels->size(), static_cast<std::size_t>(tex.outside_index()) + 1);
+    for (std::size_t i = 0; i < texels->size(); ++i) {
+      ASSERT_EQ((*texels)[i], labels[tex.palette_index()[i]]) << i;
+    }
+    EXPECT_EQ(tex.LabelTexels(labels), texels);
+  }
+  EXPECT_NE(tex.LabelTexels(first), tex.LabelTexels(second));
+}
+
 TEST(RayCasterTest, EmptyFloorDepthBackProjectsOntoTheFloor) {
   // Back-projection with P as the point cloud code does it (reference §3): X = (u·z - cx·z - Tx) /
   // fx, Y = (v·z - cy·z - Ty) / fy, Z = z; then through X_map_camera. Stated tolerance: the
