@@ -26,37 +26,6 @@ world::Vec2 CrossScalar(double w, const world::Vec2& r) { return {-w * r.y(), w 
 
 world::Vec2 ToVec2(const b2Vec2& v) { return {static_cast<double>(v.x), static_cast<double>(v.y)}; }
 
-// A point of a rigid body that gets impulses along a fixed direction n; the impulse is
-// accumulated and clamped to ±limit (sequential impulses).
-struct TireConstraint {
-  world::Vec2 r;  // from the centre of mass, map frame, m
-  world::Vec2 n;  // unit lateral direction of the wheel, map frame
-  double limit_Ns{0.0};
-  double accumulated_Ns{0.0};
-  double rn{0.0};                 // r × n, m
-  double effective_mass_kg{0.0};  // of the body along n at r
-};
-
-// kTireIterations passes over the axles' constraints, each impulse clamped to its axle's grip,
-// on the body's velocity v and yaw rate w (mass m, inertia about the centre).
-void SolveTires(TireConstraint (&axles)[2], double m, double inertia, world::Vec2* v, double* w) {
-  for (TireConstraint& axle : axles) {  // (fixed over the passes)
-    axle.rn = Cross(axle.r, axle.n);
-    axle.effective_mass_kg = 1.0 / (1.0 / m + axle.rn * axle.rn / inertia);
-  }
-  for (int pass = 0; pass < kTireIterations; ++pass) {
-    for (TireConstraint& axle : axles) {
-      const double slip_mps = (*v + CrossScalar(*w, axle.r)).dot(axle.n);
-      const double accumulated = std::clamp(axle.accumulated_Ns - slip_mps * axle.effective_mass_kg,
-                                            -axle.limit_Ns, axle.limit_Ns);
-      const double impulse_Ns = accumulated - axle.accumulated_Ns;
-      axle.accumulated_Ns = accumulated;
-      *v += axle.n * (impulse_Ns / m);
-      *w += axle.rn * impulse_Ns / inertia;
-    }
-  }
-}
-
 }  // namespace
 
 void CarParams::Validate() const {
@@ -137,6 +106,42 @@ void Car::SetCommand(const ActuatorCommand& command) {
 }
 
 void Car::ApplyForces(double dt_s) {
+  TireSolve solve = BeginForces(dt_s);
+  SolveTires(std::span<TireSolve>(&solve, 1));
+  EndForces(solve);
+}
+
+void Car::SolveTires(std::span<TireSolve> solves) {
+  for (TireSolve& s : solves) {
+    for (TireAxle& axle : s.axles) {  // (fixed over the passes)
+      axle.rn = Cross(axle.r, axle.n);
+      axle.effective_mass_kg = 1.0 / (1.0 / s.m + axle.rn * axle.rn / s.inertia);
+    }
+  }
+  // the cars' passes side by side: each car's chain of dependent steps is its own
+  for (int pass = 0; pass < kTireIterations; ++pass) {
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (TireSolve& s : solves) {
+        TireAxle& axle = s.axles[a];
+        const double slip_mps = (s.v + CrossScalar(s.w, axle.r)).dot(axle.n);
+        const double accumulated = std::clamp(
+            axle.accumulated_Ns - slip_mps * axle.effective_mass_kg, -axle.limit_Ns, axle.limit_Ns);
+        const double impulse_Ns = accumulated - axle.accumulated_Ns;
+        axle.accumulated_Ns = accumulated;
+        s.v += axle.n * (impulse_Ns / s.m);
+        s.w += axle.rn * impulse_Ns / s.inertia;
+      }
+    }
+  }
+}
+
+void Car::EndForces(const TireSolve& solve) {
+  body_->SetLinearVelocity(
+      b2Vec2(static_cast<float>(solve.v.x()), static_cast<float>(solve.v.y())));
+  body_->SetAngularVelocity(static_cast<float>(solve.w));
+}
+
+Car::TireSolve Car::BeginForces(double dt_s) {
   Require(std::isfinite(dt_s) && dt_s > 0.0,
           [&] { return "ApplyForces: dt_s must be finite and > 0, got " + Num(dt_s); });
 
@@ -190,17 +195,15 @@ void Car::ApplyForces(double dt_s) {
   const double half_wheelbase_m = params_.wheelbase_m / 2.0;
   const double cos_steer = steer_cos_.Of(steering_angle_rad_, [](double a) { return std::cos(a); });
   const double sin_steer = steer_sin_.Of(steering_angle_rad_, [](double a) { return std::sin(a); });
-  TireConstraint axles[2];
-  axles[0].r = -half_wheelbase_m * x_axis;
-  axles[0].n = y_axis;
-  axles[0].limit_Ns = std::sqrt(std::max(0.0, axle_grip_Ns * axle_grip_Ns - drive_Ns * drive_Ns));
-  axles[1].r = half_wheelbase_m * x_axis;
-  axles[1].n = y_axis * cos_steer - x_axis * sin_steer;
-  axles[1].limit_Ns = axle_grip_Ns;
-  SolveTires(axles, m, inertia, &v, &w);
-
-  body_->SetLinearVelocity(b2Vec2(static_cast<float>(v.x()), static_cast<float>(v.y())));
-  body_->SetAngularVelocity(static_cast<float>(w));
+  TireSolve solve{.v = v, .w = w, .m = m, .inertia = inertia};
+  solve.axles[0].r = -half_wheelbase_m * x_axis;
+  solve.axles[0].n = y_axis;
+  solve.axles[0].limit_Ns =
+      std::sqrt(std::max(0.0, axle_grip_Ns * axle_grip_Ns - drive_Ns * drive_Ns));
+  solve.axles[1].r = half_wheelbase_m * x_axis;
+  solve.axles[1].n = y_axis * cos_steer - x_axis * sin_steer;
+  solve.axles[1].limit_Ns = axle_grip_Ns;
+  return solve;
 }
 
 world::Pose2 Car::pose() const {

@@ -14,8 +14,10 @@
 // by 1 cm. Contacts resolve with up to Box2D's linear slop (5 mm) of overlap.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <limits>
+#include <span>
 
 #include "world/geometry.h"
 #include "world/time.h"
@@ -102,6 +104,30 @@ class Car {
   // Steering servo, motor and tyre impulses for the next step of dt_s; called before each
   // b2World::Step. Sets the body's velocities directly.
   void ApplyForces(double dt_s);
+
+  // ApplyForces in three steps, so that a world solves its cars' tyres side by side: each car's
+  // arithmetic is the same, in the same order (the same bits as ApplyForces), and the cars'
+  // chains of dependent steps overlap. BeginForces: the servo, the motor and the tyres' problem;
+  // SolveTires: sequential impulses at both axles, clamped to their grip (friction circle at the
+  // rear), on each problem; EndForces: the solved velocities into the body.
+  struct TireAxle {           // a point of the body that gets impulses along a fixed direction
+    world::Vec2 r{0.0, 0.0};  // from the centre of mass, map frame, m
+    world::Vec2 n{0.0, 0.0};  // unit lateral direction of the wheel, map frame
+    double limit_Ns{0.0};     // the grip: the accumulated impulse stays within ±this
+    double accumulated_Ns{0.0};
+    double rn{0.0};                 // r × n, m
+    double effective_mass_kg{0.0};  // of the body along n at r
+  };
+  struct TireSolve {
+    std::array<TireAxle, 2> axles;  // rear, front
+    world::Vec2 v{0.0, 0.0};        // the body's velocity, map frame, m/s
+    double w{0.0};                  // its yaw rate, rad/s
+    double m{0.0};                  // kg
+    double inertia{0.0};            // about the centre of mass, kg m²
+  };
+  TireSolve BeginForces(double dt_s);
+  static void SolveTires(std::span<TireSolve> solves);
+  void EndForces(const TireSolve& solve);
 
   world::Pose2 pose() const;             // chassis centre, map frame, yaw wrapped to (-pi, pi]
   world::Vec2 velocity_map_mps() const;  // of the chassis centre

@@ -171,7 +171,12 @@ bool PhysicsWorld::obstacle_enabled(std::size_t index) const {
 
 void PhysicsWorld::Step() {
   const double dt_s = ToSeconds(params_.step);
-  for (auto& entry : cars_) entry.second->ApplyForces(dt_s);
+  // every car's forces, their tyres solved side by side (Car::SolveTires)
+  tire_solves_.clear();
+  for (auto& entry : cars_) tire_solves_.push_back(entry.second->BeginForces(dt_s));
+  Car::SolveTires(tire_solves_);
+  std::size_t k = 0;
+  for (auto& entry : cars_) entry.second->EndForces(tire_solves_[k++]);
   world_->Step(static_cast<float>(dt_s), params_.velocity_iterations, params_.position_iterations);
   time_ += params_.step;
 

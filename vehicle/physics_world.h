@@ -111,6 +111,7 @@ class PhysicsWorld {
   std::unique_ptr<b2World> world_;
   std::vector<Obstacle> obstacles_;
   std::map<int, std::unique_ptr<Car>> cars_;
+  std::vector<Car::TireSolve> tire_solves_;  // Step's scratch, one per car
   std::vector<ContactEvent> pending_;
 };
 

@@ -6,10 +6,13 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -150,6 +153,35 @@ TEST(CarParamsTest, DescribeListsEveryKeyOnce) {
 
 // A throttle inside the ESC's neutral band drives nothing; just outside it, the car drives off at
 // u · top speed (2 s = 3.3 motor time constants: ≈ 96 % of 0.12 m/s).
+// PhysicsWorld::Step solves its cars' tyres side by side (Car::SolveTires over all of them):
+// each car's problem must come out bit for bit as when it is solved alone (ApplyForces), here
+// for cars turning, braking and sliding in different ways.
+TEST(CarTest, TyresSolvedSideBySideAreBitIdenticalToOneAtATime) {
+  PhysicsWorld world(PhysicsParams{});
+  const ActuatorCommand commands[] = {{1.0, 0.8}, {-1.0, -1.2}, {0.4, 0.0}};
+  for (int id = 0; id < 3; ++id) {
+    world.AddCar(id, CarParams{}, world::Pose2{3.0 * id, 0.0, 0.3 * id}).SetCommand(commands[id]);
+  }
+  RunFor(world, 0.5);  // moving, the servos slewing
+  const double dt_s = ToSeconds(world.step());
+  std::vector<Car::TireSolve> together, alone;
+  for (int id = 0; id < 3; ++id) together.push_back(world.car(id).BeginForces(dt_s));
+  alone = together;
+  Car::SolveTires(together);
+  for (Car::TireSolve& solve : alone) Car::SolveTires(std::span<Car::TireSolve>(&solve, 1));
+  const auto bits = [](double x) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  for (std::size_t k = 0; k < together.size(); ++k) {
+    EXPECT_EQ(bits(together[k].v.x()), bits(alone[k].v.x())) << k;
+    EXPECT_EQ(bits(together[k].v.y()), bits(alone[k].v.y())) << k;
+    EXPECT_EQ(bits(together[k].w), bits(alone[k].w)) << k;
+    EXPECT_NE(together[k].axles[1].accumulated_Ns, 0.0) << k;  // the tyres did work
+  }
+}
+
 TEST(CarTest, ThrottleInsideTheEscNeutralBandDrivesNothing) {
   PhysicsWorld world(PhysicsParams{});
   Car& car = world.AddCar(1, CarParams{}, {});
