@@ -62,8 +62,10 @@ std::vector<world::Vec2> GoalsAhead(const BehaviorParams& params, const world::P
   const double end_m = route.cyclic() ? s_m + params.waypoint_horizon_m
                                       : std::min(s_m + params.waypoint_horizon_m, route.length_m());
   const double spacing = params.waypoint_spacing_m;
-  // (one allocation, not one per doubling: the count is known to within the end's rounding)
-  goals.reserve(static_cast<std::size_t>(std::max(0.0, (end_m - s_m) / spacing)) + 2);
+  // (one allocation, not one per doubling: the count is known to within the end's rounding; a
+  // horizon too long to hold is left to grow, as before)
+  const double count = (end_m - s_m) / spacing;
+  if (count >= 0.0 && count < 1e6) goals.reserve(static_cast<std::size_t>(count) + 2);
   for (auto n = static_cast<std::int64_t>(std::floor(s_m / spacing)) + 1;
        static_cast<double>(n) * spacing < end_m + 1e-9; ++n) {
     const double s = static_cast<double>(n) * spacing;

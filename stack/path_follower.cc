@@ -36,8 +36,11 @@ double SquaredDistance(const world::Pose2& X, const world::Vec2& p) {
 
 // Where two distances' squares differ by more than this factor, their hypots (each within an ulp
 // of the true distance, as is the square's rounding) compare the same way: a comparison of
-// distances takes the hypots only where the squares are this close.
+// distances takes the hypots only where the squares are this close. That holds for squares in
+// the normal range; below kSquaresDecideFrom (m²) a square's underflow can be larger than the
+// margin, and the hypots decide.
 constexpr double kSquaresApart = 1.0 + 1e-9;
+constexpr double kSquaresDecideFrom = 0x1p-900;
 
 // Whether the cell containing p_F collides under the model (the lab's inCollision for centre).
 bool CellCollides(CollisionModel model, const CostQuery& cell_cost, const world::Vec2& p_F) {
@@ -184,7 +187,8 @@ std::size_t ClosestAhead(const PathFollowerParams& params, std::span<const world
   double closest_m = Distance(X, path[closest]);
   for (std::size_t i = begin + 1; i < search_end; ++i) {
     const double sq = SquaredDistance(X, path[i]);
-    if (sq > closest_sq * kSquaresApart) continue;  // farther: Distance would say so too
+    // farther: Distance would say so too
+    if (closest_sq >= kSquaresDecideFrom && sq > closest_sq * kSquaresApart) continue;
     const double distance_m = Distance(X, path[i]);
     if (distance_m < closest_m) {
       closest = i;
@@ -201,10 +205,11 @@ std::size_t WithinExtentEnd(const PathFollowerParams& params, std::span<const wo
                             const world::Pose2& X, std::size_t closest) {
   const double extent_m = params.max_costmap_extent_m;
   const double extent_sq = extent_m * extent_m;
+  const bool squares_decide = extent_sq >= kSquaresDecideFrom;
   const auto within_extent = [&](const world::Vec2& p) {
     const double sq = SquaredDistance(X, p);
-    if (sq * kSquaresApart < extent_sq) return true;
-    if (sq > extent_sq * kSquaresApart) return false;
+    if (squares_decide && sq * kSquaresApart < extent_sq) return true;
+    if (squares_decide && sq > extent_sq * kSquaresApart) return false;
     return Distance(X, p) <= extent_m;
   };
   std::size_t end = closest;

@@ -15,7 +15,9 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <chrono>
+#include <cstdint>
 #include <limits>
 #include <span>
 
@@ -156,12 +158,17 @@ class Car {
   // than every step (dt, the command, the servo at rest): the same x gives the same bits, so the
   // value is computed again only when x changes.
   struct LastValue {
-    double x{std::numeric_limits<double>::quiet_NaN()};  // none yet (NaN equals nothing)
+    // the last input's bits, once there is one
+    std::uint64_t x_bits{0};
+    bool known{false};
     double y{0.0};
     template <class F>
     double Of(double input, F f) {
-      if (input != x) {
-        x = input;
+      // by bits, so that -0 and +0 (whose functions differ) are different inputs
+      const auto bits = std::bit_cast<std::uint64_t>(input);
+      if (!known || bits != x_bits) {
+        x_bits = bits;
+        known = true;
         y = f(input);
       }
       return y;

@@ -87,7 +87,8 @@ class PhysicsWorld {
   const ObstacleBox& obstacle(std::size_t index) const;
   bool obstacle_enabled(std::size_t index) const;
 
-  // ApplyForces on every car (ascending id), then one b2World::Step of step().
+  // Every car's forces (ascending id; Car::BeginForces, then the tyres of all cars solved side by
+  // side, then Car::EndForces: the same as ApplyForces on each), then one b2World::Step of step().
   void Step();
   // Contacts begun since the last call: by step, and within a step ordered by (car_id, with_car,
   // other_car_id, obstacle_name), so the order never depends on Box2D's internal lists.

@@ -391,7 +391,7 @@ TEST(PathFollowerTest, PruningAgreesWithTheHypotOfEveryPoint) {
     const Pose2 X{0.0, 0.0, 0.0};
     std::vector<Vec2> path;
     // towards X and away, with mirrored (equal-distance) pairs, then out past the extent through
-    // (3, 4) and (-3, -4) at exactly 5 m, each point perhaps nudged by an ulp or two
+    // (3, 4) and (-3, -4) at exactly 5 m, each point perhaps nudged by up to 1e-15 m
     // (the nearest two, at ±0.01 m, tie exactly in every other trial)
     for (int i = -20; i <= 20; ++i) {
       if (i != 0) path.emplace_back(0.01 * std::abs(i) + (trial % 4 < 2 ? jitter(rng) : 0.0), 0.3);
@@ -410,6 +410,31 @@ TEST(PathFollowerTest, PruningAgreesWithTheHypotOfEveryPoint) {
     ASSERT_EQ(state.begin, closest) << trial;
     ASSERT_TRUE(out.carrot.has_value());
     ASSERT_EQ(*out.carrot, path[end - 1]) << trial;
+  }
+  // Squares that underflow (coordinates near 1e-162 m) do not decide: there the hypots do.
+  // Nearest by hypot is the second point, though its square rounds above the first's. (A goal
+  // tolerance below these distances, so that the goal is not reached at once.)
+  params.goal_tolerance_m = 1e-200;
+  {
+    const std::vector<Vec2> tiny{{2.7132228295948296e-162, 0.0},
+                                 {1.5873672523365087e-162, 1.5873672523365087e-162}};
+    PathFollowerState state;
+    PathFollowerInput input;
+    input.path = tiny;
+    input.X_F_base = Pose2{0.0, 0.0, 0.0};
+    StepPathFollower(params, input, &state);
+    EXPECT_EQ(state.begin, reference(tiny, input.X_F_base).first);
+    EXPECT_EQ(state.begin, 1u);
+  }
+  {  // an extent so small that the point's square underflows to 0, though its hypot is beyond
+    PathFollowerParams tiny_extent = params;
+    tiny_extent.max_costmap_extent_m = 1.7217e-162;
+    const std::vector<Vec2> tiny{{1.5559e-162, 1.5559e-162}};
+    PathFollowerState state;
+    PathFollowerInput input;
+    input.path = tiny;
+    input.X_F_base = Pose2{0.0, 0.0, 0.0};
+    EXPECT_TRUE(StepPathFollower(tiny_extent, input, &state).no_path);
   }
 }
 
