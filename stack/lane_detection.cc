@@ -874,8 +874,7 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
   constexpr int kCountShift = 40;
   static_assert(std::uint64_t{kLaneImageWidth} * kLaneImageWidth <
                 (std::uint64_t{1} << kCountShift));
-  packed_yellow_.fill(0);
-  packed_white_.fill(0);
+  std::array<std::uint64_t, kLaneImageHeight> packed_yellow{}, packed_white{};
   const auto add = [](std::array<std::uint64_t, kLaneImageHeight>& rows, std::uint32_t w) {
     rows[static_cast<std::size_t>(WarpPixel::Row(w))] +=
         static_cast<std::uint64_t>(WarpPixel::Col(w)) + (std::uint64_t{1} << kCountShift);
@@ -899,22 +898,22 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
           const auto add_all = [&](std::array<std::uint64_t, kLaneImageHeight>& rows) {
             for (const std::uint32_t* w = first; w != last; ++w) add(rows, *w);
           };
-          if (yellow == Tables::kAlways) add_all(packed_yellow_);
-          if (white == Tables::kAlways) add_all(packed_white_);
+          if (yellow == Tables::kAlways) add_all(packed_yellow);
+          if (white == Tables::kAlways) add_all(packed_white);
           return;
         }
         for (const std::uint32_t* w = first; w != last; ++w) {
           const int alpha16 = WarpPixel::Alpha16(*w);
           if (nonzero) {
-            if (warp[alpha16 + yellow_bits] != 0) add(packed_yellow_, *w);
-            if (warp[alpha16 + white_bits] != 0) add(packed_white_, *w);
+            if (warp[alpha16 + yellow_bits] != 0) add(packed_yellow, *w);
+            if (warp[alpha16 + white_bits] != 0) add(packed_white, *w);
             continue;
           }
           const std::uint8_t cls = white_bits == 0    ? single[alpha16 + yellow_bits] & 3
                                    : yellow_bits == 0 ? single[alpha16 + white_bits] >> 2
                                                       : exact[(alpha16 << 4) + pattern];
-          if (cls == 1) add(packed_yellow_, *w);
-          if (cls == 2) add(packed_white_, *w);
+          if (cls == 1) add(packed_yellow, *w);
+          if (cls == 2) add(packed_white, *w);
         }
       });
   const auto unpack = [](const std::array<std::uint64_t, kLaneImageHeight>& packed,
@@ -925,8 +924,8 @@ void LaneDetector::SumWarpedClasses(BirdsEyeRowSums* sums, BirdsEyeClasses class
           static_cast<std::int64_t>(packed[r] & ((std::uint64_t{1} << kCountShift) - 1));
     }
   };
-  unpack(packed_yellow_, sums->yellow);
-  unpack(packed_white_, sums->white);
+  unpack(packed_yellow, sums->yellow);
+  unpack(packed_white, sums->white);
 }
 
 LanePoints LaneDetector::Step(const cv::Mat& bgr, LaneDetectionTrace* trace) {

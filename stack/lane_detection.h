@@ -633,8 +633,6 @@ class LaneDetector {
   std::vector<UniformRun> uniform_runs_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> mixed_squares_;
   BirdsEyeRowSums sums_;
-  // SumWarpedClasses' per-row sums, each row's count and column sum in one word
-  std::array<std::uint64_t, kLaneImageHeight> packed_yellow_{}, packed_white_{};
 };
 
 }  // namespace autonomsim::stack

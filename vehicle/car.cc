@@ -193,8 +193,10 @@ Car::TireSolve Car::BeginForces(double dt_s) {
   // tyres: lateral impulses at both axles cancel the sideways slip up to the grip left over by
   // the drive (friction circle at the rear)
   const double half_wheelbase_m = params_.wheelbase_m / 2.0;
-  const double cos_steer = steer_cos_.Of(steering_angle_rad_, [](double a) { return std::cos(a); });
-  const double sin_steer = steer_sin_.Of(steering_angle_rad_, [](double a) { return std::sin(a); });
+  const world::Vec2& steer = steer_cos_sin_.Of(
+      steering_angle_rad_, [](double a) { return world::Vec2(std::cos(a), std::sin(a)); });
+  const double cos_steer = steer.x();
+  const double sin_steer = steer.y();
   TireSolve solve{.v = v, .w = w, .m = m, .inertia = inertia};
   solve.axles[0].r = -half_wheelbase_m * x_axis;
   solve.axles[0].n = y_axis;

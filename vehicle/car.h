@@ -157,13 +157,14 @@ class Car {
   // f(x) as last computed, for the functions ApplyForces takes of inputs that change less often
   // than every step (dt, the command, the servo at rest): the same x gives the same bits, so the
   // value is computed again only when x changes.
+  template <class Y>
   struct LastValue {
     // the last input's bits, once there is one
     std::uint64_t x_bits{0};
     bool known{false};
-    double y{0.0};
+    Y y{};
     template <class F>
-    double Of(double input, F f) {
+    const Y& Of(double input, F f) {
       // by bits, so that -0 and +0 (whose functions differ) are different inputs
       const auto bits = std::bit_cast<std::uint64_t>(input);
       if (!known || bits != x_bits) {
@@ -174,10 +175,9 @@ class Car {
       return y;
     }
   };
-  LastValue motor_lag_;     // 1 - exp(-dt/τ), by dt_s
-  LastValue steer_target_;  // atan(wheelbase · κ), by the commanded κ
-  LastValue steer_cos_;     // by the steering angle
-  LastValue steer_sin_;     // by the steering angle
+  LastValue<double> motor_lag_;           // 1 - exp(-dt/τ), by dt_s
+  LastValue<double> steer_target_;        // atan(wheelbase · κ), by the commanded κ
+  LastValue<world::Vec2> steer_cos_sin_;  // (cos, sin) of the steering angle
 };
 
 // The real PWM mapping (reference §2), in timer counts within a 10 ms period (150000 counts is the

@@ -481,12 +481,8 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
     labels.palette[static_cast<std::size_t>(k)] = label(bgr);
   }
   labels.surround = label(surround_);
-  if (!label_texels_ ||
-      label_texels_palette_ != labels.palette) {  // (the same one, frame on frame)
-    label_texels_ = tex.LabelTexels(labels.palette);
-    label_texels_palette_ = labels.palette;
-  }
-  labels.texels = label_texels_->data();
+  const std::shared_ptr<const std::vector<std::uint8_t>> texels = tex.LabelTexels(labels.palette);
+  labels.texels = texels->data();
   if (out.nonzero_columns != nullptr) {
     if (labels.surround != 0 || labels.palette[tex.common_index()] != 0) {
       *out.nonzero_columns = region.columns;  // the region's every pixel may be

@@ -514,9 +514,6 @@ class CameraRenderer {
   std::vector<std::uint64_t> group_seen_, group_mixed_;
   bool common_floor_blocks_on_{true};
   std::uint64_t common_floor_pixels_{0};
-  // the floor's label per texel under the last labelling asked for (FloorTexture::LabelTexels)
-  std::shared_ptr<const std::vector<std::uint8_t>> label_texels_;
-  FloorTexture::PaletteLabels label_texels_palette_{};
 };
 
 // Adds seeded noise to a rendered frame (either image may be null): depth z + N(0, (c·z²)²), a
