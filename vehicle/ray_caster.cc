@@ -23,6 +23,11 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 using F4 = float __attribute__((vector_size(16)));
 using I4 = std::int32_t __attribute__((vector_size(16)));
 constexpr int kLanes = 4;
+// Four lanes of narrower integers, for stores of four pixels' depth (mm) or labels at once.
+using U16x4 = std::uint16_t __attribute__((vector_size(8)));
+using S16x4 = std::int16_t __attribute__((vector_size(8)));
+using U8x4 = std::uint8_t __attribute__((vector_size(4)));
+using S8x4 = std::int8_t __attribute__((vector_size(4)));
 
 F4 Splat(float x) { return F4{x, x, x, x}; }
 I4 SplatInt(std::int32_t x) { return I4{x, x, x, x}; }
@@ -39,7 +44,13 @@ F4 Load(const float* p, int n) {
 I4 FirstLanes(int n) { return I4{0, 1, 2, 3} < SplatInt(n); }
 F4 Min(F4 a, F4 b) { return a < b ? a : b; }
 F4 Max(F4 a, F4 b) { return a > b ? a : b; }
-bool Any(I4 mask) { return (mask[0] | mask[1] | mask[2] | mask[3]) != 0; }
+bool Any(I4 mask) {
+#if defined(__SSE2__)
+  return __builtin_ia32_movmskps(reinterpret_cast<F4>(mask)) != 0;  // the lanes' sign bits
+#else
+  return (mask[0] | mask[1] | mask[2] | mask[3]) != 0;
+#endif
+}
 // Face shading, so that a box's faces are told apart: ambient + diffuse · max(0, n · light), one
 // fixed light from above (map frame; the lab's ceiling lights are not described).
 constexpr double kAmbient = 0.6;
@@ -1150,6 +1161,30 @@ void CameraRenderer::TracePrismFacelessRow(const PrismTrace& trace, int v, int u
     // inside it)
     const I4 in_clip = (hits.t >= near_m) & (hits.t <= far_m);
     const I4 mm = __builtin_convertvector(in_clip ? hits.t * 1000.0f + 0.5f : Splat(0.0f), I4);
+    if (n == kLanes) {
+      // the four lanes at once: each keeps what it held unless the ray hits
+      F4 old_t;
+      std::memcpy(&old_t, nearest + i, sizeof old_t);
+      const F4 new_t = hits.hit ? hits.t : old_t;
+      std::memcpy(nearest + i, &new_t, sizeof new_t);
+      if (depth_mm != nullptr) {
+        U16x4 old_mm;
+        std::memcpy(&old_mm, depth_mm + i, sizeof old_mm);
+        const U16x4 new_mm = __builtin_convertvector(hits.hit, S16x4) != 0
+                                 ? __builtin_convertvector(mm, U16x4)
+                                 : old_mm;
+        std::memcpy(depth_mm + i, &new_mm, sizeof new_mm);
+      }
+      if (label_row != nullptr) {
+        U8x4 old_label;
+        std::memcpy(&old_label, label_row + u, sizeof old_label);
+        const U8x4 new_label = __builtin_convertvector(hits.hit, S8x4) != 0
+                                   ? U8x4{label, label, label, label}
+                                   : old_label;
+        std::memcpy(label_row + u, &new_label, sizeof new_label);
+      }
+      continue;
+    }
     for (int k = 0; k < n; ++k) {
       if (!hits.hit[k]) continue;
       nearest[i + k] = hits.t[k];

@@ -515,6 +515,34 @@ TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsA
   }
 }
 
+// The depth-only path writes four pixels at a time, each keeping its depth (and the nearest
+// distance the prisms drawn later compare with) unless its ray hits: a nearer prism's edges cut
+// through groups of four, and a farther prism drawn after it must show exactly where the nearer
+// one leaves off. Scenes of three to five boxes, at staggered distances and yaws, in both orders.
+TEST(RayCasterTest,
+     ADepthOnlyRenderKeepsWhatEachMissingPixelSawWhereNearerEdgesCrossFartherPrisms) {
+  const CameraParams params = DepthCameraParams();
+  CameraRenderer renderer = MakeRenderer(params, BlackFloor());
+  int edge_pixels = 0;  // pixels whose depth changes between a column and the next
+  for (int scene_index = 0; scene_index < 24; ++scene_index) {
+    std::vector<Prism> scene;
+    const int boxes = 3 + scene_index % 3;
+    for (int b = 0; b < boxes; ++b) {
+      const double k = scene_index * 7 + b * 3;  // staggered, no randomness needed
+      scene.push_back(Box(0.7 + 0.45 * b + 0.013 * k, 0.23 * std::sin(1.7 * k), 0.37 * k,
+                          0.18 + 0.02 * b, 0.11 + 0.015 * b, 0.12 + 0.05 * b));
+    }
+    if (scene_index % 2 == 1) std::reverse(scene.begin(), scene.end());  // farther ones first
+    ColorImage both_color;
+    DepthImage both_depth, depth;
+    renderer.Render(world::Pose2{}, scene, &both_color, &both_depth);
+    renderer.Render(world::Pose2{}, scene, nullptr, &depth);
+    ASSERT_EQ(both_depth.mm, depth.mm) << "scene " << scene_index;
+    for (std::size_t i = 1; i < depth.mm.size(); ++i) edge_pixels += depth.mm[i] != depth.mm[i - 1];
+  }
+  EXPECT_GT(edge_pixels, 1000);  // the scenes do have edges
+}
+
 // RenderDepth with a depth interest (issue 38: the obstacle grid reads each pixel's depth only up
 // to where its ray leaves the obstacle box) is Render's image wherever that is within the pixel's
 // bound, frame after frame in one buffer, and leaves out what lies beyond it.
