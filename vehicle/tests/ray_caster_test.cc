@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -515,24 +516,30 @@ TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsA
   }
 }
 
-// The depth-only path writes four pixels at a time, each keeping its depth (and the nearest
-// distance the prisms drawn later compare with) unless its ray hits: a nearer prism's edges cut
-// through groups of four, and a farther prism drawn after it must show exactly where the nearer
-// one leaves off. Scenes of three to five boxes, at staggered distances and yaws, in both orders.
+// Scenes of three to five boxes at staggered distances, yaws and sizes (no randomness needed),
+// the farther ones first in every other scene: nearer edges cut through groups of pixels traced
+// together, and a farther prism drawn after a nearer one must show exactly where it leaves off.
+std::vector<Prism> StaggeredBoxes(int scene_index) {
+  std::vector<Prism> scene;
+  const int boxes = 3 + scene_index % 3;
+  for (int b = 0; b < boxes; ++b) {
+    const double k = scene_index * 7 + b * 3;
+    scene.push_back(Box(0.7 + 0.45 * b + 0.013 * k, 0.23 * std::sin(1.7 * k), 0.37 * k,
+                        0.18 + 0.02 * b, 0.11 + 0.015 * b, 0.12 + 0.05 * b));
+  }
+  if (scene_index % 2 == 1) std::reverse(scene.begin(), scene.end());
+  return scene;
+}
+
+// The depth-only path writes a group of pixels at once: each keeps its depth (and the nearest
+// distance the prisms drawn later compare with) unless its ray hits.
 TEST(RayCasterTest,
      ADepthOnlyRenderKeepsWhatEachMissingPixelSawWhereNearerEdgesCrossFartherPrisms) {
   const CameraParams params = DepthCameraParams();
   CameraRenderer renderer = MakeRenderer(params, BlackFloor());
-  int edge_pixels = 0;  // pixels whose depth changes between a column and the next
+  int edge_pixels = 0;  // pixels whose depth differs from their left neighbour's
   for (int scene_index = 0; scene_index < 24; ++scene_index) {
-    std::vector<Prism> scene;
-    const int boxes = 3 + scene_index % 3;
-    for (int b = 0; b < boxes; ++b) {
-      const double k = scene_index * 7 + b * 3;  // staggered, no randomness needed
-      scene.push_back(Box(0.7 + 0.45 * b + 0.013 * k, 0.23 * std::sin(1.7 * k), 0.37 * k,
-                          0.18 + 0.02 * b, 0.11 + 0.015 * b, 0.12 + 0.05 * b));
-    }
-    if (scene_index % 2 == 1) std::reverse(scene.begin(), scene.end());  // farther ones first
+    const std::vector<Prism> scene = StaggeredBoxes(scene_index);
     ColorImage both_color;
     DepthImage both_depth, depth;
     renderer.Render(world::Pose2{}, scene, &both_color, &both_depth);
@@ -541,6 +548,52 @@ TEST(RayCasterTest,
     for (std::size_t i = 1; i < depth.mm.size(); ++i) edge_pixels += depth.mm[i] != depth.mm[i - 1];
   }
   EXPECT_GT(edge_pixels, 1000);  // the scenes do have edges
+}
+
+// Eight pixels at a time (AVX2) or four: the same depth, with or without an interest, and the same
+// labels, bit for bit.
+TEST(RayCasterTest, TheWidePrismTraceIsTheNarrowOnesBitForBit) {
+  const CameraParams params = DepthCameraParams();
+  CameraRenderer narrow = MakeRenderer(params, BlackFloor());
+  CameraRenderer wide = MakeRenderer(params, BlackFloor());
+  EXPECT_TRUE(narrow.set_wide_prism_trace(false));
+  EXPECT_FALSE(narrow.wide_prism_trace());
+  if (!wide.set_wide_prism_trace(true)) GTEST_SKIP() << "this CPU has no AVX2";
+  const CameraRays& rays = narrow.rays();
+  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
+  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
+  const DepthInterest interest(rays, bounds);
+  RowSpans ragged;  // rows cut at odd columns: groups of fewer than eight or four pixels
+  for (int v = 0; v < params.height_px; ++v)
+    ragged.columns.emplace_back(v % 13, params.width_px - v % 7);
+  const auto no_colour_label = [](const Bgr&) { return std::uint8_t{0}; };
+  DepthRowHistory narrow_history, wide_history;
+  DepthImage narrow_limited, wide_limited;
+  std::map<std::uint8_t, int> labelled;  // pixels per prism label, over the scenes
+  for (int scene_index = 0; scene_index < 24; ++scene_index) {
+    const std::vector<Prism> scene = StaggeredBoxes(scene_index);
+    const world::Pose2 car{0.02 * scene_index, -0.01 * scene_index, 0.03 * scene_index};
+    std::array<DepthImage, 2> depth;
+    narrow.Render(car, scene, nullptr, &depth[0]);
+    wide.Render(car, scene, nullptr, &depth[1]);
+    ASSERT_EQ(depth[0].mm, depth[1].mm) << "scene " << scene_index;
+    narrow.RenderDepth(car, scene, &narrow_limited, &narrow_history, &interest);
+    wide.RenderDepth(car, scene, &wide_limited, &wide_history, &interest);
+    ASSERT_EQ(narrow_limited.mm, wide_limited.mm) << "scene " << scene_index;
+    std::vector<std::uint8_t> ids(scene.size());
+    for (std::size_t k = 0; k < ids.size(); ++k) ids[k] = static_cast<std::uint8_t>(k + 1);
+    std::array<std::vector<std::uint8_t>, 2> labels;
+    for (std::size_t w = 0; w < 2; ++w) {
+      labels[w].assign(depth[0].mm.size(), 99);
+      (w == 0 ? narrow : wide)
+          .RenderLabels(car, scene, ragged, no_colour_label,
+                        LabelView{labels[w].data(), params.width_px}, ids);
+    }
+    ASSERT_EQ(labels[0], labels[1]) << "scene " << scene_index;
+    for (std::uint8_t l : labels[0]) ++labelled[l];
+  }
+  // every scene's boxes seen, each nearer one hiding part of the others
+  for (std::uint8_t id = 1; id <= 5; ++id) EXPECT_GT(labelled[id], 10000) << int{id};
 }
 
 // RenderDepth with a depth interest (issue 38: the obstacle grid reads each pixel's depth only up
