@@ -138,10 +138,12 @@ class FloorTexture {
   int palette_size() const { return static_cast<int>(palette_.size()); }
   std::uint32_t outside_index() const { return static_cast<std::uint32_t>(index_.size() - 1); }
   // Texel i's label under a labelling (`labels`: the label of each palette index), one byte per
-  // texel like palette_index() (outside_index() included): a labelled look-up is then one load,
-  // not two dependent ones. Made once per labelling and kept, shared by every renderer of this
-  // texture (the cars of a run); safe to call from several threads.
+  // texel like palette_index() (outside_index() included), then kLabelTexelPadding bytes of 0 (so
+  // that four bytes read from any texel's lie inside: a gather's): a labelled look-up is then one
+  // load, not two dependent ones. Made once per labelling and kept, shared by every renderer of
+  // this texture (the cars of a run); safe to call from several threads.
   using PaletteLabels = std::array<std::uint8_t, 256>;
+  static constexpr std::size_t kLabelTexelPadding = 3;
   std::shared_ptr<const std::vector<std::uint8_t>> LabelTexels(const PaletteLabels& labels) const;
 
   // The colour most of the raster has (the bare floor of a track), as a palette index.
@@ -436,12 +438,12 @@ class CameraRenderer {
   // How many pixels were filled that way, over every frame so far.
   std::uint64_t common_floor_pixels() const { return common_floor_pixels_; }
 
-  // Whether a prism's depth (and its labels, where its faces share one) is traced eight pixels
-  // at a time in AVX2 registers: on by default where the CPU has AVX2 (x86-64; elsewhere never),
-  // four at a time otherwise. The images are the same either way, bit for bit. Returns whether
-  // the setting took (false: asked for eight without AVX2).
-  bool set_wide_prism_trace(bool on);
-  bool wide_prism_trace() const { return wide_prism_trace_; }
+  // Whether a prism's depth (and its labels, where its faces share one) and the floor's labels
+  // are computed eight pixels at a time in AVX2 registers: on by default where the CPU has AVX2
+  // (x86-64; elsewhere never), four at a time otherwise. The images are the same either way, bit
+  // for bit. Returns whether the setting took (false: asked for eight without AVX2).
+  bool set_wide_lanes(bool on);
+  bool wide_lanes() const { return wide_lanes_; }
 
  private:
   // std::invalid_argument unless `region` has a row per image row.
@@ -520,7 +522,7 @@ class CameraRenderer {
   // not all of the common colour
   std::vector<std::uint64_t> group_seen_, group_mixed_;
   bool common_floor_blocks_on_{true};
-  bool wide_prism_trace_;  // set_wide_prism_trace
+  bool wide_lanes_;  // set_wide_lanes
   std::uint64_t common_floor_pixels_{0};
 };
 

@@ -89,10 +89,12 @@ TEST(FloorTextureTest, LabelTexelsAreThePalettesLabelOfEachTexel) {
   }
   for (const FloorTexture::PaletteLabels& labels : {first, second}) {
     const auto texels = tex.LabelTexels(labels);
-    ASSERT_EQ(texels->size(), static_cast<std::size_t>(tex.outside_index()) + 1);
-    for (std::size_t i = 0; i < texels->size(); ++i) {
+    const std::size_t n = static_cast<std::size_t>(tex.outside_index()) + 1;
+    ASSERT_EQ(texels->size(), n + FloorTexture::kLabelTexelPadding);
+    for (std::size_t i = 0; i < n; ++i) {
       ASSERT_EQ((*texels)[i], labels[tex.palette_index()[i]]) << i;
     }
+    for (std::size_t i = n; i < texels->size(); ++i) EXPECT_EQ((*texels)[i], 0) << i;
     EXPECT_EQ(tex.LabelTexels(labels), texels);
   }
   EXPECT_NE(tex.LabelTexels(first), tex.LabelTexels(second));
@@ -551,14 +553,19 @@ TEST(RayCasterTest,
 }
 
 // Eight pixels at a time (AVX2) or four: the same depth, with or without an interest, and the same
-// labels, bit for bit.
-TEST(RayCasterTest, TheWidePrismTraceIsTheNarrowOnesBitForBit) {
+// labels of prisms and of a floor with lines, bit for bit.
+TEST(RayCasterTest, TheWideLanesAreTheNarrowOnesBitForBit) {
   const CameraParams params = DepthCameraParams();
-  CameraRenderer narrow = MakeRenderer(params, BlackFloor());
-  CameraRenderer wide = MakeRenderer(params, BlackFloor());
-  EXPECT_TRUE(narrow.set_wide_prism_trace(false));
-  EXPECT_FALSE(narrow.wide_prism_trace());
-  if (!wide.set_wide_prism_trace(true)) GTEST_SKIP() << "this CPU has no AVX2";
+  world::FloorRaster raster = BlackFloor(4.0);
+  for (int k = -6; k <= 6; ++k) {
+    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
+    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
+  }
+  CameraRenderer narrow = MakeRenderer(params, raster);
+  CameraRenderer wide = MakeRenderer(params, raster);
+  EXPECT_TRUE(narrow.set_wide_lanes(false));
+  EXPECT_FALSE(narrow.wide_lanes());
+  if (!wide.set_wide_lanes(true)) GTEST_SKIP() << "this CPU has no AVX2";
   const CameraRays& rays = narrow.rays();
   std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
@@ -566,7 +573,9 @@ TEST(RayCasterTest, TheWidePrismTraceIsTheNarrowOnesBitForBit) {
   RowSpans ragged;  // rows cut at odd columns: groups of fewer than eight or four pixels
   for (int v = 0; v < params.height_px; ++v)
     ragged.columns.emplace_back(v % 13, params.width_px - v % 7);
-  const auto no_colour_label = [](const Bgr&) { return std::uint8_t{0}; };
+  const auto lines_label = [](const Bgr& c) {  // prisms are labelled by their index below
+    return static_cast<std::uint8_t>(c == kWhite ? 10 : c == Bgr{0, 235, 235} ? 11 : 0);
+  };
   DepthRowHistory narrow_history, wide_history;
   DepthImage narrow_limited, wide_limited;
   std::map<std::uint8_t, int> labelled;  // pixels per prism label, over the scenes
@@ -586,14 +595,14 @@ TEST(RayCasterTest, TheWidePrismTraceIsTheNarrowOnesBitForBit) {
     for (std::size_t w = 0; w < 2; ++w) {
       labels[w].assign(depth[0].mm.size(), 99);
       (w == 0 ? narrow : wide)
-          .RenderLabels(car, scene, ragged, no_colour_label,
+          .RenderLabels(car, scene, ragged, lines_label,
                         LabelView{labels[w].data(), params.width_px}, ids);
     }
     ASSERT_EQ(labels[0], labels[1]) << "scene " << scene_index;
     for (std::uint8_t l : labels[0]) ++labelled[l];
   }
-  // every scene's boxes seen, each nearer one hiding part of the others
-  for (std::uint8_t id = 1; id <= 5; ++id) EXPECT_GT(labelled[id], 10000) << int{id};
+  // every scene's boxes seen, each nearer one hiding part of the others; both lines' colours
+  for (std::uint8_t id : {1, 2, 3, 4, 5, 10, 11}) EXPECT_GT(labelled[id], 10000) << int{id};
 }
 
 // RenderDepth with a depth interest (issue 38: the obstacle grid reads each pixel's depth only up
