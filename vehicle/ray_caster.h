@@ -259,7 +259,7 @@ class CameraRays {
   // where all of a block's pixels see the floor, a circle (base frame, metres) holding their floor
   // points. A frame whose floor texture is one colour all over a block's circle gives the block
   // that colour without looking its pixels up (the bare floor between the painted lines).
-  static constexpr int kBlockSize = 16;
+  static constexpr int kBlockSize = 32;
   struct FloorBlock {
     float centre_x{0.0f}, centre_y{0.0f};
     float radius{-1.0f};  // < 0: not every pixel of the block sees the floor
@@ -270,8 +270,8 @@ class CameraRays {
   int blocks_per_row() const { return (width_ + kBlockSize - 1) / kBlockSize; }
   // The same for groups of kGroupRows blocks one above the other, rows [g · kGroupRows,
   // (g + 1) · kGroupRows), at [g · blocks_per_row() + k]: near the car, where a pixel sees a few
-  // millimetres of floor, one look-up settles 128 pixels.
-  static constexpr int kGroupRows = 8;
+  // millimetres of floor, one look-up settles 512 pixels.
+  static constexpr int kGroupRows = 16;
   const std::vector<FloorBlock>& floor_block_groups() const { return floor_block_groups_; }
 
  private:
