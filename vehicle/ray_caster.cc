@@ -563,6 +563,9 @@ void CameraRenderer::RenderLabels(const world::Pose2& X_map_car, std::span<const
   }
   labels.surround = label(surround_);
   const std::shared_ptr<const std::vector<std::uint8_t>> texels = tex.LabelTexels(labels.palette);
+  // (the eight-lane look-up reads four bytes at a texel's: the padding keeps the last inside)
+  Require(texels->size() >= tex.outside_index() + 1 + FloorTexture::kLabelTexelPadding,
+          "RenderLabels: the label texels lack their padding");
   labels.texels = texels->data();
   if (out.nonzero_columns != nullptr) {
     if (labels.surround != 0 || labels.palette[tex.common_index()] != 0) {
@@ -687,6 +690,7 @@ struct FloorLabelLookUp {
       for (int k = 0; k < n; ++k) label_row[i + k] = f.label_texels[index[k]];
       continue;
     }
+    static_assert(FloorTexture::kLabelTexelPadding >= 3);
     // four bytes from each texel's (the padding keeps the last texel's inside), its own the lowest
     // of them: those eight bytes gathered to the low four of each half, the halves' joined
     const __m256i words = _mm256_i32gather_epi32(reinterpret_cast<const int*>(f.label_texels),
@@ -703,7 +707,10 @@ struct FloorLabelLookUp {
 
 }  // namespace ray_caster_internal
 
-using namespace ray_caster_internal;  // this file's own
+using ray_caster_internal::FloorLabelLookUp;
+#if defined(__x86_64__)
+using ray_caster_internal::LookUpFloorLabels8;
+#endif
 
 // One frame's colouring of the floor and the surround: where it writes (colour: 3 bytes per pixel
 // at out + 3 · i; labels: one byte at LabelRow(v)[i] for pixel i of row v) and the map from the
@@ -1278,6 +1285,14 @@ std::pair<int, int> TraceFacelessRow4(const SlabConstants& c, int row_start, int
 #endif
 
 }  // namespace ray_caster_internal
+
+using ray_caster_internal::FacelessRowOut;
+using ray_caster_internal::SlabConstants;
+using ray_caster_internal::SlabTest;
+using ray_caster_internal::TraceFacelessRow4;
+#if defined(__x86_64__)
+using ray_caster_internal::TraceFacelessRow8;
+#endif
 
 namespace {
 

@@ -5,12 +5,12 @@
 // The structure of the problem does the work. The car moves in the plane and its cameras are
 // rigidly mounted, so every pixel's ray, its floor hit in the car's frame and that hit's depth are
 // constants of the camera (CameraRays, computed once, lens distortion included). A frame then
-// costs, per floor pixel, one 2D rigid transform and one raster look-up (and a block of 16 pixels
-// over the bare floor between the painted lines costs one look-up in all), and the empty floor's
-// depth image is a copy (only of the pixels a prism changed, for a consumer that keeps its buffer).
-// Prisms are culled to those in front of the camera; each one's corners bound it on the image, and
-// only the pixels of the tiles under that bound get the exact ray–prism test, which keeps the
-// nearest surface.
+// costs, per floor pixel, one 2D rigid transform and one raster look-up (and a block of kBlockSize
+// pixels over the bare floor between the painted lines costs one look-up in all), and the empty
+// floor's depth image is a copy (only of the pixels a prism changed, for a consumer that keeps its
+// buffer). Prisms are culled to those in front of the camera; each one's corners bound it on the
+// image, and only the pixels of the tiles under that bound get the exact ray–prism test, which
+// keeps the nearest surface.
 //
 // Depth is the optical-axis z of the surface (what a real depth camera reports, and what
 // back-projection with P expects: a pixel's point is z · (x, y, 1) in the optical frame), in
@@ -322,9 +322,10 @@ inline void WidenColumns(std::pair<int, int>* columns, int begin, int end) {
 class DepthRowHistory {
  public:
   // Per image row: the columns [begin, end) outside which this frame's depth is the previous
-  // frame's (begin == end == 0: the whole row is), the smallest range holding the columns that
-  // the previous frame's prisms and this frame's wrote; empty where that is not known (every
-  // pixel may differ).
+  // frame's (begin == end == 0: the whole row is), the smallest range holding the groups of
+  // pixels traced together (four or eight, CameraRenderer::set_wide_lanes) that the previous
+  // frame's prisms and this frame's wrote: a bound, whose width may differ with the lanes; empty
+  // where that is not known (every pixel may differ).
   std::span<const std::pair<int, int>> changed_columns() const { return changed_; }
   // Something else wrote the buffer (a black frame, noise): the next frame is rendered whole.
   void Forget() {
@@ -370,7 +371,8 @@ class DepthInterest {
 // Where RenderLabels writes: the label of pixel (u, v) at origin[v · stride + u]. If
 // nonzero_columns is set, RenderLabels also says there, per image row, the columns [begin, end)
 // outside which every pixel it labelled got label 0 (begin >= end: none), so that a consumer
-// looking for the other labels need not read the rest.
+// looking for the other labels need not read the rest. A bound: it may hold label-0 pixels too,
+// and its width may differ with CameraRenderer::set_wide_lanes (the images never do).
 struct LabelView {
   std::uint8_t* origin{nullptr};
   std::ptrdiff_t stride{0};

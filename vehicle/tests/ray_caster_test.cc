@@ -605,6 +605,48 @@ TEST(RayCasterTest, TheWideLanesAreTheNarrowOnesBitForBit) {
   for (std::uint8_t id : {1, 2, 3, 4, 5, 10, 11}) EXPECT_GT(labelled[id], 10000) << int{id};
 }
 
+// The same where a tile's rows are cut short by the image's edge (643 columns: the last tile three
+// wide), so that both widths trace groups of fewer pixels than their lanes, for the depth image
+// with and without an interest, against the render with faces too.
+TEST(RayCasterTest, TheWideLanesAreTheNarrowOnesWhereTheImageEdgeCutsATilesRows) {
+  CameraParams params = DepthCameraParams();
+  params.width_px = 643;  // (K's centre as it was: the image reaches three columns further right)
+  CameraRenderer narrow = MakeRenderer(params, BlackFloor());
+  CameraRenderer wide = MakeRenderer(params, BlackFloor());
+  narrow.set_wide_lanes(false);
+  const bool has_wide = wide.set_wide_lanes(true);
+  const CameraRays& rays = narrow.rays();
+  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
+  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
+  const DepthInterest interest(rays, bounds);
+  DepthRowHistory narrow_history, wide_history;
+  DepthImage narrow_limited, wide_limited;
+  int edge_hits = 0;  // depth written in the last three columns
+  for (int scene_index = 0; scene_index < 24; ++scene_index) {
+    std::vector<Prism> scene = StaggeredBoxes(scene_index);
+    for (Prism& prism : scene) prism.footprint.pose.y_m -= 0.5;  // towards the right edge
+    const world::Pose2 car{0.02 * scene_index, -0.01 * scene_index, -0.03 * scene_index};
+    ColorImage both_color;
+    std::array<DepthImage, 3> depth;  // faces, narrow, wide
+    narrow.Render(car, scene, &both_color, &depth[0]);
+    narrow.Render(car, scene, nullptr, &depth[1]);
+    wide.Render(car, scene, nullptr, &depth[2]);
+    ASSERT_EQ(depth[0].mm, depth[1].mm) << "scene " << scene_index;
+    ASSERT_EQ(depth[1].mm, depth[2].mm) << "scene " << scene_index;
+    narrow.RenderDepth(car, scene, &narrow_limited, &narrow_history, &interest);
+    wide.RenderDepth(car, scene, &wide_limited, &wide_history, &interest);
+    ASSERT_EQ(narrow_limited.mm, wide_limited.mm) << "scene " << scene_index;
+    for (int v = 0; v < params.height_px; ++v) {
+      for (int u = 640; u < 643; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * 643 + static_cast<std::size_t>(u);
+        edge_hits += static_cast<int>(depth[1].mm[i] != rays.floor_depth_mm()[i]);
+      }
+    }
+  }
+  EXPECT_GT(edge_hits, 500);  // prisms do reach the cut tiles (1117 pixels)
+  if (!has_wide) GTEST_SKIP() << "this CPU has no AVX2: the narrow lanes checked alone";
+}
+
 // RenderDepth with a depth interest (issue 38: the obstacle grid reads each pixel's depth only up
 // to where its ray leaves the obstacle box) is Render's image wherever that is within the pixel's
 // bound, frame after frame in one buffer, and leaves out what lies beyond it.
@@ -817,7 +859,7 @@ TEST(RayCasterTest, AFloorBlockFilledWithTheCommonColourIsWhatItsPixelsWouldLook
     ASSERT_EQ(la, lb) << "pose " << k << ", labels in the region";
   }
   EXPECT_EQ(each_pixel.common_floor_pixels(), 0u);
-  // most of a 640x480 view is bare floor: 40 blocks a row, hundreds of rows
+  // most of a 640x480 view is bare floor: 640 / kBlockSize blocks a row, hundreds of rows
   EXPECT_GT(fast.common_floor_pixels(), 24u * 2000u * CameraRays::kBlockSize);
 }
 
