@@ -518,6 +518,23 @@ TEST(RayCasterTest, ADepthOnlyRenderIsTheBothRendersDepthAmongOverlappingPrismsA
   }
 }
 
+// A floor of 4 m with lines of two colours, 0.3 m apart both ways.
+world::FloorRaster FloorWithLines() {
+  world::FloorRaster raster = BlackFloor(4.0);
+  for (int k = -6; k <= 6; ++k) {
+    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
+    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
+  }
+  return raster;
+}
+
+// A depth interest whose bounds run from 1 m to 2.5 m and back every 1500 pixels.
+DepthInterest RaggedInterest(const CameraRays& rays) {
+  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
+  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
+  return DepthInterest(rays, bounds);
+}
+
 // Scenes of three to five boxes at staggered distances, yaws and sizes (no randomness needed),
 // the farther ones first in every other scene: nearer edges cut through groups of pixels traced
 // together, and a farther prism drawn after a nearer one must show exactly where it leaves off.
@@ -556,20 +573,14 @@ TEST(RayCasterTest,
 // labels of prisms and of a floor with lines, bit for bit.
 TEST(RayCasterTest, TheWideLanesAreTheNarrowOnesBitForBit) {
   const CameraParams params = DepthCameraParams();
-  world::FloorRaster raster = BlackFloor(4.0);
-  for (int k = -6; k <= 6; ++k) {
-    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
-    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
-  }
+  const world::FloorRaster raster = FloorWithLines();
   CameraRenderer narrow = MakeRenderer(params, raster);
   CameraRenderer wide = MakeRenderer(params, raster);
   EXPECT_TRUE(narrow.set_wide_lanes(false));
   EXPECT_FALSE(narrow.wide_lanes());
   if (!wide.set_wide_lanes(true)) GTEST_SKIP() << "this CPU has no AVX2";
   const CameraRays& rays = narrow.rays();
-  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
-  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
-  const DepthInterest interest(rays, bounds);
+  const DepthInterest interest = RaggedInterest(rays);
   RowSpans ragged;  // rows cut at odd columns: groups of fewer than eight or four pixels
   for (int v = 0; v < params.height_px; ++v)
     ragged.columns.emplace_back(v % 13, params.width_px - v % 7);
@@ -616,9 +627,7 @@ TEST(RayCasterTest, TheWideLanesAreTheNarrowOnesWhereTheImageEdgeCutsATilesRows)
   narrow.set_wide_lanes(false);
   const bool has_wide = wide.set_wide_lanes(true);
   const CameraRays& rays = narrow.rays();
-  std::vector<float> bounds(static_cast<std::size_t>(rays.width()) * rays.height());
-  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = 1.0f + 0.001f * (i % 1500);
-  const DepthInterest interest(rays, bounds);
+  const DepthInterest interest = RaggedInterest(rays);
   DepthRowHistory narrow_history, wide_history;
   DepthImage narrow_limited, wide_limited;
   int edge_hits = 0;  // depth written in the last three columns
@@ -995,11 +1004,7 @@ TEST(RayCasterTest, LabelsAreEachPixelsColourLabelledWhereAskedAndNothingElseIsW
   // a label that tells many colours apart; the labels into a padded buffer, as the lane detector
   // keeps its classes.
   const CameraParams params = ColorCameraParams();
-  world::FloorRaster raster = BlackFloor(4.0);
-  for (int k = -6; k <= 6; ++k) {
-    Paint(&raster, 0.3 * k, 0.3 * k + 0.02, -2.0, 2.0, kWhite);
-    Paint(&raster, -2.0, 2.0, 0.3 * k + 0.1, 0.3 * k + 0.13, Bgr{0, 235, 235});
-  }
+  const world::FloorRaster raster = FloorWithLines();
   CameraRenderer renderer = MakeRenderer(params, raster);
   RowSpans region;
   region.columns.assign(static_cast<std::size_t>(params.height_px), {0, 0});
