@@ -652,12 +652,12 @@ void CameraRenderer::KeepHistory(const DepthImage* depth, DepthRowHistory* histo
   history->valid_ = true;
 }
 
-// The floor's labelled look-up (CameraRenderer::FloorPass::LookUp with labels), eight pixels at a
-// time in AVX2 registers, the eight labels read by one gather: the same operations per lane as
-// the four-lane look-up, so the same labels (tested).
 namespace ray_caster_internal {
 
-struct FloorLabelLookUp {
+// What a frame's floor look-up reads (CameraRenderer::FloorPass::LookUp): the map from the base
+// frame's (x, y) to the texture's continuous (column, row), the texture's extent, the pixels'
+// floor points, and the texels' labels (with labels).
+struct FloorMap {
   float a00, a01, a02, a10, a11, a12;  // the base frame's (x, y) → the texture's (column, row)
   float cols, rows;                    // the texture's size
   std::int32_t width, outside;         // its width, and FloorTexture::outside_index()
@@ -666,8 +666,10 @@ struct FloorLabelLookUp {
 };
 
 #if defined(__x86_64__)
+// The labelled look-up eight pixels at a time in AVX2 registers, the eight labels read by one
+// gather: the same operations per lane as the four-lane look-up, so the same labels (tested).
 // Pixels [begin, end) of a row, pixel i's label to label_row[i].
-[[gnu::target("avx2")]] void LookUpFloorLabels8(const FloorLabelLookUp& f, std::uint8_t* label_row,
+[[gnu::target("avx2")]] void LookUpFloorLabels8(const FloorMap& f, std::uint8_t* label_row,
                                                 int begin, int end) {
   using F = Lanes<8>::F;
   using I = Lanes<8>::I;
@@ -707,7 +709,7 @@ struct FloorLabelLookUp {
 
 }  // namespace ray_caster_internal
 
-using ray_caster_internal::FloorLabelLookUp;
+using ray_caster_internal::FloorMap;
 #if defined(__x86_64__)
 using ray_caster_internal::LookUpFloorLabels8;
 #endif
@@ -728,30 +730,24 @@ struct CameraRenderer::FloorPass {
     const double c = std::cos(X_map_car.yaw_rad);
     const double s = std::sin(X_map_car.yaw_rad);
     const double m = tex.m_per_px();
-    a00 = static_cast<float>(c / m);
-    a01 = static_cast<float>(-s / m);
-    a02 = static_cast<float>((X_map_car.x_m - tex.origin_m().x()) / m);
-    a10 = static_cast<float>(-s / m);
-    a11 = static_cast<float>(-c / m);
-    a12 = static_cast<float>((tex.origin_m().y() - X_map_car.y_m) / m);
+    map = {.a00 = static_cast<float>(c / m),
+           .a01 = static_cast<float>(-s / m),
+           .a02 = static_cast<float>((X_map_car.x_m - tex.origin_m().x()) / m),
+           .a10 = static_cast<float>(-s / m),
+           .a11 = static_cast<float>(-c / m),
+           .a12 = static_cast<float>((tex.origin_m().y() - X_map_car.y_m) / m),
+           .cols = static_cast<float>(tex.width()),
+           .rows = static_cast<float>(tex.height()),
+           .width = tex.width(),
+           .outside = static_cast<std::int32_t>(tex.outside_index()),
+           .fx = rays.floor_x().data(),
+           .fy = rays.floor_y().data(),
+           .label_texels = labels != nullptr ? labels->texels : nullptr};
     texels_per_m = static_cast<float>(1.0 / m);
     for (int k = 0; k < CameraRays::kBlockSize; ++k) {
       std::memcpy(common_block.data() + 3 * k, &tex.palette()[tex.common_index()], 3);
     }
     if (labels != nullptr) common_label = labels->palette[tex.common_index()];
-    floor_labels = {.a00 = a00,
-                    .a01 = a01,
-                    .a02 = a02,
-                    .a10 = a10,
-                    .a11 = a11,
-                    .a12 = a12,
-                    .cols = static_cast<float>(tex.width()),
-                    .rows = static_cast<float>(tex.height()),
-                    .width = tex.width(),
-                    .outside = static_cast<std::int32_t>(tex.outside_index()),
-                    .fx = rays.floor_x().data(),
-                    .fy = rays.floor_y().data(),
-                    .label_texels = labels != nullptr ? labels->texels : nullptr};
   }
 
   std::uint8_t* LabelRow(int v) const {
@@ -763,20 +759,20 @@ struct CameraRenderer::FloorPass {
   [[gnu::always_inline]] inline void LookUp(int v, int begin, int end) const {
 #if defined(__x86_64__)
     if (wide && labels != nullptr) {
-      LookUpFloorLabels8(floor_labels, LabelRow(v), begin, end);
+      LookUpFloorLabels8(map, LabelRow(v), begin, end);
       return;
     }
 #endif
-    const F4 cols = Splat(static_cast<float>(tex.width()));
-    const F4 rows = Splat(static_cast<float>(tex.height()));
+    const F4 cols = Splat(map.cols);
+    const F4 rows = Splat(map.rows);
     const F4 zero = Splat(0.0f);
-    const I4 width = SplatInt(tex.width());
-    const I4 outside = SplatInt(static_cast<std::int32_t>(tex.outside_index()));
+    const I4 width = SplatInt(map.width);
+    const I4 outside = SplatInt(map.outside);
     const std::uint8_t* texel_index = tex.palette_index();
     const std::uint32_t* palette = tex.palette();
-    const std::uint8_t* label_texels = labels != nullptr ? labels->texels : nullptr;
-    const float* fx = rays.floor_x().data();
-    const float* fy = rays.floor_y().data();
+    const std::uint8_t* label_texels = map.label_texels;
+    const float* fx = map.fx;
+    const float* fy = map.fy;
     // (the row's start once: the byte stores below may alias anything, so the compiler would
     // compute it again for every chunk)
     std::uint8_t* const label_row = labels != nullptr ? LabelRow(v) : nullptr;
@@ -784,8 +780,8 @@ struct CameraRenderer::FloorPass {
       const int n = std::min(kLanes, end - i);
       const F4 x = Load(fx + i, n);
       const F4 y = Load(fy + i, n);
-      const F4 col = a00 * x + a01 * y + a02;
-      const F4 row = a10 * x + a11 * y + a12;
+      const F4 col = map.a00 * x + map.a01 * y + map.a02;
+      const F4 row = map.a10 * x + map.a11 * y + map.a12;
       const I4 inside = (col >= zero) & (col < cols) & (row >= zero) & (row < rows);
       const I4 texel_col = __builtin_convertvector(inside ? col : zero, I4);
       const I4 texel_row = __builtin_convertvector(inside ? row : zero, I4);
@@ -814,8 +810,8 @@ struct CameraRenderer::FloorPass {
   // every pixel's texel lies between those of the square's corners.
   bool Common(const CameraRays::FloorBlock& block) const {
     if (!blocks_on || block.radius < 0.0f) return false;
-    const float col = a00 * block.centre_x + a01 * block.centre_y + a02;
-    const float row = a10 * block.centre_x + a11 * block.centre_y + a12;
+    const float col = map.a00 * block.centre_x + map.a01 * block.centre_y + map.a02;
+    const float row = map.a10 * block.centre_x + map.a11 * block.centre_y + map.a12;
     const float reach = block.radius * texels_per_m + 1.0f;
     if (col - reach >= 0.0f && row - reach >= 0.0f &&
         col + reach < static_cast<float>(tex.width()) &&
@@ -855,8 +851,7 @@ struct CameraRenderer::FloorPass {
   std::uint8_t* out;
   const LabelOut* labels;
   bool wide;  // CameraRenderer::wide_lanes
-  FloorLabelLookUp floor_labels;
-  float a00, a01, a02, a10, a11, a12;
+  FloorMap map;
   float texels_per_m;
   std::array<std::uint8_t, 3 * CameraRays::kBlockSize> common_block;
   std::uint8_t common_label{0};  // with labels: the common colour's
@@ -1199,13 +1194,14 @@ struct SlabTest {
 };
 
 // Where a faceless row writes (TracePrismFacelessRow): the nearest distance per pixel, and the
-// depth (null: none) and the label (null: none) of row v; the clip range.
+// depth (null: none) and the label (null: none) of row v; the near clip (the far one is the
+// slab test's).
 struct FacelessRowOut {
   float* nearest;
   std::uint16_t* depth_mm;
   std::uint8_t* label_row;
   std::uint8_t label;
-  float near_m, far_m;
+  float near_m;
 };
 
 // Row v's pixels [u_begin, u_end) (pixel i = row_start + u) traced L at a time; returns the
@@ -1220,7 +1216,6 @@ template <int L>
   using I = typename Lanes<L>::I;
   const SlabTest<L> test(c);
   const F near_m = Splat<F>(out.near_m);
-  const F far_m = Splat<F>(out.far_m);
   typename SlabTest<L>::Hits hits;
   int first = u_end, last = u_begin;
   for (int u = u_begin; u < u_end; u += L) {
@@ -1231,7 +1226,7 @@ template <int L>
     last = u + n;
     // DepthMillimetres in float, as TracePrismRow: 0 outside the clip range (converted only
     // inside it)
-    const I in_clip = (hits.t >= near_m) & (hits.t <= far_m);
+    const I in_clip = (hits.t >= near_m) & (hits.t <= test.far);
     const I mm = __builtin_convertvector(in_clip ? hits.t * 1000.0f + 0.5f : Splat<F>(0.0f), I);
     if (n < L) {
       for (int j = 0; j < n; ++j) {
@@ -1452,8 +1447,7 @@ void CameraRenderer::TracePrismFacelessRow(const PrismTrace& trace, int v, int u
                            .depth_mm = depth != nullptr ? depth->mm.data() : nullptr,
                            .label_row = labels != nullptr ? labels->Row(v) : nullptr,
                            .label = trace.face_label[0],
-                           .near_m = static_cast<float>(params.clip_near_m),
-                           .far_m = static_cast<float>(params.clip_far_m)};
+                           .near_m = static_cast<float>(params.clip_near_m)};
   const int row_start = v * rays_->width();
 #if defined(__x86_64__)
   const auto [first, last] = wide_lanes_
